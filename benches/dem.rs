@@ -1,0 +1,2 @@
+//! Placeholder until the dem crate issue lands its criterion bench here.
+fn main() {}

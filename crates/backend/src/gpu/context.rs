@@ -1,0 +1,254 @@
+//! Adapter choice and the device/queue pair every GPU backend runs on.
+
+use std::sync::Arc;
+
+use crate::{Error, Result};
+
+/// Environment variable holding a case-insensitive substring of the adapter name to use
+/// (e.g. `SIMKIT_ADAPTER=llvmpipe` or `SIMKIT_ADAPTER=nvidia`).
+pub const ADAPTER_ENV: &str = "SIMKIT_ADAPTER";
+
+/// A description of one adapter, as found by [`GpuContext::list_adapters`].
+#[derive(Clone, Debug)]
+pub struct AdapterSummary {
+    /// Adapter name as the driver reports it (e.g. `llvmpipe (LLVM 15.0.6, 256 bits)`).
+    pub name: String,
+    /// Kind of device (discrete, integrated, CPU, ...).
+    pub device_type: wgpu::DeviceType,
+    /// Graphics API backend (Vulkan, Metal, DX12).
+    pub backend: wgpu::Backend,
+    /// Driver name and version.
+    pub driver: String,
+    /// Whether the adapter supports 64-bit floats in shaders.
+    pub shader_f64: bool,
+}
+
+impl std::fmt::Display for AdapterSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} [{:?}, {:?}, driver {}{}]",
+            self.name,
+            self.device_type,
+            self.backend,
+            self.driver,
+            if self.shader_f64 { ", f64" } else { "" }
+        )
+    }
+}
+
+struct Inner {
+    adapter: wgpu::Adapter,
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    info: wgpu::AdapterInfo,
+    limits: wgpu::Limits,
+    features: wgpu::Features,
+}
+
+/// A GPU device and queue with the limits and features simkit needs.
+///
+/// Cheap to clone (shared handle). Created once per program and passed to the GPU backends
+/// through [`Backend::Gpu`](crate::Backend).
+#[derive(Clone)]
+pub struct GpuContext {
+    inner: Arc<Inner>,
+}
+
+impl std::fmt::Debug for GpuContext {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GpuContext").field("adapter", &self.inner.info.name).finish()
+    }
+}
+
+fn instance() -> wgpu::Instance {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+    if std::env::var_os("WGPU_BACKEND").is_none() {
+        // Compute needs a modern API; the GL backend is left out unless asked for.
+        desc.backends = wgpu::Backends::PRIMARY;
+    }
+    wgpu::Instance::new(desc)
+}
+
+fn preference(device_type: wgpu::DeviceType) -> u8 {
+    match device_type {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Cpu => 3,
+        wgpu::DeviceType::Other => 4,
+    }
+}
+
+fn summary(adapter: &wgpu::Adapter) -> AdapterSummary {
+    let info = adapter.get_info();
+    AdapterSummary {
+        name: info.name.clone(),
+        device_type: info.device_type,
+        backend: info.backend,
+        driver: format!("{} {}", info.driver, info.driver_info).trim().to_string(),
+        shader_f64: adapter.features().contains(wgpu::Features::SHADER_F64),
+    }
+}
+
+fn compute_capable(adapter: &wgpu::Adapter) -> bool {
+    adapter.get_downlevel_capabilities().flags.contains(wgpu::DownlevelFlags::COMPUTE_SHADERS)
+}
+
+impl GpuContext {
+    /// Lists every compute-capable adapter, best first (the order [`GpuContext::new`] uses).
+    pub fn list_adapters() -> Vec<AdapterSummary> {
+        Self::sorted_adapters().iter().map(summary).collect()
+    }
+
+    fn sorted_adapters() -> Vec<wgpu::Adapter> {
+        let instance = instance();
+        let mut adapters: Vec<wgpu::Adapter> =
+            pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()))
+                .into_iter()
+                .filter(compute_capable)
+                .collect();
+        adapters.sort_by_key(|a| {
+            let info = a.get_info();
+            // Prefer real GPUs, then Vulkan over other APIs.
+            (preference(info.device_type), info.backend != wgpu::Backend::Vulkan)
+        });
+        adapters
+    }
+
+    /// Opens the best adapter: a real GPU if there is one, else a CPU Vulkan driver
+    /// (lavapipe). `SIMKIT_ADAPTER=<substring>` picks an adapter by name instead.
+    pub fn new() -> Result<Self> {
+        let wanted = std::env::var(ADAPTER_ENV).ok().filter(|s| !s.is_empty());
+        Self::with_adapter_name(wanted.as_deref())
+    }
+
+    /// Opens the best adapter whose name contains `name` (case-insensitive), or the best
+    /// adapter overall with `None`.
+    pub fn with_adapter_name(name: Option<&str>) -> Result<Self> {
+        let adapters = Self::sorted_adapters();
+        if adapters.is_empty() {
+            return Err(Error::NoAdapter("wgpu found no compute-capable adapter".into()));
+        }
+        let found: Vec<String> = adapters.iter().map(|a| a.get_info().name).collect();
+        let adapter = match name {
+            None => adapters.into_iter().next(),
+            Some(pat) => {
+                let pat = pat.to_lowercase();
+                adapters.into_iter().find(|a| a.get_info().name.to_lowercase().contains(&pat))
+            }
+        };
+        let adapter = adapter.ok_or_else(|| {
+            Error::NoAdapter(format!(
+                "no adapter name contains {:?} (from {ADAPTER_ENV}); found: {}",
+                name.unwrap_or_default(),
+                found.join(", ")
+            ))
+        })?;
+        Self::open(adapter)
+    }
+
+    fn open(adapter: wgpu::Adapter) -> Result<Self> {
+        let info = adapter.get_info();
+        // Ask for everything the adapter offers: large storage buffers, the largest
+        // workgroup storage, and 64-bit floats in shaders when present.
+        let limits = adapter.limits();
+        let features = adapter.features() & wgpu::Features::SHADER_F64;
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("simkit"),
+            required_features: features,
+            required_limits: limits.clone(),
+            ..Default::default()
+        }))
+        .map_err(|e| Error::NoAdapter(format!("adapter {} refused a device: {e}", info.name)))?;
+        let limits = device.limits();
+        let features = device.features();
+        Ok(Self { inner: Arc::new(Inner { adapter, device, queue, info, limits, features }) })
+    }
+
+    /// The wgpu device.
+    pub fn device(&self) -> &wgpu::Device {
+        &self.inner.device
+    }
+
+    /// The wgpu queue.
+    pub fn queue(&self) -> &wgpu::Queue {
+        &self.inner.queue
+    }
+
+    /// The wgpu adapter the device was opened on.
+    pub fn adapter(&self) -> &wgpu::Adapter {
+        &self.inner.adapter
+    }
+
+    /// Information about the adapter (name, type, driver).
+    pub fn adapter_info(&self) -> &wgpu::AdapterInfo {
+        &self.inner.info
+    }
+
+    /// A printable summary of the adapter.
+    pub fn summary(&self) -> AdapterSummary {
+        summary(&self.inner.adapter)
+    }
+
+    /// The limits the device was opened with.
+    pub fn limits(&self) -> &wgpu::Limits {
+        &self.inner.limits
+    }
+
+    /// The features the device was opened with.
+    pub fn features(&self) -> wgpu::Features {
+        self.inner.features
+    }
+
+    /// Whether shaders may use `f64`.
+    pub fn has_f64(&self) -> bool {
+        self.inner.features.contains(wgpu::Features::SHADER_F64)
+    }
+
+    /// Whether this adapter is a CPU implementation (lavapipe, SwiftShader, WARP).
+    pub fn is_cpu_adapter(&self) -> bool {
+        self.inner.info.device_type == wgpu::DeviceType::Cpu
+    }
+
+    /// Largest storage buffer, in bytes, a single binding may cover.
+    pub fn max_storage_bytes(&self) -> u64 {
+        let l = &self.inner.limits;
+        l.max_storage_buffer_binding_size.min(l.max_buffer_size)
+    }
+
+    /// Blocks until all submitted work has finished.
+    pub fn wait(&self) -> Result<()> {
+        self.inner
+            .device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| Error::Gpu(format!("waiting for the device failed: {e}")))
+    }
+
+    /// Runs `f` inside a validation error scope and turns any captured validation or
+    /// out-of-memory error into [`Error::Gpu`] instead of wgpu's default panic.
+    pub fn checked<T>(&self, what: &str, f: impl FnOnce() -> T) -> Result<T> {
+        let oom = self.inner.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = self.inner.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let out = f();
+        let v = pollster::block_on(validation.pop());
+        let o = pollster::block_on(oom.pop());
+        match v.or(o) {
+            None => Ok(out),
+            Some(e) => Err(Error::Gpu(format!("{what}: {e}"))),
+        }
+    }
+
+    /// Submits an encoder's commands.
+    pub fn submit(&self, encoder: wgpu::CommandEncoder) {
+        self.inner.queue.submit(Some(encoder.finish()));
+    }
+
+    /// A new command encoder.
+    pub fn encoder(&self, label: &str) -> wgpu::CommandEncoder {
+        self.inner
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) })
+    }
+}

@@ -1,0 +1,39 @@
+//! The common trait every simulation backend implements, and the backend selector.
+
+use crate::{Error, GpuContext};
+
+/// A time-stepping simulation with a host-side snapshot type.
+///
+/// CPU and GPU backends of one model implement this trait with the same `State`, so that
+/// examples, tests and user code swap backends with one line.
+pub trait Simulation {
+    /// Host-side snapshot of the simulation state.
+    type State;
+    /// Advances the simulation by `steps` time steps (GPU backends: without host round trips).
+    fn step(&mut self, steps: u32) -> Result<(), Error>;
+    /// Returns a snapshot of the current state (GPU backends download it).
+    fn state(&mut self) -> Result<Self::State, Error>;
+    /// Number of steps taken since construction.
+    fn steps_done(&self) -> u64;
+    /// Short human-readable backend name, e.g. `"cpu"`, `"cpu-multispin"`, `"gpu (llvmpipe)"`.
+    fn backend_name(&self) -> String;
+}
+
+/// Which backend to run a model on: a runtime value, never a compile-time fork.
+#[derive(Clone, Copy, Debug)]
+pub enum Backend<'a> {
+    /// Multi-threaded CPU backend (rayon).
+    Cpu,
+    /// GPU backend on the given context.
+    Gpu(&'a GpuContext),
+}
+
+impl Backend<'_> {
+    /// `"cpu"` or `"gpu (<adapter name>)"`.
+    pub fn name(&self) -> String {
+        match self {
+            Backend::Cpu => "cpu".to_string(),
+            Backend::Gpu(ctx) => format!("gpu ({})", ctx.adapter_info().name),
+        }
+    }
+}

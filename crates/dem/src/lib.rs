@@ -1,0 +1,1 @@
+//! `dem`: see its issue; filled in by its own crate work.

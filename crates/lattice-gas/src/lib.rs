@@ -1,0 +1,1 @@
+//! `lattice-gas`: see its issue; filled in by its own crate work.

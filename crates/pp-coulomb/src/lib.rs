@@ -1,0 +1,1 @@
+//! `pp-coulomb`: see its issue; filled in by its own crate work.

@@ -1,0 +1,1 @@
+//! `rd`: see its issue; filled in by its own crate work.

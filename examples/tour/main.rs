@@ -1,0 +1,106 @@
+//! The simkit tour: lists the adapters, runs each crate's flagship scene at a small size on
+//! the best backend available, writes pictures and data under `out/`, and prints a summary.
+//!
+//! ```text
+//! cargo run --release --example tour            # best backend (GPU if any, else CPU)
+//! cargo run --release --example tour -- --cpu   # force the CPU backends
+//! ```
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use simkit::backend::{Backend, GpuContext, Result};
+
+// Scene modules: one per crate, each `pub fn run(backend: Backend<'_>, out: &Path) -> Result<Row>`.
+// TOUR-MODULES (keep this marker: crate work adds `mod <crate>;` lines below it)
+
+/// One line of the summary table.
+pub struct Row {
+    /// Scene name.
+    pub scene: String,
+    /// Backend that ran it.
+    pub backend: String,
+    /// Steps taken.
+    pub steps: u64,
+    /// Throughput in the field's unit.
+    pub throughput: f64,
+    /// The unit of `throughput` (e.g. "pair evaluations/s").
+    pub unit: &'static str,
+    /// One validation figure, as text (e.g. "restitution 0.899 (want 0.9)").
+    pub check: String,
+}
+
+type Scene = fn(Backend<'_>, &Path) -> Result<Row>;
+
+fn scenes() -> Vec<(&'static str, Scene)> {
+    vec![
+        // TOUR-SCENES (keep this marker: crate work adds `("name", module::run),` lines below it)
+    ]
+}
+
+fn main() {
+    let force_cpu = std::env::args().any(|a| a == "--cpu");
+    let out = PathBuf::from("out/tour");
+    println!("simkit tour\n===========\n");
+    let adapters = GpuContext::list_adapters();
+    if adapters.is_empty() {
+        println!("GPU adapters: none found (install a Vulkan driver, e.g. mesa-vulkan-drivers).");
+    } else {
+        println!("GPU adapters (best first):");
+        for a in &adapters {
+            println!("  - {a}");
+        }
+    }
+    let ctx = if force_cpu {
+        println!("--cpu given: running every scene on the CPU backend.\n");
+        None
+    } else {
+        match GpuContext::new() {
+            Ok(ctx) => {
+                println!("Using GPU adapter: {}\n", ctx.summary());
+                Some(ctx)
+            }
+            Err(e) => {
+                println!("No usable GPU ({e}).\nRunning every scene on the CPU backend.\n");
+                None
+            }
+        }
+    };
+    let backend = ctx.as_ref().map_or(Backend::Cpu, Backend::Gpu);
+    let mut rows = Vec::new();
+    let mut failures = 0;
+    for (name, scene) in scenes() {
+        let t = Instant::now();
+        print!("running {name} ... ");
+        match scene(backend, &out.join(name)) {
+            Ok(row) => {
+                println!("done in {:.2} s", t.elapsed().as_secs_f64());
+                rows.push(row);
+            }
+            Err(e) => {
+                println!("FAILED: {e}");
+                failures += 1;
+            }
+        }
+    }
+    print_table(&rows);
+    println!("\nOutputs under {}/", out.display());
+    if failures > 0 {
+        eprintln!("{failures} scene(s) failed");
+        std::process::exit(1);
+    }
+}
+
+fn print_table(rows: &[Row]) {
+    println!(
+        "\n{:<22} {:<28} {:>8} {:>12}  {:<26} validation",
+        "scene", "backend", "steps", "throughput", "unit"
+    );
+    println!("{}", "-".repeat(120));
+    for r in rows {
+        println!(
+            "{:<22} {:<28} {:>8} {:>12.3e}  {:<26} {}",
+            r.scene, r.backend, r.steps, r.throughput, r.unit, r.check
+        );
+    }
+}

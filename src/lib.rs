@@ -1,0 +1,23 @@
+//! # simkit
+//!
+//! Reusable simulation libraries, each with a CPU and a GPU backend behind a common trait:
+//!
+//! | crate | what |
+//! |---|---|
+//! | [`neighbor`] | linked-list and sorted cell lists, half-shell search, Verlet lists |
+//! | [`dem`] | spring–dashpot granular dynamics with Verlet integration |
+//! | [`lattice_gas`] | FHP D2Q6 lattice-gas automaton |
+//! | [`rd`] | reaction–diffusion with a tiled stencil |
+//! | [`pp_coulomb`] | normalised direct-sum Coulomb particle–particle method |
+//! | [`backend`] | GPU context, buffers, kernels, scan, shared RNG, common trait and error |
+//! | [`output`] | PNG heat maps and plots, GIF, VTK, extended XYZ, CSV (atomic writes) |
+//!
+//! This facade re-exports the crates and owns the workspace's `examples/` and `benches/`.
+
+pub use backend;
+pub use dem;
+pub use lattice_gas;
+pub use neighbor;
+pub use output;
+pub use pp_coulomb;
+pub use rd;
