@@ -1,2 +1,220 @@
-//! Placeholder until the neighbor crate issue lands its criterion bench here.
-fn main() {}
+//! Neighbour search throughput: build + enumerate every pair within the cutoff, in
+//! unordered pairs per second, for each method of the `neighbor` crate and for the `kiddo`
+//! k-d tree (its fastest path: per-point `within().unsorted().visit()` queries issued in the
+//! tree's own order, rayon-parallel).
+//!
+//! Workload (issue 3): N uniform random points at number density 1 in a cube (square in
+//! 2D), closed box, cutoff 2.5 (about 65 neighbours per point in 3D, 20 in 2D),
+//! N = 1e4, 1e5, 1e6. Run: `cargo bench --bench neighbor`. After the criterion groups it
+//! prints a side-by-side summary (medians of 5 runs) with the sorted-cells / kiddo ratio
+//! and the build-time scaling from N = 1e4 to 1e6.
+
+use std::hint::black_box;
+use std::time::{Duration, Instant};
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use rand::{RngExt, SeedableRng};
+use rayon::prelude::*;
+use simkit::backend::{GpuBuffer, GpuContext};
+use simkit::neighbor::{
+    CellGrid, GpuCellList, GpuNeighborList, LinkedCells, ListKind, NeighborSearch, SortedCells,
+    VerletList, positions_to_f32,
+};
+
+const CUTOFF: f64 = 2.5;
+const SIZES: [usize; 3] = [10_000, 100_000, 1_000_000];
+
+fn points<const D: usize>(n: usize) -> (CellGrid<D>, Vec<[f64; D]>) {
+    let side = (n as f64).powf(1.0 / D as f64);
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(42);
+    let p = (0..n)
+        .map(|_| std::array::from_fn(|_| rng.random::<f64>() * side))
+        .collect();
+    let grid = CellGrid::new([0.0; D], [side; D], [false; D], CUTOFF).expect("grid");
+    (grid, p)
+}
+
+/// Sorted cells, rayon: build + half-shell enumeration; returns the pair count.
+fn sorted_par<const D: usize>(cells: &mut SortedCells<D>, p: &[[f64; D]]) -> usize {
+    cells.build(p).expect("build");
+    cells.par_pair_count()
+}
+
+/// kiddo, rayon: tree build + per-point queries in tree order; returns the pair count.
+fn kiddo_par(p: &[[f64; 3]]) -> usize {
+    let tree: ImmutableKdTree<f64, 3> = ImmutableKdTree::new_from_slice(p).expect("kiddo tree");
+    let order: Vec<[f64; 3]> = tree.iter().map(|(_, q)| q).collect();
+    let r2 = CUTOFF * CUTOFF;
+    let hits: usize = order
+        .par_iter()
+        .map(|q| {
+            let mut c = 0usize;
+            tree.query(q)
+                .within::<SquaredEuclidean<f64>>(r2)
+                .unsorted()
+                .visit(|_| c += 1);
+            c
+        })
+        .sum();
+    (hits - p.len()) / 2
+}
+
+fn configure<'a>(
+    c: &'a mut Criterion,
+    name: &str,
+) -> criterion::BenchmarkGroup<'a, criterion::measurement::WallTime> {
+    let mut g = c.benchmark_group(name);
+    g.sample_size(10)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(3));
+    g
+}
+
+fn cpu_methods(c: &mut Criterion) {
+    for &n in &SIZES {
+        let (grid, p) = points::<3>(n);
+        let mut cells = SortedCells::new(&grid);
+        let pairs = sorted_par(&mut cells, &p);
+        println!(
+            "N = {n}: {pairs} pairs within {CUTOFF} ({:.1} neighbours each)",
+            2.0 * pairs as f64 / n as f64
+        );
+
+        let mut g = configure(c, "neighbor_3d_build_and_pairs");
+        g.throughput(Throughput::Elements(pairs as u64));
+        g.bench_with_input(BenchmarkId::new("sorted_cells_rayon", n), &n, |b, _| {
+            b.iter(|| black_box(sorted_par(&mut cells, &p)))
+        });
+        g.bench_with_input(BenchmarkId::new("sorted_cells_serial", n), &n, |b, _| {
+            b.iter(|| {
+                cells.build(&p).expect("build");
+                let mut k = 0usize;
+                cells.for_each_pair(|_, _, _, r2| k += usize::from(r2 >= 0.0));
+                black_box(k)
+            })
+        });
+        let mut linked = LinkedCells::new(&grid);
+        g.bench_with_input(BenchmarkId::new("linked_cells_serial", n), &n, |b, _| {
+            b.iter(|| {
+                linked.build(&p).expect("build");
+                black_box(linked.pair_count().expect("pairs"))
+            })
+        });
+        let mut verlet = VerletList::new(&grid, 0.3, ListKind::Half).expect("verlet");
+        g.bench_with_input(
+            BenchmarkId::new("verlet_half_rayon_build", n),
+            &n,
+            |b, _| {
+                b.iter(|| {
+                    verlet.build(&p).expect("build");
+                    black_box(verlet.par_fold_pairs(|| 0usize, |k, _, _, _, _| *k += 1))
+                })
+            },
+        );
+        g.bench_with_input(
+            BenchmarkId::new("verlet_half_rayon_reuse", n),
+            &n,
+            |b, _| b.iter(|| black_box(verlet.par_fold_pairs(|| 0usize, |k, _, _, _, _| *k += 1))),
+        );
+        g.bench_with_input(BenchmarkId::new("kiddo_rayon_tree_order", n), &n, |b, _| {
+            b.iter(|| black_box(kiddo_par(&p)))
+        });
+        g.finish();
+
+        let mut g = configure(c, "neighbor_3d_build_only");
+        g.throughput(Throughput::Elements(n as u64));
+        g.bench_with_input(BenchmarkId::new("sorted_cells", n), &n, |b, _| {
+            b.iter(|| cells.build(&p).expect("build"))
+        });
+        g.finish();
+    }
+}
+
+fn cpu_2d(c: &mut Criterion) {
+    for &n in &SIZES {
+        let (grid, p) = points::<2>(n);
+        let mut cells = SortedCells::new(&grid);
+        let pairs = sorted_par(&mut cells, &p);
+        let mut g = configure(c, "neighbor_2d_build_and_pairs");
+        g.throughput(Throughput::Elements(pairs as u64));
+        g.bench_with_input(BenchmarkId::new("sorted_cells_rayon", n), &n, |b, _| {
+            b.iter(|| black_box(sorted_par(&mut cells, &p)))
+        });
+        g.finish();
+    }
+}
+
+fn gpu(c: &mut Criterion) {
+    let ctx = match GpuContext::new() {
+        Ok(ctx) => ctx,
+        Err(e) => {
+            println!("GPU benchmarks skipped: {e}");
+            return;
+        }
+    };
+    println!("GPU adapter: {}", ctx.summary());
+    for &n in &SIZES {
+        let (grid, p) = points::<3>(n);
+        let buf = GpuBuffer::from_slice(&ctx, "positions", &positions_to_f32(&p)).expect("upload");
+        let cells = GpuCellList::new(&ctx, &grid, &buf).expect("cells");
+        let mut list = GpuNeighborList::new(&ctx, &cells, ListKind::Half).expect("list");
+        cells.build(&ctx).expect("build");
+        let pairs = list.build(&ctx, &cells).expect("list");
+        let mut g = configure(c, "neighbor_3d_gpu");
+        g.throughput(Throughput::Elements(pairs as u64));
+        g.bench_with_input(BenchmarkId::new("cells_and_half_list", n), &n, |b, _| {
+            b.iter(|| {
+                cells.build(&ctx).expect("build");
+                black_box(list.build(&ctx, &cells).expect("list"))
+            })
+        });
+        g.finish();
+    }
+}
+
+fn median_secs(mut f: impl FnMut() -> usize) -> (f64, usize) {
+    let mut t = Vec::new();
+    let mut k = 0;
+    for _ in 0..5 {
+        let s = Instant::now();
+        k = black_box(f());
+        t.push(s.elapsed().as_secs_f64());
+    }
+    t.sort_by(f64::total_cmp);
+    (t[2], k)
+}
+
+fn summary(_: &mut Criterion) {
+    println!(
+        "\nSummary (median of 5, rayon threads = {}):",
+        rayon::current_num_threads()
+    );
+    let mut build_times = Vec::new();
+    for &n in &SIZES {
+        let (grid, p) = points::<3>(n);
+        let mut cells = SortedCells::new(&grid);
+        let (ts, ps) = median_secs(|| sorted_par(&mut cells, &p));
+        let (tk, pk) = median_secs(|| kiddo_par(&p));
+        let (tb, _) = median_secs(|| {
+            cells.build(&p).expect("build");
+            cells.len()
+        });
+        build_times.push(tb);
+        assert_eq!(ps, pk, "sorted cells and kiddo disagree on the pair count");
+        println!(
+            "N = {n:>8}: sorted cells {:.3e} pairs/s ({ts:.4} s), kiddo {:.3e} pairs/s ({tk:.4} s), \
+             ratio {:.1}x, build {tb:.4} s",
+            ps as f64 / ts,
+            pk as f64 / tk,
+            tk / ts
+        );
+    }
+    println!(
+        "build time N=1e6 / N=1e4: {:.1}x (linear: 100x, target <= 130x)",
+        build_times[2] / build_times[0]
+    );
+}
+
+criterion_group!(benches, summary, cpu_methods, cpu_2d, gpu);
+criterion_main!(benches);

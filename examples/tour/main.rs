@@ -13,6 +13,8 @@ use simkit::backend::{Backend, GpuContext, Result};
 
 // Scene modules: one per crate, each `pub fn run(backend: Backend<'_>, out: &Path) -> Result<Row>`.
 // TOUR-MODULES (keep this marker: crate work adds `mod <crate>;` lines below it)
+mod pp_coulomb;
+mod rd;
 
 /// One line of the summary table.
 pub struct Row {
@@ -35,6 +37,8 @@ type Scene = fn(Backend<'_>, &Path) -> Result<Row>;
 fn scenes() -> Vec<(&'static str, Scene)> {
     vec![
         // TOUR-SCENES (keep this marker: crate work adds `("name", module::run),` lines below it)
+        ("rd", rd::run),
+        ("pp_coulomb", pp_coulomb::run),
     ]
 }
 

@@ -121,11 +121,22 @@ mod tests {
     fn messages_name_value_and_fix() {
         let e = require_positive("cutoff", -1.0).unwrap_err();
         let s = e.to_string();
-        assert!(s.contains("cutoff") && s.contains("-1") && s.contains("> 0"), "{s}");
+        assert!(
+            s.contains("cutoff") && s.contains("-1") && s.contains("> 0"),
+            "{s}"
+        );
         assert!(require_finite("x", f64::NAN).is_err());
         assert!(require_non_negative("x", 0.0).is_ok());
-        let e = Error::Unstable { dt: 0.5, bound: 0.25, reason: "D dt/h^2 <= 1/4".into() };
+        let e = Error::Unstable {
+            dt: 0.5,
+            bound: 0.25,
+            reason: "D dt/h^2 <= 1/4".into(),
+        };
         assert!(e.to_string().contains("2.5e-1"), "{e}");
-        assert!(Error::NoAdapter("none".into()).to_string().contains("mesa-vulkan-drivers"));
+        assert!(
+            Error::NoAdapter("none".into())
+                .to_string()
+                .contains("mesa-vulkan-drivers")
+        );
     }
 }

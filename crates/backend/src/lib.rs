@@ -6,7 +6,7 @@
 //!   and download.
 //! - [`Kernel`]: WGSL from `shaders/` (embedded with `include_str!`), pipelines, bind groups and
 //!   dispatch of any number of items.
-//! - [`GpuScan`]: multi-level exclusive prefix sum on the GPU.
+//! - [`GpuScan`]: multi-level exclusive prefix sum on the GPU; [`prefix`] has the CPU twins.
 //! - [`rng`]: the counter-based random numbers that CPU and WGSL draw bit for bit alike.
 //! - [`Simulation`], [`Backend`], [`Error`]: the common trait, backend selector and error type.
 //!
@@ -23,6 +23,7 @@
 
 pub mod error;
 pub mod gpu;
+pub mod prefix;
 pub mod rng;
 mod simulation;
 pub mod testing;

@@ -61,7 +61,9 @@ mod tests {
         let frac = ones as f64 / n as f64;
         assert!((frac - 0.5).abs() < 2e-3, "bit fraction {frac}");
         // Consecutive steps at one index are not correlated.
-        let agree = (0..n).filter(|&s| rng_bit(1, s, 5) == rng_bit(1, s + 1, 5)).count();
+        let agree = (0..n)
+            .filter(|&s| rng_bit(1, s, 5) == rng_bit(1, s + 1, 5))
+            .count();
         assert!((agree as f64 / n as f64 - 0.5).abs() < 2e-3);
     }
 

@@ -1,14 +1,19 @@
 //! GPU tests of the backend: they run on any adapter (lavapipe in CI) and are skipped with a
 //! printed reason when there is none, unless `SIMKIT_REQUIRE_GPU=1` makes that a failure.
 
-use backend::gpu::{DISPATCH_WGSL, exclusive_scan_cpu, run_pass};
+use backend::gpu::{DISPATCH_WGSL, run_pass};
+use backend::prefix::exclusive_scan;
 use backend::rng::{RNG_WGSL, rng_bit, rng_u32, rng_uniform};
 use backend::testing::gpu_or_skip;
 use backend::{Error, GpuBuffer, GpuScan, Kernel, KernelDesc};
 
 /// The key of item `i` in the RNG test: seeds, steps and indices all vary.
 fn key(i: u32) -> (u32, u32, u32) {
-    ((i % 7).wrapping_mul(0x9E37_79B9), i / 1024, i.wrapping_mul(2_654_435_761))
+    (
+        (i % 7).wrapping_mul(0x9E37_79B9),
+        i / 1024,
+        i.wrapping_mul(2_654_435_761),
+    )
 }
 
 const RNG_TEST_WGSL: &str = r#"
@@ -32,7 +37,9 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
 
 #[test]
 fn rng_is_bit_identical_on_cpu_and_gpu() {
-    let Some(ctx) = gpu_or_skip("rng_is_bit_identical_on_cpu_and_gpu") else { return };
+    let Some(ctx) = gpu_or_skip("rng_is_bit_identical_on_cpu_and_gpu") else {
+        return;
+    };
     let n = 1_000_000usize;
     let kernel = Kernel::new(
         &ctx,
@@ -48,8 +55,13 @@ fn rng_is_bit_identical_on_cpu_and_gpu() {
     let words = GpuBuffer::<u32>::zeroed(&ctx, "words", n).unwrap();
     let uniforms = GpuBuffer::<f32>::zeroed(&ctx, "uniforms", n).unwrap();
     let bits = GpuBuffer::<u32>::zeroed(&ctx, "bits", n).unwrap();
-    let bind = kernel.bind(&ctx, &[words.binding(), uniforms.binding(), bits.binding()]).unwrap();
-    run_pass(&ctx, "rng", |pass| kernel.dispatch_items(&ctx, pass, &bind, n as u64)).unwrap();
+    let bind = kernel
+        .bind(&ctx, &[words.binding(), uniforms.binding(), bits.binding()])
+        .unwrap();
+    run_pass(&ctx, "rng", |pass| {
+        kernel.dispatch_items(&ctx, pass, &bind, n as u64)
+    })
+    .unwrap();
     let (w, u, b) = (
         words.download(&ctx).unwrap(),
         uniforms.download(&ctx).unwrap(),
@@ -59,23 +71,31 @@ fn rng_is_bit_identical_on_cpu_and_gpu() {
         let (s, t, x) = key(i);
         let k = i as usize;
         assert_eq!(w[k], rng_u32(s, t, x), "word {i}");
-        assert_eq!(u[k].to_bits(), rng_uniform(s, t, x).to_bits(), "uniform {i}");
+        assert_eq!(
+            u[k].to_bits(),
+            rng_uniform(s, t, x).to_bits(),
+            "uniform {i}"
+        );
         assert_eq!(b[k], rng_bit(s, t, x), "bit {i}");
     }
 }
 
 #[test]
 fn scan_matches_cpu_for_awkward_lengths() {
-    let Some(ctx) = gpu_or_skip("scan_matches_cpu_for_awkward_lengths") else { return };
+    let Some(ctx) = gpu_or_skip("scan_matches_cpu_for_awkward_lengths") else {
+        return;
+    };
     let scan = GpuScan::new(&ctx).unwrap();
-    for &n in &[0usize, 1, 255, 256, 257, 1023, 1024, 1025, 65_535, 1_000_003] {
+    for &n in &[
+        0usize, 1, 255, 256, 257, 1023, 1024, 1025, 65_535, 1_000_003,
+    ] {
         // Small pseudo-random counts, as in a counting sort.
         let input: Vec<u32> = (0..n as u32).map(|i| rng_u32(9, 0, i) % 17).collect();
         let buf = GpuBuffer::from_slice(&ctx, "scan input", &input).unwrap();
         let plan = scan.scan_in_place(&ctx, &buf).unwrap();
         let got = buf.download(&ctx).unwrap();
         let mut want = input.clone();
-        let total = exclusive_scan_cpu(&mut want);
+        let total = exclusive_scan(&mut want);
         assert_eq!(got, want, "length {n}");
         match plan.total() {
             Some(t) => assert_eq!(t.download(&ctx).unwrap(), vec![total], "total, length {n}"),
@@ -115,24 +135,34 @@ fn dispatch_and_download_beyond_the_workgroup_grid_limit() {
     .unwrap();
     let buf = GpuBuffer::<u32>::zeroed(&ctx, "big", n).unwrap();
     let bind = kernel.bind(&ctx, &[buf.binding()]).unwrap();
-    run_pass(&ctx, "fill", |pass| kernel.dispatch_items(&ctx, pass, &bind, n as u64)).unwrap();
+    run_pass(&ctx, "fill", |pass| {
+        kernel.dispatch_items(&ctx, pass, &bind, n as u64)
+    })
+    .unwrap();
     let got = buf.download(&ctx).unwrap();
     assert_eq!(got.len(), n);
     for (i, &v) in got.iter().enumerate() {
         assert_eq!(v, i as u32 ^ 0xA5A5_A5A5, "element {i}");
     }
     // Zero items: nothing recorded, nothing fails.
-    run_pass(&ctx, "empty", |pass| kernel.dispatch_items(&ctx, pass, &bind, 0)).unwrap();
+    run_pass(&ctx, "empty", |pass| {
+        kernel.dispatch_items(&ctx, pass, &bind, 0)
+    })
+    .unwrap();
 }
 
 #[test]
 fn oversize_buffer_is_refused_with_the_limit_named() {
-    let Some(ctx) = gpu_or_skip("oversize_buffer_is_refused_with_the_limit_named") else { return };
+    let Some(ctx) = gpu_or_skip("oversize_buffer_is_refused_with_the_limit_named") else {
+        return;
+    };
     let limit = ctx.max_storage_bytes();
     let len = (limit / 4 + 1) as usize;
     let err = GpuBuffer::<u32>::zeroed(&ctx, "too big", len).unwrap_err();
     match &err {
-        Error::BufferTooLarge { bytes, limit: l, .. } => {
+        Error::BufferTooLarge {
+            bytes, limit: l, ..
+        } => {
             assert_eq!(*bytes, len as u64 * 4);
             assert!(*bytes > *l);
         }
@@ -144,7 +174,9 @@ fn oversize_buffer_is_refused_with_the_limit_named() {
 
 #[test]
 fn shader_errors_are_errors_not_panics() {
-    let Some(ctx) = gpu_or_skip("shader_errors_are_errors_not_panics") else { return };
+    let Some(ctx) = gpu_or_skip("shader_errors_are_errors_not_panics") else {
+        return;
+    };
     let err = Kernel::new(
         &ctx,
         &KernelDesc {
@@ -161,7 +193,9 @@ fn shader_errors_are_errors_not_panics() {
 
 #[test]
 fn empty_buffers_round_trip() {
-    let Some(ctx) = gpu_or_skip("empty_buffers_round_trip") else { return };
+    let Some(ctx) = gpu_or_skip("empty_buffers_round_trip") else {
+        return;
+    };
     let buf = GpuBuffer::<f32>::from_slice(&ctx, "empty", &[]).unwrap();
     assert!(buf.download(&ctx).unwrap().is_empty());
     let err = buf.upload(&ctx, &[1.0]).unwrap_err();

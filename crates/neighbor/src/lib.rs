@@ -1,1 +1,68 @@
-//! `neighbor`: see its issue; filled in by its own crate work.
+//! Neighbour search for particle simulations: every pair of particles closer than a cutoff,
+//! in 2D and 3D boxes with any mix of periodic and closed axes, on the CPU (serial and rayon)
+//! and on the GPU (wgpu), all proven to find the same pairs.
+//!
+//! # Dimension
+//! One implementation serves both dimensions through a const generic: [`CellGrid<2>`] and
+//! [`CellGrid<3>`] over positions `[f64; D]` (`glam::DVec3::to_array()` gives one). Other `D`
+//! are refused with an error by [`CellGrid::new`].
+//!
+//! # Methods
+//! - [`BruteForce`]: O(N^2) reference.
+//! - [`LinkedCells`]: `head`/`link` arrays, O(N) build, random memory access.
+//! - [`SortedCells`]: counting sort by cell (`cell_start`, permutation `order`, reorder
+//!   helpers), structure-of-arrays positions in cell order; the fastest traversal, with
+//!   half-shell ([`SortedCells::for_each_pair`], [`SortedCells::par_fold_pairs`]) and
+//!   full-shell ([`SortedCells::for_each_neighbor`], [`SortedCells::par_for_each_particle`])
+//!   loops.
+//! - [`VerletList`]: CSR half or full list within `cutoff + skin`, with
+//!   [`VerletList::needs_rebuild`] / [`VerletList::update`].
+//! - GPU: [`GpuCellList`] (device-resident sorted cells whose buffers other kernels bind,
+//!   plus [`CELLS_WGSL`] helper functions), [`GpuNeighborList`] (CSR count-then-fill) and
+//!   [`GpuNeighborSearch`] (the [`NeighborSearch`] trait on the GPU).
+//!
+//! All of them implement [`NeighborSearch`].
+//!
+//! # Conventions
+//! Pairs are reported as `(i, j, sep, r2)` with original particle indices, the minimum image
+//! separation `sep = r_i - r_j` and `r2 = |sep|^2 <= cutoff^2`; see [`CellGrid`] for wrapping
+//! and cell sizes. Half-shell traversals report each unordered pair once (which particle is
+//! `i` is unspecified); full-shell traversals report each pair from both ends.
+//!
+//! ```
+//! use neighbor::{CellGrid, NeighborSearch, SortedCells};
+//! # fn main() -> backend::Result<()> {
+//! let grid = CellGrid::new([0.0; 3], [10.0; 3], [true; 3], 2.5)?;
+//! let positions = vec![[0.5, 0.5, 0.5], [9.5, 0.5, 0.5], [5.0, 5.0, 5.0]];
+//! let mut cells = SortedCells::new(&grid);
+//! cells.build(&positions)?;
+//! let mut pairs = Vec::new();
+//! cells.for_each_pair(|i, j, sep, r2| pairs.push((i.min(j), i.max(j), sep, r2)));
+//! assert_eq!(pairs.len(), 1); // 0 and 1 meet across the periodic x face
+//! assert_eq!((pairs[0].0, pairs[0].1), (0, 1));
+//! assert!((pairs[0].3 - 1.0).abs() < 1e-12);
+//! # Ok(())
+//! # }
+//! ```
+
+mod brute;
+mod gpu;
+mod grid;
+mod linked;
+mod search;
+mod sorted;
+mod stencil;
+mod traverse;
+mod verlet;
+
+pub use brute::BruteForce;
+pub use gpu::{
+    CELLS_WGSL, GPU_MAX_CELLS_PER_AXIS, GpuCellList, GpuGridParams, GpuNeighborList,
+    GpuNeighborSearch, positions_to_f32,
+};
+pub use grid::{CELL_MARGIN, CellGrid, MAX_CELLS, OutOfBox};
+pub use linked::{EMPTY, LinkedCells};
+pub use search::{NeighborLists, NeighborSearch};
+pub use sorted::SortedCells;
+pub use stencil::{HALF_SHELL_2D, HALF_SHELL_3D};
+pub use verlet::{ListKind, VerletList};

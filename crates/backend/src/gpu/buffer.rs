@@ -22,7 +22,10 @@ pub struct GpuBuffer<T: Pod> {
 
 impl<T: Pod> std::fmt::Debug for GpuBuffer<T> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("GpuBuffer").field("label", &self.label).field("len", &self.len).finish()
+        f.debug_struct("GpuBuffer")
+            .field("label", &self.label)
+            .field("len", &self.len)
+            .finish()
     }
 }
 
@@ -33,9 +36,15 @@ const STORAGE_USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
 
 /// Checks that `len` elements of `T` fit the device's storage-buffer limits.
 pub fn check_storage_size<T>(ctx: &GpuContext, label: &str, len: usize) -> Result<u64> {
-    let bytes = (len as u64).checked_mul(size_of::<T>() as u64).ok_or_else(|| {
-        Error::invalid(format!("length of buffer '{label}'"), len, "byte size overflows u64")
-    })?;
+    let bytes = (len as u64)
+        .checked_mul(size_of::<T>() as u64)
+        .ok_or_else(|| {
+            Error::invalid(
+                format!("length of buffer '{label}'"),
+                len,
+                "byte size overflows u64",
+            )
+        })?;
     let limits = ctx.limits();
     let binding = limits.max_storage_buffer_binding_size;
     if bytes > binding {
@@ -66,15 +75,23 @@ impl<T: Pod> GpuBuffer<T> {
     /// A zero-filled buffer of `len` elements.
     pub fn zeroed(ctx: &GpuContext, label: &str, len: usize) -> Result<Self> {
         let bytes = check_storage_size::<T>(ctx, label, len)?;
-        let buffer = ctx.checked(&format!("allocating buffer '{label}' ({bytes} bytes)"), || {
-            ctx.device().create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: padded(bytes),
-                usage: STORAGE_USAGE,
-                mapped_at_creation: false,
-            })
-        })?;
-        Ok(Self { buffer, len, label: label.to_string(), _marker: PhantomData })
+        let buffer = ctx.checked(
+            &format!("allocating buffer '{label}' ({bytes} bytes)"),
+            || {
+                ctx.device().create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: padded(bytes),
+                    usage: STORAGE_USAGE,
+                    mapped_at_creation: false,
+                })
+            },
+        )?;
+        Ok(Self {
+            buffer,
+            len,
+            label: label.to_string(),
+            _marker: PhantomData,
+        })
     }
 
     /// A buffer initialised with `data`.
@@ -91,19 +108,22 @@ impl<T: Pod> GpuBuffer<T> {
 
     /// Overwrites elements `offset..offset + data.len()`.
     pub fn upload_at(&self, ctx: &GpuContext, offset: usize, data: &[T]) -> Result<()> {
-        let end = offset.checked_add(data.len()).filter(|&e| e <= self.len).ok_or_else(|| {
-            Error::invalid(
-                format!("upload range of buffer '{}'", self.label),
-                format!("{offset}..{}", offset.saturating_add(data.len())),
-                format!("must lie within 0..{}", self.len),
-            )
-        })?;
+        let end = offset
+            .checked_add(data.len())
+            .filter(|&e| e <= self.len)
+            .ok_or_else(|| {
+                Error::invalid(
+                    format!("upload range of buffer '{}'", self.label),
+                    format!("{offset}..{}", offset.saturating_add(data.len())),
+                    format!("must lie within 0..{}", self.len),
+                )
+            })?;
         if offset == end {
             return Ok(());
         }
         let bytes: &[u8] = bytemuck::cast_slice(data);
         let start = (offset * size_of::<T>()) as u64;
-        if bytes.len() % 4 == 0 && start % 4 == 0 {
+        if bytes.len().is_multiple_of(4) && start.is_multiple_of(4) {
             ctx.queue().write_buffer(&self.buffer, start, bytes);
         } else {
             return Err(Error::invalid(
@@ -125,7 +145,11 @@ impl<T: Pod> GpuBuffer<T> {
 
     /// Records a copy of this buffer into a new staging buffer on `encoder`; read it with
     /// [`Staging::read`] after submitting. Lets several downloads share one submission.
-    pub fn encode_download(&self, ctx: &GpuContext, encoder: &mut wgpu::CommandEncoder) -> Staging<T> {
+    pub fn encode_download(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Staging<T> {
         let bytes = (self.len * size_of::<T>()) as u64;
         let staging = ctx.device().create_buffer(&wgpu::BufferDescriptor {
             label: Some("staging"),
@@ -136,7 +160,11 @@ impl<T: Pod> GpuBuffer<T> {
         if bytes > 0 {
             encoder.copy_buffer_to_buffer(&self.buffer, 0, &staging, 0, padded(bytes));
         }
-        Staging { buffer: staging, len: self.len, _marker: PhantomData }
+        Staging {
+            buffer: staging,
+            len: self.len,
+            _marker: PhantomData,
+        }
     }
 
     /// Number of elements.
@@ -216,14 +244,18 @@ impl<T: Pod> Uniform<T> {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let u = Self { buffer, _marker: PhantomData };
+        let u = Self {
+            buffer,
+            _marker: PhantomData,
+        };
         u.set(ctx, value);
         u
     }
 
     /// Overwrites the value (takes effect for work submitted afterwards).
     pub fn set(&self, ctx: &GpuContext, value: &T) {
-        ctx.queue().write_buffer(&self.buffer, 0, bytemuck::bytes_of(value));
+        ctx.queue()
+            .write_buffer(&self.buffer, 0, bytemuck::bytes_of(value));
     }
 
     /// The buffer as a bind-group resource.

@@ -57,7 +57,9 @@ pub struct GpuContext {
 
 impl std::fmt::Debug for GpuContext {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("GpuContext").field("adapter", &self.inner.info.name).finish()
+        f.debug_struct("GpuContext")
+            .field("adapter", &self.inner.info.name)
+            .finish()
     }
 }
 
@@ -86,13 +88,18 @@ fn summary(adapter: &wgpu::Adapter) -> AdapterSummary {
         name: info.name.clone(),
         device_type: info.device_type,
         backend: info.backend,
-        driver: format!("{} {}", info.driver, info.driver_info).trim().to_string(),
+        driver: format!("{} {}", info.driver, info.driver_info)
+            .trim()
+            .to_string(),
         shader_f64: adapter.features().contains(wgpu::Features::SHADER_F64),
     }
 }
 
 fn compute_capable(adapter: &wgpu::Adapter) -> bool {
-    adapter.get_downlevel_capabilities().flags.contains(wgpu::DownlevelFlags::COMPUTE_SHADERS)
+    adapter
+        .get_downlevel_capabilities()
+        .flags
+        .contains(wgpu::DownlevelFlags::COMPUTE_SHADERS)
 }
 
 impl GpuContext {
@@ -111,7 +118,10 @@ impl GpuContext {
         adapters.sort_by_key(|a| {
             let info = a.get_info();
             // Prefer real GPUs, then Vulkan over other APIs.
-            (preference(info.device_type), info.backend != wgpu::Backend::Vulkan)
+            (
+                preference(info.device_type),
+                info.backend != wgpu::Backend::Vulkan,
+            )
         });
         adapters
     }
@@ -128,14 +138,18 @@ impl GpuContext {
     pub fn with_adapter_name(name: Option<&str>) -> Result<Self> {
         let adapters = Self::sorted_adapters();
         if adapters.is_empty() {
-            return Err(Error::NoAdapter("wgpu found no compute-capable adapter".into()));
+            return Err(Error::NoAdapter(
+                "wgpu found no compute-capable adapter".into(),
+            ));
         }
         let found: Vec<String> = adapters.iter().map(|a| a.get_info().name).collect();
         let adapter = match name {
             None => adapters.into_iter().next(),
             Some(pat) => {
                 let pat = pat.to_lowercase();
-                adapters.into_iter().find(|a| a.get_info().name.to_lowercase().contains(&pat))
+                adapters
+                    .into_iter()
+                    .find(|a| a.get_info().name.to_lowercase().contains(&pat))
             }
         };
         let adapter = adapter.ok_or_else(|| {
@@ -163,7 +177,16 @@ impl GpuContext {
         .map_err(|e| Error::NoAdapter(format!("adapter {} refused a device: {e}", info.name)))?;
         let limits = device.limits();
         let features = device.features();
-        Ok(Self { inner: Arc::new(Inner { adapter, device, queue, info, limits, features }) })
+        Ok(Self {
+            inner: Arc::new(Inner {
+                adapter,
+                device,
+                queue,
+                info,
+                limits,
+                features,
+            }),
+        })
     }
 
     /// The wgpu device.
@@ -229,8 +252,14 @@ impl GpuContext {
     /// Runs `f` inside a validation error scope and turns any captured validation or
     /// out-of-memory error into [`Error::Gpu`] instead of wgpu's default panic.
     pub fn checked<T>(&self, what: &str, f: impl FnOnce() -> T) -> Result<T> {
-        let oom = self.inner.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-        let validation = self.inner.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let oom = self
+            .inner
+            .device
+            .push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = self
+            .inner
+            .device
+            .push_error_scope(wgpu::ErrorFilter::Validation);
         let out = f();
         let v = pollster::block_on(validation.pop());
         let o = pollster::block_on(oom.pop());

@@ -33,7 +33,9 @@ pub struct Kernel {
 
 impl std::fmt::Debug for Kernel {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Kernel").field("label", &self.label).finish()
+        f.debug_struct("Kernel")
+            .field("label", &self.label)
+            .finish()
     }
 }
 
@@ -66,12 +68,15 @@ impl Kernel {
         let source = desc.sources.join("\n");
         let what = format!("compiling kernel '{}'", desc.label);
         let (pipeline, layout) = ctx.checked(&what, || {
-            let module = ctx.device().create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some(desc.label),
-                source: wgpu::ShaderSource::Wgsl(source.into()),
-            });
-            let pipeline =
-                ctx.device().create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            let module = ctx
+                .device()
+                .create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label: Some(desc.label),
+                    source: wgpu::ShaderSource::Wgsl(source.into()),
+                });
+            let pipeline = ctx
+                .device()
+                .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                     label: Some(desc.label),
                     layout: None,
                     module: &module,
@@ -85,23 +90,38 @@ impl Kernel {
             let layout = pipeline.get_bind_group_layout(0);
             (pipeline, layout)
         })?;
-        Ok(Self { pipeline, layout, workgroup_size: desc.workgroup_size, label: desc.label.into() })
+        Ok(Self {
+            pipeline,
+            layout,
+            workgroup_size: desc.workgroup_size,
+            label: desc.label.into(),
+        })
     }
 
     /// A bind group for group 0 with `resources` at bindings 0, 1, 2, ...
-    pub fn bind(&self, ctx: &GpuContext, resources: &[wgpu::BindingResource<'_>]) -> Result<wgpu::BindGroup> {
+    pub fn bind(
+        &self,
+        ctx: &GpuContext,
+        resources: &[wgpu::BindingResource<'_>],
+    ) -> Result<wgpu::BindGroup> {
         let entries: Vec<wgpu::BindGroupEntry<'_>> = resources
             .iter()
             .enumerate()
-            .map(|(i, r)| wgpu::BindGroupEntry { binding: i as u32, resource: r.clone() })
-            .collect();
-        ctx.checked(&format!("binding resources of kernel '{}'", self.label), || {
-            ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some(&self.label),
-                layout: &self.layout,
-                entries: &entries,
+            .map(|(i, r)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: r.clone(),
             })
-        })
+            .collect();
+        ctx.checked(
+            &format!("binding resources of kernel '{}'", self.label),
+            || {
+                ctx.device().create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some(&self.label),
+                    layout: &self.layout,
+                    entries: &entries,
+                })
+            },
+        )
     }
 
     /// Records a dispatch covering `items` invocations (one per item, rounded up to whole
@@ -141,7 +161,13 @@ impl Kernel {
     }
 
     /// Records a dispatch of an explicit `x` by `y` workgroup grid (e.g. 2D tiles).
-    pub fn dispatch_grid(&self, pass: &mut wgpu::ComputePass<'_>, bind: &wgpu::BindGroup, x: u32, y: u32) {
+    pub fn dispatch_grid(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        bind: &wgpu::BindGroup,
+        x: u32,
+        y: u32,
+    ) {
         if x == 0 || y == 0 {
             return;
         }

@@ -8,4 +8,4 @@ pub mod scan;
 pub use buffer::{GpuBuffer, Staging, Uniform, check_storage_size};
 pub use context::{ADAPTER_ENV, AdapterSummary, GpuContext};
 pub use kernel::{DISPATCH_WGSL, Kernel, KernelDesc, run_pass, workgroup_grid};
-pub use scan::{GpuScan, ScanPlan, exclusive_scan_cpu};
+pub use scan::{GpuScan, ScanPlan};

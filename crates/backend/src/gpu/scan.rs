@@ -59,7 +59,10 @@ impl GpuScan {
                 },
             )
         };
-        Ok(Self { blocks: make("scan_blocks")?, add: make("add_offsets")? })
+        Ok(Self {
+            blocks: make("scan_blocks")?,
+            add: make("add_offsets")?,
+        })
     }
 
     /// Prepares an in-place exclusive scan of `data`.
@@ -69,12 +72,25 @@ impl GpuScan {
         while n > 0 {
             let blocks = n.div_ceil(u64::from(SCAN_BLOCK));
             let sums = GpuBuffer::<u32>::zeroed(ctx, "scan block sums", blocks as usize)?;
-            let params = Uniform::new(ctx, "scan params", &ScanParams { n: n as u32, pad: [0; 3] });
+            let params = Uniform::new(
+                ctx,
+                "scan params",
+                &ScanParams {
+                    n: n as u32,
+                    pad: [0; 3],
+                },
+            );
             let input = levels.last().map_or(data, |l| &l.sums);
             let resources = [input.binding(), sums.binding(), params.binding()];
             let scan_bind = self.blocks.bind(ctx, &resources)?;
             let add_bind = self.add.bind(ctx, &resources)?;
-            levels.push(Level { blocks, scan_bind, add_bind, _params: params, sums });
+            levels.push(Level {
+                blocks,
+                scan_bind,
+                add_bind,
+                _params: params,
+                sums,
+            });
             if blocks == 1 {
                 break;
             }
@@ -84,13 +100,20 @@ impl GpuScan {
     }
 
     /// Records the scan described by `plan` into `pass`.
-    pub fn encode(&self, ctx: &GpuContext, pass: &mut wgpu::ComputePass<'_>, plan: &ScanPlan) -> Result<()> {
+    pub fn encode(
+        &self,
+        ctx: &GpuContext,
+        pass: &mut wgpu::ComputePass<'_>,
+        plan: &ScanPlan,
+    ) -> Result<()> {
         for level in &plan.levels {
-            self.blocks.dispatch_workgroups(ctx, pass, &level.scan_bind, level.blocks)?;
+            self.blocks
+                .dispatch_workgroups(ctx, pass, &level.scan_bind, level.blocks)?;
         }
         // The last level is a single block whose offset is zero: nothing to add there.
         for level in plan.levels.iter().rev().skip(1) {
-            self.add.dispatch_workgroups(ctx, pass, &level.add_bind, level.blocks)?;
+            self.add
+                .dispatch_workgroups(ctx, pass, &level.add_bind, level.blocks)?;
         }
         Ok(())
     }
@@ -110,15 +133,4 @@ impl ScanPlan {
     pub fn total(&self) -> Option<&GpuBuffer<u32>> {
         self.levels.last().map(|l| &l.sums)
     }
-}
-
-/// Exclusive prefix sum on the CPU (the reference for the GPU scan); returns the total.
-pub fn exclusive_scan_cpu(data: &mut [u32]) -> u32 {
-    let mut acc = 0u32;
-    for x in data.iter_mut() {
-        let v = *x;
-        *x = acc;
-        acc = acc.wrapping_add(v);
-    }
-    acc
 }

@@ -1,0 +1,187 @@
+//! Diagnostics of a state: energies, momentum, overlaps, contacts, granular temperature.
+
+use neighbor::{CellGrid, OutOfBox, SortedCells};
+
+use backend::Result;
+
+use crate::prepared::Prepared;
+
+/// Scalar observables of one state (computed on the host from a [`crate::State`], so they
+/// are identical for both backends).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Diagnostics {
+    /// Simulation time.
+    pub time: f64,
+    /// Kinetic energy `sum m v^2 / 2`.
+    pub kinetic: f64,
+    /// Elastic energy stored in the springs `sum k delta^2 / 2` (pairs and walls).
+    pub elastic: f64,
+    /// Potential energy in gravity `sum m g h` (h along the vertical axis from the box floor).
+    pub potential: f64,
+    /// Total momentum.
+    pub momentum: [f64; 3],
+    /// Deepest particle–particle or particle–wall overlap.
+    pub max_overlap: f64,
+    /// Deepest overlap divided by the radius of the (smaller) particle involved.
+    pub max_overlap_ratio: f64,
+    /// Number of particle–particle contacts.
+    pub contacts: usize,
+    /// Number of particle–wall contacts.
+    pub wall_contacts: usize,
+    /// Granular temperature: `sum m |v - <v>|^2 / (N D)` with the mass-weighted mean `<v>`.
+    pub granular_temperature: f64,
+    /// Centre-of-mass height (vertical coordinate).
+    pub com_height: f64,
+    /// Whether every position and velocity is finite.
+    pub finite: bool,
+}
+
+/// Calls `f(i, j, sep, r2)` once per unordered pair closer than the largest contact
+/// distance, with minimum-image separations, using `neighbor`'s sorted cells.
+pub(crate) fn for_each_close_pair(
+    p: &Prepared,
+    positions: &[[f64; 3]],
+    mut f: impl FnMut(usize, usize, [f64; 3], f64),
+) -> Result<()> {
+    fn run<const D: usize>(
+        p: &Prepared,
+        positions: &[[f64; 3]],
+        f: &mut dyn FnMut(usize, usize, [f64; 3], f64),
+    ) -> Result<()> {
+        let lo: [f64; D] = std::array::from_fn(|d| p.lo[d]);
+        let len: [f64; D] = std::array::from_fn(|d| p.len[d]);
+        let per: [bool; D] = std::array::from_fn(|d| p.periodic[d]);
+        let grid = CellGrid::new(lo, len, per, p.cutoff)?.with_out_of_box(OutOfBox::Clamp);
+        let mut cells = SortedCells::new(&grid);
+        let pos: Vec<[f64; D]> = positions
+            .iter()
+            .map(|x| std::array::from_fn(|d| x[d]))
+            .collect();
+        cells.build(&pos)?;
+        cells.for_each_pair(|i, j, sep, r2| {
+            let mut s = [0.0; 3];
+            s[..D].copy_from_slice(&sep);
+            f(i, j, s, r2)
+        });
+        Ok(())
+    }
+    if p.axes == 2 {
+        run::<2>(p, positions, &mut f)
+    } else {
+        run::<3>(p, positions, &mut f)
+    }
+}
+
+/// The deepest particle–particle overlap `(i, j, depth)`, if any pair overlaps.
+pub(crate) fn deepest_overlap(
+    p: &Prepared,
+    positions: &[[f64; 3]],
+) -> Result<Option<(usize, usize, f64)>> {
+    let mut worst: Option<(usize, usize, f64)> = None;
+    for_each_close_pair(p, positions, |i, j, _, r2| {
+        let depth = p.radius[i] + p.radius[j] - r2.sqrt();
+        if depth > 0.0 && worst.is_none_or(|w| depth > w.2) {
+            worst = Some((i.min(j), i.max(j), depth));
+        }
+    })?;
+    Ok(worst)
+}
+
+/// Overlap of particle `x` (radius `r`) with wall `w` at vertical displacement `zw`, and
+/// the unit normal pointing from the wall to the particle.
+pub(crate) fn wall_overlap(
+    p: &Prepared,
+    w: &crate::prepared::PreparedWall,
+    x: [f64; 3],
+    r: f64,
+    zw: f64,
+) -> (f64, [f64; 3]) {
+    if w.cylinder {
+        let dx = x[0] - w.center[0];
+        let dy = x[1] - w.center[1];
+        let rho = (dx * dx + dy * dy).sqrt();
+        let n = if rho > 0.0 {
+            [-dx / rho, -dy / rho, 0.0]
+        } else {
+            [0.0; 3]
+        };
+        (rho + r - w.radius, n)
+    } else {
+        let shift = if w.vibrating {
+            zw * w.normal[p.vertical]
+        } else {
+            0.0
+        };
+        let h = (0..p.axes).map(|d| w.normal[d] * x[d]).sum::<f64>() - w.offset - shift;
+        (r - h, w.normal)
+    }
+}
+
+pub(crate) fn compute(
+    p: &Prepared,
+    time: f64,
+    x: &[[f64; 3]],
+    v: &[[f64; 3]],
+) -> Result<Diagnostics> {
+    let mut out = Diagnostics {
+        time,
+        finite: x
+            .iter()
+            .chain(v.iter())
+            .all(|a| a.iter().all(|c| c.is_finite())),
+        ..Default::default()
+    };
+    if !out.finite {
+        return Ok(out);
+    }
+    let mut mtot = 0.0;
+    let mut mz = 0.0;
+    for i in 0..p.n {
+        let m = p.mass[i];
+        mtot += m;
+        mz += m * x[i][p.vertical];
+        for d in 0..3 {
+            out.momentum[d] += m * v[i][d];
+        }
+        out.kinetic += 0.5 * m * v[i].iter().map(|c| c * c).sum::<f64>();
+        out.potential += m * p.gravity * (x[i][p.vertical] - p.lo[p.vertical]);
+    }
+    out.com_height = mz / mtot;
+    let vmean = out.momentum.map(|c| c / mtot);
+    let mut t = 0.0;
+    for i in 0..p.n {
+        t += p.mass[i]
+            * (0..p.axes)
+                .map(|d| (v[i][d] - vmean[d]).powi(2))
+                .sum::<f64>();
+    }
+    out.granular_temperature = t / (p.n * p.axes) as f64;
+    let mut worst = 0.0f64;
+    let mut worst_ratio = 0.0f64;
+    for_each_close_pair(p, x, |i, j, _, r2| {
+        let depth = p.radius[i] + p.radius[j] - r2.sqrt();
+        if depth > 0.0 {
+            let c = &p.coeff[crate::pair_index(p.species[i], p.species[j], p.n_species)];
+            let mij = crate::reduced_mass(p.mass[i], p.mass[j]);
+            out.elastic += 0.5 * mij * c.kappa * depth * depth;
+            out.contacts += 1;
+            worst = worst.max(depth);
+            worst_ratio = worst_ratio.max(depth / p.radius[i].min(p.radius[j]));
+        }
+    })?;
+    let (zw, _) = p.wall_motion(time);
+    for i in 0..p.n {
+        for w in &p.walls {
+            let (depth, _) = wall_overlap(p, w, x[i], p.radius[i], zw);
+            if depth > 0.0 {
+                out.elastic += 0.5 * p.mass[i] * w.coeff.kappa * depth * depth;
+                out.wall_contacts += 1;
+                worst = worst.max(depth);
+                worst_ratio = worst_ratio.max(depth / p.radius[i]);
+            }
+        }
+    }
+    out.max_overlap = worst;
+    out.max_overlap_ratio = worst_ratio;
+    Ok(out)
+}

@@ -1,0 +1,564 @@
+//! Scene description: particles, species-pair materials, walls, gravity, vibration, box.
+
+use backend::{Error, Result};
+
+/// Spatial dimension of a scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Dim {
+    /// Discs in the x-y plane; the vertical axis is y.
+    Two,
+    /// Spheres; the vertical axis is z.
+    Three,
+}
+
+impl Dim {
+    /// Number of axes (2 or 3).
+    pub fn axes(self) -> usize {
+        match self {
+            Dim::Two => 2,
+            Dim::Three => 3,
+        }
+    }
+
+    /// Index of the vertical axis (gravity and vibration act along it): 1 in 2D, 2 in 3D.
+    pub fn vertical(self) -> usize {
+        self.axes() - 1
+    }
+}
+
+/// Contact parameters of a species pair or of a wall: the requested normal restitution
+/// `e` and contact time `t_c`, and the friction coefficients.
+///
+/// The linear spring–dashpot coefficients follow from `(e, t_c)` with the reduced mass
+/// (see [`crate::ContactCoefficients`]), so the requested `e` and `t_c` hold for any mass pair.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Material {
+    /// Normal coefficient of restitution, in (0, 1].
+    pub restitution: f64,
+    /// Duration of a binary normal contact, > 0.
+    pub contact_time: f64,
+    /// Coulomb (static) friction coefficient: tangential force `<= mu_s |F_n|`. 0 = off.
+    pub mu_s: f64,
+    /// Viscous tangential coefficient: tangential force `<= mu_k m_ij |v_t|` (units of 1/time).
+    pub mu_k: f64,
+}
+
+impl Material {
+    /// A frictionless material with restitution `e` and contact time `t_c`.
+    pub fn new(restitution: f64, contact_time: f64) -> Self {
+        Self {
+            restitution,
+            contact_time,
+            mu_s: 0.0,
+            mu_k: 0.0,
+        }
+    }
+
+    /// The same material with friction: tangential force
+    /// `min(mu_s |F_n|, mu_k m_ij |v_t|)` opposing the tangential relative velocity.
+    pub fn with_friction(mut self, mu_s: f64, mu_k: f64) -> Self {
+        self.mu_s = mu_s;
+        self.mu_k = mu_k;
+        self
+    }
+
+    /// Whether the tangential force is non-zero.
+    pub fn has_friction(&self) -> bool {
+        self.mu_s > 0.0 && self.mu_k > 0.0
+    }
+
+    pub(crate) fn validate(&self, what: &str) -> Result<()> {
+        let e = self.restitution;
+        if !(e.is_finite() && e > 0.0 && e <= 1.0) {
+            return Err(Error::invalid(
+                format!("{what}: restitution"),
+                e,
+                "must be in (0, 1]; e = 0 would need infinite damping",
+            ));
+        }
+        let t = self.contact_time;
+        if !(t.is_finite() && t > 0.0) {
+            return Err(Error::invalid(
+                format!("{what}: contact_time"),
+                t,
+                "must be finite and > 0",
+            ));
+        }
+        for (name, v) in [("mu_s", self.mu_s), ("mu_k", self.mu_k)] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(Error::invalid(
+                    format!("{what}: {name}"),
+                    v,
+                    "must be finite and >= 0",
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One particle: a disc (2D) or sphere (3D) without rotation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Particle {
+    /// Position (in 2D the z component must be 0).
+    pub position: [f64; 3],
+    /// Velocity (in 2D the z component must be 0).
+    pub velocity: [f64; 3],
+    /// Radius, > 0.
+    pub radius: f64,
+    /// Mass, > 0.
+    pub mass: f64,
+    /// Species index, < the scene's species count.
+    pub species: u32,
+}
+
+impl Particle {
+    /// A particle at rest of species 0.
+    pub fn new(position: [f64; 3], radius: f64, mass: f64) -> Self {
+        Self {
+            position,
+            velocity: [0.0; 3],
+            radius,
+            mass,
+            species: 0,
+        }
+    }
+
+    /// The same particle with a velocity.
+    pub fn with_velocity(mut self, velocity: [f64; 3]) -> Self {
+        self.velocity = velocity;
+        self
+    }
+
+    /// The same particle with a species index.
+    pub fn with_species(mut self, species: u32) -> Self {
+        self.species = species;
+        self
+    }
+}
+
+/// Geometry of a wall.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum WallShape {
+    /// The plane `normal . x = offset`; particles live on the side the unit `normal` points
+    /// to (`normal . x > offset`).
+    Plane {
+        /// Unit normal pointing into the particle region.
+        normal: [f64; 3],
+        /// Plane offset along the normal.
+        offset: f64,
+    },
+    /// 3D only: a vertical cylinder side wall (axis along z through `center`), particles
+    /// inside. The contact treats the wall as a sphere of radius `radius` centred on the
+    /// axis at the particle's height: overlap `rho + R - radius`.
+    Cylinder {
+        /// Axis position (x, y).
+        center: [f64; 2],
+        /// Inner radius.
+        radius: f64,
+    },
+}
+
+/// A wall with its own contact material; it may follow the container vibration.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Wall {
+    /// Geometry at rest (time 0 without vibration offset).
+    pub shape: WallShape,
+    /// Contact parameters against every species (wall mass is infinite: `m_ij = m_i`).
+    pub material: Material,
+    /// Whether the wall moves with the scene's [`Vibration`].
+    pub vibrating: bool,
+}
+
+impl Wall {
+    /// A fixed plane through `point` with unit inward `normal` (normalised here).
+    pub fn plane(normal: [f64; 3], point: [f64; 3], material: Material) -> Self {
+        let len = (normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]).sqrt();
+        let n = if len > 0.0 {
+            normal.map(|c| c / len)
+        } else {
+            normal
+        };
+        let offset = n[0] * point[0] + n[1] * point[1] + n[2] * point[2];
+        Self {
+            shape: WallShape::Plane { normal: n, offset },
+            material,
+            vibrating: false,
+        }
+    }
+
+    /// A fixed vertical cylinder side wall (3D).
+    pub fn cylinder(center: [f64; 2], radius: f64, material: Material) -> Self {
+        Self {
+            shape: WallShape::Cylinder { center, radius },
+            material,
+            vibrating: false,
+        }
+    }
+
+    /// The same wall, moving with the container vibration.
+    pub fn vibrating(mut self) -> Self {
+        self.vibrating = true;
+        self
+    }
+}
+
+/// Sinusoidal vertical motion of the container: `z_w(t) = -A cos(omega t)`,
+/// velocity `A omega sin(omega t)`; vibration strength `Gamma = A omega^2 / g`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Vibration {
+    /// Amplitude `A`.
+    pub amplitude: f64,
+    /// Angular frequency `omega`.
+    pub omega: f64,
+}
+
+impl Vibration {
+    /// Displacement of the vibrating walls at time `t`.
+    pub fn displacement(&self, t: f64) -> f64 {
+        -self.amplitude * (self.omega * t).cos()
+    }
+
+    /// Velocity of the vibrating walls at time `t`.
+    pub fn velocity(&self, t: f64) -> f64 {
+        self.amplitude * self.omega * (self.omega * t).sin()
+    }
+}
+
+/// A complete scene: box, particles, species-pair materials, walls and body forces.
+///
+/// Everything beyond bare particles is opt-in: friction (a material with `mu_s, mu_k > 0`),
+/// gravity, walls, vibration and periodic axes cost nothing when absent (the backends
+/// select kernel variants once).
+///
+/// ```
+/// use dem::{Dim, Material, Particle, Scene};
+/// # fn main() -> backend::Result<()> {
+/// let mut scene = Scene::new(Dim::Two, [0.0; 3], [10.0, 10.0, 0.0], Material::new(0.9, 0.01))?;
+/// scene.set_gravity(1.0)?;
+/// scene.add_box_walls(Material::new(0.8, 0.01), true)?;
+/// scene.add_particle(Particle::new([5.0, 1.0, 0.0], 0.5, 1.0))?;
+/// assert_eq!(scene.particles().len(), 1);
+/// # Ok(())
+/// # }
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    dim: Dim,
+    lo: [f64; 3],
+    hi: [f64; 3],
+    periodic: [bool; 3],
+    n_species: usize,
+    pairs: Vec<Material>,
+    particles: Vec<Particle>,
+    walls: Vec<Wall>,
+    gravity: f64,
+    vibration: Option<Vibration>,
+}
+
+const AXES: [&str; 3] = ["x", "y", "z"];
+
+impl Scene {
+    /// An empty scene in the box `[lo, hi]` (z ignored in 2D) with one species whose
+    /// particle–particle contacts use `material`. No axis is periodic, there are no walls
+    /// (add them, or particles leaving the box are clamped into its edge cells for the
+    /// neighbour search only) and no gravity.
+    pub fn new(dim: Dim, lo: [f64; 3], hi: [f64; 3], material: Material) -> Result<Self> {
+        material.validate("particle material")?;
+        for d in 0..dim.axes() {
+            if !(lo[d].is_finite() && hi[d].is_finite() && hi[d] > lo[d]) {
+                return Err(Error::invalid(
+                    format!("box along {}", AXES[d]),
+                    format!("[{}, {}]", lo[d], hi[d]),
+                    "bounds must be finite with hi > lo",
+                ));
+            }
+        }
+        Ok(Self {
+            dim,
+            lo,
+            hi,
+            periodic: [false; 3],
+            n_species: 1,
+            pairs: vec![material],
+            particles: Vec::new(),
+            walls: Vec::new(),
+            gravity: 0.0,
+            vibration: None,
+        })
+    }
+
+    /// Makes the given axes periodic (in 2D the z flag is ignored). Periodic axes must not
+    /// be the vertical axis of a vibrating scene.
+    pub fn set_periodic(&mut self, periodic: [bool; 3]) -> &mut Self {
+        self.periodic = periodic;
+        if self.dim == Dim::Two {
+            self.periodic[2] = false;
+        }
+        self
+    }
+
+    /// Sets the number of species; every pair starts with `material` (replace pairs with
+    /// [`set_pair`](Self::set_pair)).
+    pub fn set_species(&mut self, count: usize, material: Material) -> Result<&mut Self> {
+        if count == 0 || count > 64 {
+            return Err(Error::invalid("species count", count, "must be in 1..=64"));
+        }
+        material.validate("species material")?;
+        self.n_species = count;
+        self.pairs = vec![material; count * count];
+        Ok(self)
+    }
+
+    /// Sets the material of species pair `(a, b)` (and `(b, a)`: the table is symmetric).
+    pub fn set_pair(&mut self, a: u32, b: u32, material: Material) -> Result<&mut Self> {
+        let n = self.n_species;
+        if a as usize >= n || b as usize >= n {
+            return Err(Error::invalid(
+                "species pair",
+                format!("({a}, {b})"),
+                format!("species must be < {n}; call set_species first"),
+            ));
+        }
+        material.validate(&format!("material of pair ({a}, {b})"))?;
+        self.pairs[pair_index(a, b, n)] = material;
+        self.pairs[pair_index(b, a, n)] = material;
+        Ok(self)
+    }
+
+    /// Gravity of magnitude `g` along minus the vertical axis (y in 2D, z in 3D).
+    pub fn set_gravity(&mut self, g: f64) -> Result<&mut Self> {
+        backend::require_non_negative("gravity", g)?;
+        self.gravity = g;
+        Ok(self)
+    }
+
+    /// Vibrates the walls marked [`Wall::vibrating`]: `z_w(t) = -A cos(omega t)`.
+    pub fn set_vibration(&mut self, amplitude: f64, omega: f64) -> Result<&mut Self> {
+        backend::require_non_negative("vibration amplitude", amplitude)?;
+        backend::require_positive("vibration omega", omega)?;
+        self.vibration = Some(Vibration { amplitude, omega });
+        Ok(self)
+    }
+
+    /// Adds a wall.
+    pub fn add_wall(&mut self, wall: Wall) -> Result<&mut Self> {
+        wall.material
+            .validate(&format!("wall {} material", self.walls.len()))?;
+        match wall.shape {
+            WallShape::Plane { normal, offset } => {
+                let len2: f64 = normal.iter().map(|c| c * c).sum();
+                if !(len2.is_finite() && (len2 - 1.0).abs() < 1e-9 && offset.is_finite()) {
+                    return Err(Error::invalid(
+                        "wall plane normal",
+                        format!("{normal:?}"),
+                        "must be a finite non-zero vector (Wall::plane normalises it)",
+                    ));
+                }
+                if self.dim == Dim::Two && normal[2] != 0.0 {
+                    return Err(Error::invalid(
+                        "wall plane normal",
+                        format!("{normal:?}"),
+                        "z must be 0 in 2D",
+                    ));
+                }
+            }
+            WallShape::Cylinder { center, radius } => {
+                if self.dim != Dim::Three {
+                    return Err(Error::Unsupported(
+                        "cylinder walls exist only in 3D scenes".into(),
+                    ));
+                }
+                if !(center[0].is_finite()
+                    && center[1].is_finite()
+                    && radius.is_finite()
+                    && radius > 0.0)
+                {
+                    return Err(Error::invalid(
+                        "cylinder wall",
+                        format!("center {center:?}, radius {radius}"),
+                        "must be finite with radius > 0",
+                    ));
+                }
+            }
+        }
+        self.walls.push(wall);
+        Ok(self)
+    }
+
+    /// Adds plane walls on every non-periodic face of the box (2 per axis), vibrating with
+    /// the container when `vibrating`.
+    pub fn add_box_walls(&mut self, material: Material, vibrating: bool) -> Result<&mut Self> {
+        for d in 0..self.dim.axes() {
+            if self.periodic[d] {
+                continue;
+            }
+            let mut n = [0.0; 3];
+            n[d] = 1.0;
+            let mut w = Wall::plane(n, self.lo, material);
+            w.vibrating = vibrating;
+            self.add_wall(w)?;
+            n[d] = -1.0;
+            let mut w = Wall::plane(n, self.hi, material);
+            w.vibrating = vibrating;
+            self.add_wall(w)?;
+        }
+        Ok(self)
+    }
+
+    /// Adds a particle (validated here: finite values, positive radius and mass, known
+    /// species, z = 0 in 2D).
+    pub fn add_particle(&mut self, p: Particle) -> Result<&mut Self> {
+        let i = self.particles.len();
+        for d in 0..3 {
+            backend::require_finite(
+                &format!("particle[{i}].position.{}", AXES[d]),
+                p.position[d],
+            )?;
+            backend::require_finite(
+                &format!("particle[{i}].velocity.{}", AXES[d]),
+                p.velocity[d],
+            )?;
+        }
+        if self.dim == Dim::Two && (p.position[2] != 0.0 || p.velocity[2] != 0.0) {
+            return Err(Error::invalid(
+                format!("particle[{i}] z"),
+                p.position[2],
+                "2D scenes need z = 0 and v_z = 0",
+            ));
+        }
+        backend::require_positive(&format!("particle[{i}].radius"), p.radius)?;
+        backend::require_positive(&format!("particle[{i}].mass"), p.mass)?;
+        if p.species as usize >= self.n_species {
+            return Err(Error::invalid(
+                format!("particle[{i}].species"),
+                p.species,
+                format!("must be < the species count {}", self.n_species),
+            ));
+        }
+        self.particles.push(p);
+        Ok(self)
+    }
+
+    /// Replaces the particles' positions and velocities (e.g. to restart from a
+    /// [`crate::State`]); counts must match.
+    pub fn set_kinematics(
+        &mut self,
+        positions: &[[f64; 3]],
+        velocities: &[[f64; 3]],
+    ) -> Result<()> {
+        let n = self.particles.len();
+        if positions.len() != n || velocities.len() != n {
+            return Err(Error::invalid(
+                "kinematics length",
+                format!(
+                    "{} positions, {} velocities",
+                    positions.len(),
+                    velocities.len()
+                ),
+                format!("must both equal the particle count {n}"),
+            ));
+        }
+        let old = std::mem::take(&mut self.particles);
+        for (k, p) in old.into_iter().enumerate() {
+            self.add_particle(Particle {
+                position: positions[k],
+                velocity: velocities[k],
+                ..p
+            })?;
+        }
+        Ok(())
+    }
+
+    /// Dimension.
+    pub fn dim(&self) -> Dim {
+        self.dim
+    }
+    /// Lower box corner.
+    pub fn lo(&self) -> [f64; 3] {
+        self.lo
+    }
+    /// Upper box corner.
+    pub fn hi(&self) -> [f64; 3] {
+        self.hi
+    }
+    /// Periodic axes.
+    pub fn periodic(&self) -> [bool; 3] {
+        self.periodic
+    }
+    /// Number of species.
+    pub fn species_count(&self) -> usize {
+        self.n_species
+    }
+    /// Material of species pair `(a, b)` (symmetric).
+    pub fn pair(&self, a: u32, b: u32) -> Material {
+        self.pairs[pair_index(a, b, self.n_species)]
+    }
+    /// The full species-pair table, row-major `n x n`, symmetric.
+    pub fn pair_table(&self) -> &[Material] {
+        &self.pairs
+    }
+    /// Particles.
+    pub fn particles(&self) -> &[Particle] {
+        &self.particles
+    }
+    /// Walls.
+    pub fn walls(&self) -> &[Wall] {
+        &self.walls
+    }
+    /// Gravity magnitude (0 = off).
+    pub fn gravity(&self) -> f64 {
+        self.gravity
+    }
+    /// Container vibration, if any.
+    pub fn vibration(&self) -> Option<Vibration> {
+        self.vibration
+    }
+
+    /// Whether any pair or wall material has friction.
+    pub fn has_friction(&self) -> bool {
+        self.pairs.iter().any(Material::has_friction)
+            || self.walls.iter().any(|w| w.material.has_friction())
+    }
+
+    /// Largest particle radius (0 without particles).
+    pub fn max_radius(&self) -> f64 {
+        self.particles.iter().map(|p| p.radius).fold(0.0, f64::max)
+    }
+
+    /// Shortest contact time of any pair or wall material.
+    pub fn min_contact_time(&self) -> f64 {
+        self.pairs
+            .iter()
+            .chain(self.walls.iter().map(|w| &w.material))
+            .map(|m| m.contact_time)
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    pub(crate) fn check_ready(&self) -> Result<()> {
+        if self.particles.is_empty() {
+            return Err(Error::invalid(
+                "particle count",
+                0,
+                "add at least one particle",
+            ));
+        }
+        if let Some(v) = self.vibration {
+            if self.periodic[self.dim.vertical()] && v.amplitude > 0.0 {
+                return Err(Error::invalid(
+                    "periodic axes",
+                    format!("{:?}", self.periodic),
+                    "the vertical axis of a vibrating scene cannot be periodic",
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Index of species pair `(a, b)` in the row-major `n x n` table. The table is stored
+/// symmetric (both triangles), so the lookup needs no `min`/`max` or branch.
+#[inline(always)]
+pub fn pair_index(a: u32, b: u32, n: usize) -> usize {
+    a as usize * n + b as usize
+}

@@ -1,0 +1,145 @@
+//! GPU backend against the CPU backend: a dilute gas over a short horizon, and the
+//! statistics of a vibrated bed.
+
+use backend::testing::gpu_or_skip;
+use backend::{Backend, Error, Simulation};
+use dem::{Config, Dem, Dim, Integrator, Material, Particle, Scene};
+
+fn dilute_gas() -> Scene {
+    let mut s = Scene::new(
+        Dim::Three,
+        [0.0; 3],
+        [16.0, 16.0, 16.0],
+        Material::new(0.8, 0.05).with_friction(0.4, 20.0),
+    )
+    .unwrap();
+    s.set_periodic([true, true, false]);
+    s.set_gravity(0.5).unwrap();
+    s.add_box_walls(Material::new(0.7, 0.05), false).unwrap();
+    let mut k = 0;
+    for z in 0..6 {
+        for y in 0..8 {
+            for x in 0..8 {
+                k += 1;
+                let h = |a: u32| backend::rng::rng_uniform(3, a, k) as f64 - 0.5;
+                // Pairs 1.02 apart along x that approach each other: contacts within 50 steps.
+                let p = [
+                    1.0 + 2.0 * x as f64,
+                    1.0 + 2.0 * y as f64,
+                    1.0 + 2.0 * z as f64,
+                ];
+                let v = [1.0 + 0.5 * h(0), 0.5 * h(1), 0.5 * h(2)];
+                let m = if k % 2 == 0 { 1.0 } else { 3.0 };
+                s.add_particle(Particle::new(p, 0.5, m).with_velocity(v))
+                    .unwrap();
+                let q = [p[0] + 1.02, p[1], p[2]];
+                s.add_particle(Particle::new(q, 0.5, 1.0).with_velocity([-v[0], -v[1], v[2]]))
+                    .unwrap();
+            }
+        }
+    }
+    s
+}
+
+#[test]
+fn dilute_gas_positions_agree_after_50_steps() {
+    let Some(ctx) = gpu_or_skip("dilute_gas_positions_agree_after_50_steps") else {
+        return;
+    };
+    let scene = dilute_gas();
+    let cfg = Config::default();
+    let mut cpu = Dem::new(&scene, &cfg, Backend::Cpu).unwrap();
+    let mut gpu = Dem::new(&scene, &cfg, Backend::Gpu(&ctx)).unwrap();
+    let mut contacts = 0;
+    for _ in 0..5 {
+        cpu.step(10).unwrap();
+        gpu.step(10).unwrap();
+        contacts += cpu.diagnostics().unwrap().contacts;
+    }
+    let (a, b) = (cpu.state().unwrap(), gpu.state().unwrap());
+    let worst = a
+        .positions
+        .iter()
+        .zip(&b.positions)
+        .map(|(x, y)| (0..3).map(|d| (x[d] - y[d]).abs()).fold(0.0, f64::max))
+        .fold(0.0, f64::max);
+    println!(
+        "dilute gas, 50 steps: worst position difference {worst:.2e} diameters ({contacts} contacts seen in 5 samples)"
+    );
+    assert!(
+        contacts > 100,
+        "the test scene should collide: {contacts} contacts"
+    );
+    assert!(worst < 1e-4, "CPU and GPU differ by {worst} diameters");
+    assert!((a.time - b.time).abs() < 1e-12);
+}
+
+/// A 2D vibrated bed: 120 discs in a box whose floor and ceiling vibrate.
+fn bed() -> Scene {
+    let m = Material::new(0.9, 0.1).with_friction(0.3, 10.0);
+    let mut s = Scene::new(Dim::Two, [0.0; 3], [12.0, 30.0, 0.0], m).unwrap();
+    s.set_gravity(1.0).unwrap().set_vibration(0.8, 1.5).unwrap();
+    s.add_box_walls(Material::new(0.8, 0.1).with_friction(0.3, 10.0), true)
+        .unwrap();
+    for k in 0..120u32 {
+        let (x, y) = (k % 10, k / 10);
+        let h = backend::rng::rng_uniform(5, 0, k) as f64 - 0.5;
+        s.add_particle(Particle::new(
+            [0.8 + 1.15 * x as f64 + 0.1 * h, 1.0 + 1.15 * y as f64, 0.0],
+            0.5,
+            1.0,
+        ))
+        .unwrap();
+    }
+    s
+}
+
+#[test]
+fn vibrated_bed_statistics_agree() {
+    let Some(ctx) = gpu_or_skip("vibrated_bed_statistics_agree") else {
+        return;
+    };
+    let scene = bed();
+    let cfg = Config::default();
+    let stats = |backend: Backend<'_>| {
+        let mut sim = Dem::new(&scene, &cfg, backend).unwrap();
+        let period = 2.0 * std::f64::consts::PI / 1.5;
+        let per_sample = (period / 16.0 / sim.dt()).round() as u32;
+        sim.step(per_sample * 32).unwrap(); // 2 cycles of transient
+        let (mut ke, mut h) = (0.0, 0.0);
+        let samples = 16 * 12;
+        for _ in 0..samples {
+            sim.step(per_sample).unwrap();
+            let d = sim.diagnostics().unwrap();
+            assert!(d.finite);
+            ke += d.kinetic / samples as f64;
+            h += d.com_height / samples as f64;
+        }
+        (ke, h)
+    };
+    let (ke_c, h_c) = stats(Backend::Cpu);
+    let (ke_g, h_g) = stats(Backend::Gpu(&ctx));
+    println!(
+        "vibrated bed, 12 cycles: KE cpu {ke_c:.4} gpu {ke_g:.4}; COM height cpu {h_c:.4} gpu {h_g:.4}"
+    );
+    assert!(
+        (ke_c - ke_g).abs() / ke_c < 0.03,
+        "time-averaged KE differs: {ke_c} vs {ke_g}"
+    );
+    assert!(
+        (h_c - h_g).abs() / h_c < 0.03,
+        "time-averaged COM height differs: {h_c} vs {h_g}"
+    );
+}
+
+#[test]
+fn gpu_refuses_position_verlet() {
+    let Some(ctx) = gpu_or_skip("gpu_refuses_position_verlet") else {
+        return;
+    };
+    let cfg = Config::default().with_integrator(Integrator::PositionVerlet);
+    assert!(matches!(
+        Dem::new(&bed(), &cfg, Backend::Gpu(&ctx)),
+        Err(Error::Unsupported(_))
+    ));
+}

@@ -1,0 +1,352 @@
+//! Conservation laws, a settled pile, coarse steps, thread-count independence, bad input.
+
+use backend::{Backend, Error, Simulation};
+use dem::{Config, Dem, Dim, Integrator, Material, Particle, Precision, Scene, Units};
+
+/// A simple-cubic (3D) or square (2D) lattice of `n` particles with pseudo-random velocities.
+fn gas(dim: Dim, n_side: usize, spacing: f64, e: f64, friction: bool) -> Scene {
+    let l = n_side as f64 * spacing;
+    let hi = [l, l, if dim == Dim::Three { l } else { 0.0 }];
+    let mut m = Material::new(e, 0.05);
+    if friction {
+        m = m.with_friction(0.5, 20.0);
+    }
+    let mut s = Scene::new(dim, [0.0; 3], hi, m).unwrap();
+    s.set_periodic([true; 3]);
+    let nz = if dim == Dim::Three { n_side } else { 1 };
+    let mut k = 0u32;
+    for z in 0..nz {
+        for y in 0..n_side {
+            for x in 0..n_side {
+                k += 1;
+                let h = |a: u32| backend::rng::rng_uniform(7, a, k) as f64 - 0.5;
+                let mut p = [(x as f64 + 0.5) * spacing, (y as f64 + 0.5) * spacing, 0.0];
+                let mut v = [h(0), h(1), 0.0];
+                if dim == Dim::Three {
+                    p[2] = (z as f64 + 0.5) * spacing;
+                    v[2] = h(2);
+                }
+                let mass = if k % 3 == 0 { 2.0 } else { 1.0 };
+                s.add_particle(Particle::new(p, 0.5, mass).with_velocity(v))
+                    .unwrap();
+            }
+        }
+    }
+    s
+}
+
+#[test]
+fn elastic_gas_energy_is_bounded() {
+    // 1000 spheres, e = 1, no friction, no gravity, periodic box, packing fraction 0.3.
+    let spacing = (std::f64::consts::PI / 6.0 / 0.3).cbrt();
+    let scene = gas(Dim::Three, 10, spacing, 1.0, false);
+    let mut sim = Dem::new(&scene, &Config::default(), Backend::Cpu).unwrap();
+    let e0 = {
+        let d = sim.diagnostics().unwrap();
+        d.kinetic + d.elastic
+    };
+    let mut devs = Vec::new();
+    for _ in 0..8 {
+        sim.step(300).unwrap();
+        let d = sim.diagnostics().unwrap();
+        devs.push((d.kinetic + d.elastic - e0) / e0);
+    }
+    println!("relative energy deviation every 300 steps (dt = t_c/30): {devs:?}");
+    let first = devs[..4].iter().fold(0.0f64, |a, b| a.max(b.abs()));
+    let second = devs[4..].iter().fold(0.0f64, |a, b| a.max(b.abs()));
+    assert!(
+        first < 2e-3 && second < 2e-3,
+        "energy error too large: {devs:?}"
+    );
+    // Bounded, not growing: the later half is not systematically worse than twice the first.
+    assert!(second < 2.0 * first + 2e-4, "energy drifts: {devs:?}");
+}
+
+#[test]
+fn momentum_is_conserved_to_round_off() {
+    for dim in [Dim::Two, Dim::Three] {
+        let scene = gas(dim, if dim == Dim::Two { 20 } else { 8 }, 1.1, 0.5, true);
+        let mut sim = Dem::new(&scene, &Config::default(), Backend::Cpu).unwrap();
+        let p0 = sim.diagnostics().unwrap().momentum;
+        let scale: f64 = scene
+            .particles()
+            .iter()
+            .map(|p| p.mass * p.velocity.iter().map(|c| c * c).sum::<f64>().sqrt())
+            .sum();
+        sim.step(600).unwrap();
+        let d = sim.diagnostics().unwrap();
+        assert!(d.contacts > 0 || d.kinetic < 0.99 * sim.diagnostics().unwrap().kinetic);
+        for c in 0..3 {
+            let err = (d.momentum[c] - p0[c]).abs() / scale;
+            assert!(
+                err < 1e-13,
+                "{dim:?}: momentum {c} changed by {err:e} of sum |p|"
+            );
+        }
+    }
+}
+
+#[test]
+fn results_do_not_depend_on_thread_count() {
+    let scene = gas(Dim::Three, 8, 1.05, 0.7, true);
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut sim = Dem::new(&scene, &Config::default(), Backend::Cpu).unwrap();
+            sim.step(200).unwrap();
+            sim.state().unwrap()
+        })
+    };
+    assert_eq!(run(1), run(2), "1 and 2 threads differ");
+}
+
+/// A pile of discs settled in a box under gravity.
+fn pile(friction: bool) -> Scene {
+    let wall = if friction {
+        Material::new(0.5, 0.02).with_friction(0.5, 50.0)
+    } else {
+        Material::new(0.5, 0.02)
+    };
+    let mut s = Scene::new(Dim::Two, [0.0; 3], [6.0, 12.0, 0.0], wall).unwrap();
+    s.set_gravity(1.0).unwrap();
+    s.add_box_walls(wall, false).unwrap();
+    for k in 0..30 {
+        let (x, y) = (k % 5, k / 5);
+        let jitter = 0.05 * (y % 2) as f64;
+        s.add_particle(Particle::new(
+            [0.8 + 1.1 * x as f64 + jitter, 0.6 + 1.1 * y as f64, 0.0],
+            0.5,
+            1.0,
+        ))
+        .unwrap();
+    }
+    s
+}
+
+#[test]
+fn settled_pile_stays_at_rest_for_1e5_steps() {
+    let scene = pile(true);
+    let mut sim = Dem::new(&scene, &Config::default(), Backend::Cpu).unwrap();
+    let mut max_overlap = 0.0f64;
+    let chunk = 5000;
+    let mut check = |sim: &mut Dem| {
+        let s = sim.state().unwrap();
+        let d = sim.diagnostics_of(&s).unwrap();
+        assert!(d.finite, "NaN at t = {}", s.time);
+        for (i, p) in s.positions.iter().enumerate() {
+            assert!(
+                p[0] > 0.0 && p[0] < 6.0 && p[1] > 0.0 && p[1] < 12.0,
+                "particle {i} left the box: {p:?}"
+            );
+        }
+        max_overlap = max_overlap.max(d.max_overlap_ratio);
+        (s, d)
+    };
+    // The lattice collapses into a pile (about 50 time units = 75 000 steps).
+    for _ in 0..100_000 / chunk {
+        sim.step(chunk).unwrap();
+        check(&mut sim);
+    }
+    let (settled, d0) = check(&mut sim);
+    assert!(
+        d0.kinetic < 1e-10,
+        "the pile has not settled: KE {}",
+        d0.kinetic
+    );
+    // Then 10^5 more steps at rest.
+    let mut worst_ke = 0.0f64;
+    for _ in 0..100_000 / chunk {
+        sim.step(chunk).unwrap();
+        worst_ke = worst_ke.max(check(&mut sim).1.kinetic);
+    }
+    let (end, _) = check(&mut sim);
+    let moved = settled
+        .positions
+        .iter()
+        .zip(&end.positions)
+        .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
+        .fold(0.0, f64::max);
+    println!(
+        "settled pile (30 discs, 2e5 steps): max overlap / radius {max_overlap:.3e}, \
+         KE over the last 1e5 steps <= {worst_ke:.2e}, largest displacement {moved:.2e}"
+    );
+    assert!(worst_ke < 1e-10, "the settled pile moves: KE {worst_ke:e}");
+    assert!(
+        moved < 1e-6,
+        "a particle of the settled pile moved by {moved:e}"
+    );
+    assert!(max_overlap < 0.05, "overlap {max_overlap}");
+}
+
+#[test]
+fn coarse_step_stays_bounded_and_guard_refuses_larger() {
+    let mut scene = pile(true);
+    scene.set_vibration(0.2, 1.5).unwrap();
+    let mut walls = Scene::new(
+        Dim::Two,
+        [0.0; 3],
+        [6.0, 12.0, 0.0],
+        Material::new(0.5, 0.02),
+    )
+    .unwrap();
+    walls
+        .set_gravity(1.0)
+        .unwrap()
+        .set_vibration(0.2, 1.5)
+        .unwrap();
+    walls
+        .add_box_walls(Material::new(0.5, 0.02).with_friction(0.5, 50.0), true)
+        .unwrap();
+    for p in scene.particles() {
+        walls.add_particle(*p).unwrap();
+    }
+    let tc = 0.02;
+    let mut sim = Dem::new(&walls, &Config::default().with_dt(tc / 5.0), Backend::Cpu).unwrap();
+    for _ in 0..10 {
+        sim.step(1000).unwrap();
+        let s = sim.state().unwrap();
+        for p in &s.positions {
+            assert!(p[0].is_finite() && p[1].is_finite());
+            assert!(
+                p[0] > -0.5 && p[0] < 6.5 && p[1] > -1.0 && p[1] < 13.0,
+                "escaped: {p:?}"
+            );
+        }
+    }
+    let err = Dem::new(&walls, &Config::default().with_dt(tc / 4.0), Backend::Cpu).err();
+    match err {
+        Some(Error::Unstable { bound, .. }) => assert!((bound - tc / 5.0).abs() < 1e-15),
+        other => panic!("expected Error::Unstable, got {other:?}"),
+    }
+    assert!(
+        Dem::new(
+            &walls,
+            &Config::default().with_dt(tc / 4.0).allow_unstable_dt(),
+            Backend::Cpu
+        )
+        .is_ok()
+    );
+    // Default step is t_c / 30.
+    let sim = Dem::new(&walls, &Config::default(), Backend::Cpu).unwrap();
+    assert!((sim.dt() - tc / 30.0).abs() < 1e-15);
+}
+
+#[test]
+fn f32_matches_f64_over_a_short_run() {
+    let scene = gas(Dim::Two, 10, 1.1, 0.8, true);
+    let run = |p: Precision| {
+        let mut sim = Dem::new(&scene, &Config::default().with_precision(p), Backend::Cpu).unwrap();
+        sim.step(100).unwrap();
+        sim.state().unwrap()
+    };
+    let (a, b) = (run(Precision::F64), run(Precision::F32));
+    let worst = a
+        .positions
+        .iter()
+        .zip(&b.positions)
+        .map(|(x, y)| (0..2).map(|d| (x[d] - y[d]).abs()).fold(0.0, f64::max))
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-4, "f32 and f64 differ by {worst} diameters");
+}
+
+#[test]
+fn position_verlet_runs_a_bed() {
+    let scene = pile(false);
+    let cfg = Config::default().with_integrator(Integrator::PositionVerlet);
+    let mut sim = Dem::new(&scene, &cfg, Backend::Cpu).unwrap();
+    sim.step(3000).unwrap();
+    let d = sim.diagnostics().unwrap();
+    assert!(d.finite && d.com_height > 0.5 && d.com_height < 6.0);
+}
+
+#[test]
+fn bad_input_is_refused_with_clear_errors() {
+    let m = Material::new(0.9, 0.01);
+    assert!(Scene::new(Dim::Two, [0.0; 3], [0.0, 1.0, 0.0], m).is_err());
+    for e in [0.0, -0.1, 1.1, f64::NAN] {
+        let err =
+            Scene::new(Dim::Two, [0.0; 3], [1.0, 1.0, 0.0], Material::new(e, 0.01)).unwrap_err();
+        assert!(err.to_string().contains("restitution"), "{err}");
+    }
+    assert!(Scene::new(Dim::Two, [0.0; 3], [1.0, 1.0, 0.0], Material::new(0.5, 0.0)).is_err());
+    let mut s = Scene::new(Dim::Two, [0.0; 3], [4.0, 4.0, 0.0], m).unwrap();
+    for (r, mass) in [
+        (0.0, 1.0),
+        (-1.0, 1.0),
+        (0.5, 0.0),
+        (0.5, -2.0),
+        (f64::NAN, 1.0),
+    ] {
+        let err = s
+            .add_particle(Particle::new([1.0, 1.0, 0.0], r, mass))
+            .unwrap_err();
+        assert!(err.to_string().contains("particle[0]"), "{err}");
+    }
+    assert!(
+        s.add_particle(Particle::new([f64::NAN, 1.0, 0.0], 0.5, 1.0))
+            .is_err()
+    );
+    assert!(
+        s.add_particle(Particle::new([1.0, 1.0, 0.3], 0.5, 1.0))
+            .is_err()
+    );
+    assert!(
+        s.add_particle(Particle::new([1.0, 1.0, 0.0], 0.5, 1.0).with_species(1))
+            .is_err()
+    );
+    assert!(s.set_pair(0, 2, m).is_err());
+    // Empty scene.
+    assert!(Dem::new(&s, &Config::default(), Backend::Cpu).is_err());
+    // Overlapping particles: reported, not exploded.
+    s.add_particle(Particle::new([1.0, 1.0, 0.0], 0.5, 1.0))
+        .unwrap();
+    s.add_particle(Particle::new([1.5, 1.0, 0.0], 0.5, 1.0))
+        .unwrap();
+    let err = Dem::new(&s, &Config::default(), Backend::Cpu)
+        .err()
+        .expect("overlap accepted");
+    assert!(err.to_string().contains("particles 0 and 1"), "{err}");
+    // A slight overlap is accepted and reported by the diagnostics.
+    let mut s = Scene::new(Dim::Two, [0.0; 3], [4.0, 4.0, 0.0], m).unwrap();
+    s.add_particle(Particle::new([1.0, 1.0, 0.0], 0.5, 1.0))
+        .unwrap();
+    s.add_particle(Particle::new([1.98, 1.0, 0.0], 0.5, 1.0))
+        .unwrap();
+    let mut sim = Dem::new(&s, &Config::default(), Backend::Cpu).unwrap();
+    let d = sim.diagnostics().unwrap();
+    assert_eq!(d.contacts, 1);
+    assert!((d.max_overlap - 0.02).abs() < 1e-12);
+    sim.step(100).unwrap();
+    assert!(sim.diagnostics().unwrap().finite);
+    // Cylinder walls only in 3D, bad dt.
+    let mut s2 = Scene::new(Dim::Two, [0.0; 3], [4.0, 4.0, 0.0], m).unwrap();
+    assert!(
+        s2.add_wall(dem::Wall::cylinder([0.0, 0.0], 1.0, m))
+            .is_err()
+    );
+    assert!(matches!(
+        Dem::new(&s, &Config::default().with_dt(f64::NAN), Backend::Cpu),
+        Err(Error::InvalidParameter { .. })
+    ));
+}
+
+#[test]
+fn units_follow_the_source_normalisation() {
+    // Source: d0 = 0.6 cm, m0 = 0.2 g, g = 980 cm/s^2; take f = 30 Hz, Gamma = 3.
+    let u = Units::new(0.6, 0.2, 30.0).unwrap();
+    let omega = 2.0 * std::f64::consts::PI * 30.0;
+    assert!((u.omega() - omega).abs() < 1e-12);
+    let g = 980.0 / (0.6 * omega * omega);
+    assert!((u.gravity() - g).abs() < 1e-15);
+    // Gamma = A omega^2 / g: the physical amplitude is Gamma g / omega^2 (cm).
+    let a_cm = 3.0 * 980.0 / (omega * omega);
+    assert!((u.amplitude(3.0) - a_cm / 0.6).abs() < 1e-12);
+    assert!((u.time(5e-5) - omega * 5e-5).abs() < 1e-15);
+    assert!((u.length_cm(u.length(1.7)) - 1.7).abs() < 1e-15);
+    assert!((u.velocity_cm_s(1.0) - 0.6 * omega).abs() < 1e-12);
+    assert!(Units::new(0.0, 0.2, 30.0).is_err());
+    assert!(Units::new(0.6, 0.2, f64::NAN).is_err());
+}

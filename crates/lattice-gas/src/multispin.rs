@@ -1,0 +1,377 @@
+//! CPU multi-spin backend: six bit-planes of `u64` (64 sites per word), collisions as
+//! boolean logic, streaming as shifts; rows in parallel with rayon and the word loops
+//! compiled for AVX-512 / AVX2 / baseline with runtime dispatch (`multiversion`).
+//!
+//! The width must be a multiple of 64. The chirality bits of a word are the two 32-bit hashes
+//! of [`crate::random`] for its 64 sites, so this backend is bit-identical to the others.
+
+use backend::rng::pcg_hash;
+use backend::{Error, Result, Simulation};
+use multiversion::multiversion;
+use rayon::prelude::*;
+
+use crate::random::{FORCE_STREAM, force_threshold, step_key};
+use crate::{Lattice, Params, RuleSet, WALL};
+
+/// The multi-spin CPU backend.
+pub struct MultiSpinCpu {
+    width: usize,
+    height: usize,
+    /// Words per row.
+    nw: usize,
+    /// `planes[(j * 6 + d) * nw + k]`: direction d of sites 64k..64k+63 of row j.
+    planes: Vec<u64>,
+    next: Vec<u64>,
+    walls: Vec<u64>,
+    params: Params,
+    steps: u64,
+}
+
+impl MultiSpinCpu {
+    /// A multi-spin simulation of `lattice` under `params`; the width must be a multiple of 64.
+    pub fn new(lattice: Lattice, params: Params) -> Result<Self> {
+        params.validate(&lattice)?;
+        let (w, h) = (lattice.width(), lattice.height());
+        if !w.is_multiple_of(64) {
+            return Err(Error::invalid(
+                "width",
+                w,
+                "the multi-spin backend packs 64 sites per word: use a multiple of 64, or the lookup-table backend",
+            ));
+        }
+        let nw = w / 64;
+        let mut planes = vec![0u64; 6 * h * nw];
+        let mut walls = vec![0u64; h * nw];
+        for (s, &c) in lattice.cells().iter().enumerate() {
+            let (i, j) = (s % w, s / w);
+            let (k, b) = (i / 64, i % 64);
+            for d in 0..6 {
+                if c & (1 << d) != 0 {
+                    planes[(j * 6 + d) * nw + k] |= 1 << b;
+                }
+            }
+            if c & WALL != 0 {
+                walls[j * nw + k] |= 1 << b;
+            }
+        }
+        Ok(Self {
+            width: w,
+            height: h,
+            nw,
+            next: vec![0; planes.len()],
+            planes,
+            walls,
+            params,
+            steps: 0,
+        })
+    }
+
+    /// Particles per row (popcounts of the planes), cheaper than a full [`Simulation::state`].
+    pub fn row_counts(&self) -> Vec<[u64; 6]> {
+        let nw = self.nw;
+        (0..self.height)
+            .map(|j| {
+                let mut c = [0u64; 6];
+                for (d, cd) in c.iter_mut().enumerate() {
+                    let p = &self.planes[(j * 6 + d) * nw..(j * 6 + d + 1) * nw];
+                    *cd = p.iter().map(|x| u64::from(x.count_ones())).sum();
+                }
+                c
+            })
+            .collect()
+    }
+
+    fn step_once(&mut self) {
+        let t = self.steps as u32;
+        let ctx = Ctx {
+            src: &self.planes,
+            walls: &self.walls,
+            nw: self.nw,
+            h: self.height,
+            params: &self.params,
+            key: step_key(self.params.seed, t),
+            force_key: step_key(self.params.seed ^ FORCE_STREAM, t),
+            threshold: force_threshold(self.params.body_force),
+        };
+        let nw = self.nw;
+        self.next
+            .par_chunks_mut(6 * nw)
+            .enumerate()
+            .for_each_init(|| vec![0u64; 7 * nw], |tmp, (j, out)| ctx.row(j, out, tmp));
+        std::mem::swap(&mut self.planes, &mut self.next);
+        self.steps += 1;
+    }
+}
+
+struct Ctx<'a> {
+    src: &'a [u64],
+    walls: &'a [u64],
+    nw: usize,
+    h: usize,
+    params: &'a Params,
+    key: u32,
+    force_key: u32,
+    threshold: u32,
+}
+
+/// `dst[k]` gets the bits of the site one to the left (site i takes i - 1).
+fn from_left(src: &[u64], dst: &mut [u64], periodic: bool) {
+    let n = src.len();
+    let carry = if periodic { src[n - 1] >> 63 } else { 0 };
+    dst[0] = (src[0] << 1) | carry;
+    for k in 1..n {
+        dst[k] = (src[k] << 1) | (src[k - 1] >> 63);
+    }
+}
+
+/// `dst[k]` gets the bits of the site one to the right (site i takes i + 1).
+fn from_right(src: &[u64], dst: &mut [u64], periodic: bool) {
+    let n = src.len();
+    for k in 0..n - 1 {
+        dst[k] = (src[k] >> 1) | (src[k + 1] << 63);
+    }
+    let carry = if periodic { src[0] << 63 } else { 0 };
+    dst[n - 1] = (src[n - 1] >> 1) | carry;
+}
+
+impl Ctx<'_> {
+    fn plane(&self, j: usize, d: usize) -> &[u64] {
+        &self.src[(j * 6 + d) * self.nw..(j * 6 + d + 1) * self.nw]
+    }
+
+    fn row(&self, j: usize, out: &mut [u64], tmp: &mut [u64]) {
+        let nw = self.nw;
+        let h = self.h;
+        let px = self.params.periodic_x;
+        let py = self.params.periodic_y;
+        let up = if j + 1 < h {
+            Some(j + 1)
+        } else {
+            py.then_some(0)
+        };
+        let down = if j > 0 {
+            Some(j - 1)
+        } else {
+            py.then_some(h - 1)
+        };
+        let odd = j & 1 == 1;
+        let (inc, rnd) = tmp.split_at_mut(6 * nw);
+        {
+            let mut planes = inc.chunks_mut(nw);
+            let p: [&mut [u64]; 6] = std::array::from_fn(|_| planes.next().expect("six planes"));
+            let [p0, p1, p2, p3, p4, p5] = p;
+            from_left(self.plane(j, 0), p0, px);
+            from_right(self.plane(j, 3), p3, px);
+            match up {
+                None => {
+                    p1.fill(0);
+                    p2.fill(0);
+                }
+                Some(u) if odd => {
+                    p1.copy_from_slice(self.plane(u, 1));
+                    from_right(self.plane(u, 2), p2, px);
+                }
+                Some(u) => {
+                    from_left(self.plane(u, 1), p1, px);
+                    p2.copy_from_slice(self.plane(u, 2));
+                }
+            }
+            match down {
+                None => {
+                    p4.fill(0);
+                    p5.fill(0);
+                }
+                Some(dn) if odd => {
+                    from_right(self.plane(dn, 4), p4, px);
+                    p5.copy_from_slice(self.plane(dn, 5));
+                }
+                Some(dn) => {
+                    p4.copy_from_slice(self.plane(dn, 4));
+                    from_left(self.plane(dn, 5), p5, px);
+                }
+            }
+        }
+        let first_hash = (j * nw * 2) as u32;
+        random_words(rnd, first_hash, self.key);
+        let walls = &self.walls[j * nw..(j + 1) * nw];
+        match self.params.rules {
+            RuleSet::FhpI => collide_fhp1(inc, rnd, walls, out, nw),
+            RuleSet::Full => collide_full(inc, rnd, walls, out, nw),
+        }
+        if self.params.body_force > 0.0 {
+            let first_site = (j * nw * 64) as u32;
+            force_words(rnd, first_site, self.force_key, self.threshold);
+            for k in 0..nw {
+                let cond = rnd[k] & out[3 * nw + k] & !out[k] & !walls[k];
+                out[k] |= cond;
+                out[3 * nw + k] &= !cond;
+            }
+        }
+        if self.params.inflow && walls[0] & 1 == 0 {
+            for d in 0..6 {
+                out[d * nw] &= !1;
+            }
+            out[0] |= 1;
+        }
+        if self.params.outflow && walls[nw - 1] >> 63 == 0 {
+            for d in 0..6 {
+                out[d * nw + nw - 1] &= !(1 << 63);
+            }
+        }
+    }
+}
+
+/// Chirality words: bits of hashes `first, first + 1, ...` packed two per u64.
+#[multiversion(targets("x86_64+avx512f+avx512bw+avx512vl", "x86_64+avx2+fma"))]
+fn random_words(dst: &mut [u64], first: u32, key: u32) {
+    for (k, d) in dst.iter_mut().enumerate() {
+        let lo = first.wrapping_add(2 * k as u32);
+        *d = u64::from(pcg_hash(lo ^ key)) | u64::from(pcg_hash(lo.wrapping_add(1) ^ key)) << 32;
+    }
+}
+
+/// Body-force words: bit b of word k is set when site `first + 64k + b` draws below threshold.
+#[multiversion(targets("x86_64+avx512f+avx512bw+avx512vl", "x86_64+avx2+fma"))]
+fn force_words(dst: &mut [u64], first: u32, key: u32, threshold: u32) {
+    for (k, d) in dst.iter_mut().enumerate() {
+        let base = first.wrapping_add(64 * k as u32);
+        let mut word = 0u64;
+        for b in 0..64u32 {
+            let hit = (pcg_hash(base.wrapping_add(b) ^ key) >> 8) < threshold;
+            word |= u64::from(hit) << b;
+        }
+        *d = word;
+    }
+}
+
+/// The collision of one word of 64 sites as boolean logic; `FULL` selects the full rule set.
+#[inline(always)]
+pub(crate) fn collide_word<const FULL: bool>(s: [u64; 6], r: u64, wall: u64) -> [u64; 6] {
+    let [a, b, c, d, e, f] = s;
+    let (p1, p2, p3) = (a & d, b & e, c & f);
+    let (z1, z2, z3) = (!(a | d), !(b | e), !(c | f));
+    let two = (p1 & z2 & z3) | (p2 & z1 & z3) | (p3 & z1 & z2);
+    let tri = (a ^ b) & (b ^ c) & (c ^ d) & (d ^ e) & (e ^ f);
+    let (rot, flip1, flip2, flip3) = if FULL {
+        let four = (p1 & p2 & z3) | (p1 & p3 & z2) | (p2 & p3 & z1);
+        // A head-on pair with a spectator on axis X moves to the third axis.
+        let s1 = (a ^ d) & ((p2 & z3) | (p3 & z2));
+        let s2 = (b ^ e) & ((p1 & z3) | (p3 & z1));
+        let s3 = (c ^ f) & ((p1 & z2) | (p2 & z1));
+        (two | tri | four, s2 | s3, s1 | s3, s1 | s2)
+    } else {
+        (two | tri, 0, 0, 0)
+    };
+    // Rotation clockwise (chirality 1): new direction k holds old k - 1.
+    let cw = [f, a, b, c, d, e];
+    let ccw = [b, c, d, e, f, a];
+    let flips = [flip1, flip2, flip3, flip1, flip2, flip3];
+    let rev = [d, e, f, a, b, c];
+    let mut out = [0u64; 6];
+    for k in 0..6 {
+        let rotated = (r & cw[k]) | (!r & ccw[k]);
+        let fluid = (rot & rotated) | (!rot & (s[k] ^ flips[k]));
+        out[k] = (wall & rev[k]) | (!wall & fluid);
+    }
+    out
+}
+
+macro_rules! collide_rows {
+    ($name:ident, $full:expr) => {
+        #[multiversion(targets("x86_64+avx512f+avx512bw+avx512vl", "x86_64+avx2+fma"))]
+        fn $name(inc: &[u64], rnd: &[u64], walls: &[u64], out: &mut [u64], nw: usize) {
+            let (o0, rest) = out.split_at_mut(nw);
+            let (o1, rest) = rest.split_at_mut(nw);
+            let (o2, rest) = rest.split_at_mut(nw);
+            let (o3, rest) = rest.split_at_mut(nw);
+            let (o4, o5) = rest.split_at_mut(nw);
+            for k in 0..nw {
+                let s = [
+                    inc[k],
+                    inc[nw + k],
+                    inc[2 * nw + k],
+                    inc[3 * nw + k],
+                    inc[4 * nw + k],
+                    inc[5 * nw + k],
+                ];
+                let o = collide_word::<$full>(s, rnd[k], walls[k]);
+                o0[k] = o[0];
+                o1[k] = o[1];
+                o2[k] = o[2];
+                o3[k] = o[3];
+                o4[k] = o[4];
+                o5[k] = o[5];
+            }
+        }
+    };
+}
+collide_rows!(collide_fhp1, false);
+collide_rows!(collide_full, true);
+
+impl Simulation for MultiSpinCpu {
+    type State = Lattice;
+
+    fn step(&mut self, steps: u32) -> Result<()> {
+        for _ in 0..steps {
+            self.step_once();
+        }
+        Ok(())
+    }
+
+    fn state(&mut self) -> Result<Lattice> {
+        let (w, h, nw) = (self.width, self.height, self.nw);
+        let mut cells = vec![0u8; w * h];
+        for (s, c) in cells.iter_mut().enumerate() {
+            let (i, j) = (s % w, s / w);
+            let (k, b) = (i / 64, i % 64);
+            let mut v = (((self.walls[j * nw + k] >> b) & 1) as u8) << 7;
+            for d in 0..6 {
+                v |= (((self.planes[(j * 6 + d) * nw + k] >> b) & 1) as u8) << d;
+            }
+            *c = v;
+        }
+        Ok(Lattice::from_raw(w, h, cells))
+    }
+
+    fn steps_done(&self) -> u64 {
+        self.steps
+    }
+
+    fn backend_name(&self) -> String {
+        "cpu-multispin".into()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::CollisionTable;
+
+    #[test]
+    fn boolean_logic_equals_the_tables() {
+        for rules in [RuleSet::FhpI, RuleSet::Full] {
+            let t = CollisionTable::new(rules);
+            for st in 0..64u8 {
+                for wall in [0u8, WALL] {
+                    for r in 0..2u32 {
+                        let s: [u64; 6] = std::array::from_fn(|d| u64::from((st >> d) & 1));
+                        let o = match rules {
+                            RuleSet::FhpI => {
+                                collide_word::<false>(s, r.into(), u64::from(wall >> 7))
+                            }
+                            RuleSet::Full => {
+                                collide_word::<true>(s, r.into(), u64::from(wall >> 7))
+                            }
+                        };
+                        let got = (0..6).fold(wall, |acc, d| acc | (((o[d] & 1) as u8) << d));
+                        assert_eq!(
+                            got,
+                            t.apply(st | wall, r),
+                            "{rules:?} state {st} wall {wall} r {r}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,110 @@
+//! The trait shared by every method and backend, and per-particle neighbour lists.
+
+use backend::Result;
+
+/// Per-particle neighbour lists in compressed sparse row form: the neighbours of particle
+/// `i` are `neighbors[offsets[i]..offsets[i + 1]]`, in ascending order.
+#[derive(Clone, Debug, PartialEq, Eq, Default)]
+pub struct NeighborLists {
+    /// `N + 1` offsets into `neighbors`.
+    pub offsets: Vec<usize>,
+    /// Neighbour indices.
+    pub neighbors: Vec<u32>,
+}
+
+impl NeighborLists {
+    /// Full lists (every pair appears in both particles' lists) from unordered pairs.
+    pub fn from_pairs(n: usize, pairs: &[(u32, u32)]) -> Self {
+        let mut counts = vec![0usize; n + 1];
+        for &(i, j) in pairs {
+            counts[i as usize] += 1;
+            counts[j as usize] += 1;
+        }
+        let mut offsets = Vec::with_capacity(n + 1);
+        let mut acc = 0;
+        for c in &counts[..n] {
+            offsets.push(acc);
+            acc += c;
+        }
+        offsets.push(acc);
+        let mut cursor = offsets.clone();
+        let mut neighbors = vec![0u32; acc];
+        for &(i, j) in pairs {
+            neighbors[cursor[i as usize]] = j;
+            cursor[i as usize] += 1;
+            neighbors[cursor[j as usize]] = i;
+            cursor[j as usize] += 1;
+        }
+        for i in 0..n {
+            neighbors[offsets[i]..offsets[i + 1]].sort_unstable();
+        }
+        Self { offsets, neighbors }
+    }
+
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.offsets.len().saturating_sub(1)
+    }
+
+    /// Whether there are no particles.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Neighbours of particle `i`.
+    pub fn of(&self, i: usize) -> &[u32] {
+        &self.neighbors[self.offsets[i]..self.offsets[i + 1]]
+    }
+
+    /// Number of neighbours of every particle.
+    pub fn counts(&self) -> Vec<u32> {
+        self.offsets
+            .windows(2)
+            .map(|w| (w[1] - w[0]) as u32)
+            .collect()
+    }
+}
+
+/// A neighbour search: build from positions, then enumerate the pairs within the cutoff.
+///
+/// Implemented by [`BruteForce`](crate::BruteForce), [`LinkedCells`](crate::LinkedCells),
+/// [`SortedCells`](crate::SortedCells), [`VerletList`](crate::VerletList) and
+/// [`GpuNeighborSearch`](crate::GpuNeighborSearch), so tests and benchmarks swap them freely.
+pub trait NeighborSearch<const D: usize> {
+    /// Short method name for reports (e.g. `"sorted cells"`).
+    fn name(&self) -> String;
+
+    /// (Re)builds from positions; validates them (NaN, out of a non-periodic box).
+    fn build(&mut self, positions: &[[f64; D]]) -> Result<()>;
+
+    /// Number of particles of the last build.
+    fn particle_count(&self) -> usize;
+
+    /// Calls `f(i, j, sep, r2)` once per unordered pair within the cutoff, with the minimum
+    /// image `sep = r_i - r_j` and `r2 = |sep|^2`.
+    fn for_each_pair<F: FnMut(usize, usize, [f64; D], f64)>(&mut self, f: F) -> Result<()>;
+
+    /// Number of unordered pairs within the cutoff.
+    fn pair_count(&mut self) -> Result<usize> {
+        let mut n = 0;
+        self.for_each_pair(|_, _, _, _| n += 1)?;
+        Ok(n)
+    }
+
+    /// Number of neighbours of every particle.
+    fn neighbor_counts(&mut self) -> Result<Vec<u32>> {
+        let mut counts = vec![0u32; self.particle_count()];
+        self.for_each_pair(|i, j, _, _| {
+            counts[i] += 1;
+            counts[j] += 1;
+        })?;
+        Ok(counts)
+    }
+
+    /// Sorted full neighbour lists of every particle.
+    fn neighbor_lists(&mut self) -> Result<NeighborLists> {
+        let mut pairs = Vec::new();
+        self.for_each_pair(|i, j, _, _| pairs.push((i as u32, j as u32)))?;
+        Ok(NeighborLists::from_pairs(self.particle_count(), &pairs))
+    }
+}

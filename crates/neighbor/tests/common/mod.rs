@@ -1,0 +1,148 @@
+//! Shared checks: every method against brute force.
+// Each test binary uses a subset of these helpers.
+#![allow(dead_code)]
+
+use std::collections::BTreeMap;
+
+use neighbor::{
+    BruteForce, CellGrid, GpuNeighborSearch, LinkedCells, ListKind, NeighborSearch, SortedCells,
+    VerletList,
+};
+
+/// Unordered pair -> (separation oriented from the smaller index, r2).
+pub type PairMap<const D: usize> = BTreeMap<(usize, usize), ([f64; D], f64)>;
+
+fn insert<const D: usize>(m: &mut PairMap<D>, i: usize, j: usize, sep: [f64; D], r2: f64) {
+    assert_ne!(i, j, "self pair reported");
+    let (key, s) = if i < j {
+        ((i, j), sep)
+    } else {
+        ((j, i), sep.map(|v| -v))
+    };
+    let old = m.insert(key, (s, r2));
+    assert!(old.is_none(), "pair {key:?} reported twice");
+}
+
+/// Collects the pairs of any method.
+pub fn pairs_of<const D: usize, S: NeighborSearch<D>>(s: &mut S, p: &[[f64; D]]) -> PairMap<D> {
+    s.build(p).unwrap();
+    let mut m = PairMap::new();
+    s.for_each_pair(|i, j, sep, r2| insert(&mut m, i, j, sep, r2))
+        .unwrap();
+    m
+}
+
+/// Neighbour counts from a pair map.
+pub fn counts<const D: usize>(n: usize, m: &PairMap<D>) -> Vec<u32> {
+    let mut c = vec![0u32; n];
+    for &(i, j) in m.keys() {
+        c[i] += 1;
+        c[j] += 1;
+    }
+    c
+}
+
+/// Every CPU method, serial and rayon, half and full shell, gives exactly the brute-force
+/// pairs with bit-identical separations and squared distances.
+pub fn check_cpu<const D: usize>(grid: &CellGrid<D>, p: &[[f64; D]]) -> PairMap<D> {
+    let n = p.len();
+    let reference = pairs_of(&mut BruteForce::new(grid), p);
+    let ref_counts = counts(n, &reference);
+    let linked = pairs_of(&mut LinkedCells::new(grid), p);
+    assert_eq!(linked, reference, "linked cells differ from brute force");
+    let mut sorted = SortedCells::new(grid);
+    let m = pairs_of(&mut sorted, p);
+    assert_eq!(m, reference, "sorted cells differ from brute force");
+    // rayon half shell.
+    let parts = sorted.par_fold_pairs(Vec::new, |v, i, j, sep, r2| v.push((i, j, sep, r2)));
+    let mut par = PairMap::new();
+    for (i, j, sep, r2) in parts.into_iter().flatten() {
+        insert(&mut par, i, j, sep, r2);
+    }
+    assert_eq!(par, reference, "rayon half shell differs");
+    assert_eq!(sorted.par_pair_count(), reference.len());
+    // Serial full shell: each pair from both ends.
+    let mut full = PairMap::new();
+    sorted.for_each_neighbor(|i, j, sep, r2| {
+        if i < j {
+            insert(&mut full, i, j, sep, r2);
+        }
+    });
+    assert_eq!(full, reference, "full shell differs");
+    let mut c = vec![0u32; n];
+    sorted.for_each_neighbor(|i, _, _, _| c[i] += 1);
+    assert_eq!(c, ref_counts);
+    // rayon full shell gather.
+    let mut gathered = vec![Vec::new(); n];
+    sorted
+        .par_for_each_particle(&mut gathered, |v, i, j, sep, r2| v.push((i, j, sep, r2)))
+        .unwrap();
+    let mut g = PairMap::new();
+    for (k, list) in gathered.iter().enumerate() {
+        assert_eq!(list.len() as u32, ref_counts[k]);
+        for &(i, j, sep, r2) in list {
+            assert_eq!(i, k);
+            if i < j {
+                insert(&mut g, i, j, sep, r2);
+            }
+        }
+    }
+    assert_eq!(g, reference, "rayon full shell differs");
+    // Fresh Verlet lists, both kinds, serial and rayon.
+    for kind in [ListKind::Half, ListKind::Full] {
+        let mut v = VerletList::new(grid, 0.3 * grid.cutoff(), kind).unwrap();
+        let m = pairs_of(&mut v, p);
+        assert_eq!(m, reference, "Verlet {kind:?} differs");
+        let parts = v.par_fold_pairs(Vec::new, |acc, i, j, sep, r2| acc.push((i, j, sep, r2)));
+        let mut par = PairMap::new();
+        for (i, j, sep, r2) in parts.into_iter().flatten() {
+            insert(&mut par, i, j, sep, r2);
+        }
+        assert_eq!(par, reference, "rayon Verlet {kind:?} differs");
+        if kind == ListKind::Full {
+            let mut c = vec![0u32; n];
+            v.par_for_each_particle(&mut c, |c, _, _, _, _| *c += 1)
+                .unwrap();
+            assert_eq!(c, ref_counts);
+        }
+    }
+    let mut sorted2 = SortedCells::new(grid);
+    sorted2.build(p).unwrap();
+    assert_eq!(sorted2.neighbor_counts().unwrap(), ref_counts);
+    reference
+}
+
+/// The GPU finds the same pairs as the CPU reference, except pairs whose squared distance
+/// is within a relative `1e-4` of the cutoff squared, which `f32` cannot decide.
+pub fn check_gpu<const D: usize>(
+    ctx: &backend::GpuContext,
+    grid: &CellGrid<D>,
+    p: &[[f64; D]],
+    reference: &PairMap<D>,
+) {
+    let mut gpu = GpuNeighborSearch::new(ctx, grid).unwrap();
+    let got = pairs_of(&mut gpu, p);
+    let rc2 = grid.cutoff() * grid.cutoff();
+    let borderline = |r2: f64| (r2 - rc2).abs() <= 1e-4 * rc2;
+    for (k, (_, r2)) in reference {
+        if !borderline(*r2) {
+            assert!(
+                got.contains_key(k),
+                "GPU missed pair {k:?} at r2 = {r2} (rc2 = {rc2})"
+            );
+        }
+    }
+    for (k, (_, r2)) in &got {
+        if !reference.contains_key(k) {
+            assert!(
+                borderline(*r2),
+                "GPU extra pair {k:?} at r2 = {r2} (rc2 = {rc2})"
+            );
+        }
+    }
+    let exact = reference.values().all(|(_, r2)| !borderline(*r2))
+        && got.values().all(|(_, r2)| !borderline(*r2));
+    if exact {
+        assert_eq!(counts(p.len(), &got), counts(p.len(), reference));
+    }
+}

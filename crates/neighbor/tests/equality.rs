@@ -1,0 +1,210 @@
+//! Property tests: brute force, linked cells, sorted cells, Verlet lists, rayon and GPU find
+//! identical pairs, plus edge cases.
+
+mod common;
+
+use backend::testing::gpu_or_skip;
+use neighbor::{CellGrid, NeighborSearch, SortedCells};
+use proptest::prelude::*;
+
+use common::{check_cpu, check_gpu};
+
+/// A coordinate along one axis: uniform, or one of the edge values.
+fn coord(origin: f64, l: f64, periodic: bool, kind: u8, u: f64, cluster: Option<f64>) -> f64 {
+    if let Some(c) = cluster {
+        return (c + u * 0.3).min(origin + l);
+    }
+    match kind {
+        0 => origin,
+        1 => origin + l,
+        2 => origin + l.next_down(),
+        3 if periodic => origin - u * 2.5 * l,
+        4 if periodic => origin + l + u * 1.5 * l,
+        _ => origin + u * l,
+    }
+}
+
+#[derive(Debug, Clone)]
+struct Case<const D: usize> {
+    origin: [f64; D],
+    lengths: [f64; D],
+    periodic: [bool; D],
+    cutoff: f64,
+    positions: Vec<[f64; D]>,
+}
+
+impl<const D: usize> Case<D> {
+    fn grid(&self) -> CellGrid<D> {
+        CellGrid::new(self.origin, self.lengths, self.periodic, self.cutoff).unwrap()
+    }
+}
+
+fn case<const D: usize>(max_n: usize) -> impl Strategy<Value = Case<D>> {
+    (
+        prop::array::uniform3(prop::sample::select(vec![0.0, -4.0, 2.5])),
+        prop::array::uniform3(4u32..120),
+        prop::array::uniform3(any::<bool>()),
+        0.2f64..4.0,
+        0..max_n,
+        any::<u64>(),
+        0u8..4,
+    )
+        .prop_map(move |(o, l8, per, cutoff, n, seed, layout)| {
+            // Clustered layouts make every pair a neighbour: keep them to ~1e6 pairs.
+            let n = match layout {
+                2 => n.min(800),
+                3 => n.min(1500),
+                _ => n,
+            };
+            use rand::{RngExt, SeedableRng};
+            let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+            let origin: [f64; D] = std::array::from_fn(|d| o[d]);
+            let lengths: [f64; D] = std::array::from_fn(|d| f64::from(l8[d]) / 8.0);
+            let periodic: [bool; D] = std::array::from_fn(|d| per[d]);
+            // layout 0: uniform; 1: uniform with edge values; 2: all in one spot; 3: mixed.
+            let cluster: [f64; D] =
+                std::array::from_fn(|d| origin[d] + rng.random::<f64>() * lengths[d]);
+            let positions = (0..n)
+                .map(|_| {
+                    let clustered = layout == 2 || (layout == 3 && rng.random::<f64>() < 0.5);
+                    std::array::from_fn(|d| {
+                        let kind = if layout == 1 || layout == 3 {
+                            rng.random_range(0u8..12)
+                        } else {
+                            9
+                        };
+                        let u = rng.random::<f64>();
+                        let cl = clustered.then_some(cluster[d]);
+                        coord(origin[d], lengths[d], periodic[d], kind, u, cl)
+                    })
+                })
+                .collect();
+            Case {
+                origin,
+                lengths,
+                periodic,
+                cutoff,
+                positions,
+            }
+        })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, failure_persistence: None, ..ProptestConfig::default() })]
+
+    #[test]
+    fn cpu_methods_agree_2d(c in case::<2>(3000)) {
+        check_cpu(&c.grid(), &c.positions);
+    }
+
+    #[test]
+    fn cpu_methods_agree_3d(c in case::<3>(3000)) {
+        check_cpu(&c.grid(), &c.positions);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 10, failure_persistence: None, ..ProptestConfig::default() })]
+
+    #[test]
+    fn gpu_agrees_2d(c in case::<2>(3000)) {
+        let Some(ctx) = gpu_or_skip("gpu_agrees_2d") else { return Ok(()) };
+        let grid = c.grid();
+        let reference = check_cpu(&grid, &c.positions);
+        check_gpu(&ctx, &grid, &c.positions, &reference);
+    }
+
+    #[test]
+    fn gpu_agrees_3d(c in case::<3>(3000)) {
+        let Some(ctx) = gpu_or_skip("gpu_agrees_3d") else { return Ok(()) };
+        let grid = c.grid();
+        let reference = check_cpu(&grid, &c.positions);
+        check_gpu(&ctx, &grid, &c.positions, &reference);
+    }
+}
+
+#[test]
+fn empty_and_single_particle() {
+    let grid = CellGrid::new([0.0; 3], [5.0; 3], [true; 3], 1.0).unwrap();
+    for p in [vec![], vec![[1.0, 2.0, 3.0]]] {
+        let r = check_cpu(&grid, &p);
+        assert!(r.is_empty());
+        if let Some(ctx) = gpu_or_skip("empty_and_single_particle") {
+            check_gpu(&ctx, &grid, &p, &r);
+        }
+    }
+}
+
+#[test]
+fn coincident_particles_are_one_pair_at_zero_distance() {
+    let grid = CellGrid::new([0.0; 2], [5.0; 2], [false; 2], 1.0).unwrap();
+    let p = vec![[2.0, 2.0], [2.0, 2.0]];
+    let r = check_cpu(&grid, &p);
+    assert_eq!(r.len(), 1);
+    assert_eq!(r[&(0, 1)], ([0.0, 0.0], 0.0));
+    if let Some(ctx) = gpu_or_skip("coincident_particles") {
+        check_gpu(&ctx, &grid, &p, &r);
+    }
+}
+
+#[test]
+fn cutoff_over_half_a_periodic_box_counts_each_pair_once() {
+    // L = 3 with cutoff 2: one cell, several images within the cutoff; the minimum image
+    // decides and the pair is reported once.
+    let grid = CellGrid::new([0.0; 2], [3.0, 3.0], [true, true], 2.0).unwrap();
+    assert_eq!(grid.cells_per_axis(), [1, 1]);
+    let p = vec![[0.1, 0.1], [1.6, 0.1], [2.9, 2.9]];
+    let r = check_cpu(&grid, &p);
+    assert_eq!(r.len(), 3);
+    let (sep, r2) = r[&(0, 1)];
+    assert!((sep[0] - -1.5).abs() < 1e-12 && (r2 - 2.25).abs() < 1e-12);
+    let (sep, _) = r[&(0, 2)];
+    assert!((sep[0] - 0.2).abs() < 1e-12 && (sep[1] - 0.2).abs() < 1e-12);
+    if let Some(ctx) = gpu_or_skip("cutoff_over_half_box") {
+        check_gpu(&ctx, &grid, &p, &r);
+    }
+}
+
+#[test]
+fn one_two_and_three_cells_along_a_periodic_axis() {
+    use rand::{RngExt, SeedableRng};
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
+    for (l, cells) in [(1.5, 1usize), (2.5, 2), (3.5, 3), (4.2, 4)] {
+        let grid = CellGrid::new([0.0; 3], [l, 6.0, 6.0], [true, true, false], 1.0).unwrap();
+        assert_eq!(grid.cells_per_axis()[0], cells);
+        let p: Vec<[f64; 3]> = (0..400)
+            .map(|_| std::array::from_fn(|d| rng.random::<f64>() * [l, 6.0, 6.0][d]))
+            .collect();
+        let r = check_cpu(&grid, &p);
+        assert!(!r.is_empty());
+        if let Some(ctx) = gpu_or_skip("few_cells_periodic") {
+            check_gpu(&ctx, &grid, &p, &r);
+        }
+    }
+}
+
+#[test]
+fn errors_name_the_particle() {
+    let grid = CellGrid::new([0.0; 2], [5.0; 2], [true, false], 1.0).unwrap();
+    let mut s = SortedCells::new(&grid);
+    let e = s.build(&[[1.0, 1.0], [-3.0, 6.0]]).unwrap_err().to_string();
+    assert!(e.contains("position[1].y"), "{e}");
+    let e = s.build(&[[f64::NAN, 1.0]]).unwrap_err().to_string();
+    assert!(e.contains("position[0].x"), "{e}");
+    let mut b = neighbor::BruteForce::new(&grid);
+    assert!(b.build(&[[1.0, f64::INFINITY]]).is_err());
+    if let Some(ctx) = gpu_or_skip("gpu_errors") {
+        let mut g = neighbor::GpuNeighborSearch::new(&ctx, &grid).unwrap();
+        assert!(g.build(&[[1.0, 1.0], [-3.0, 6.0]]).is_err());
+        // The device-side check catches what bypasses host validation.
+        let buf = backend::GpuBuffer::from_slice(
+            &ctx,
+            "p",
+            &[[1.0f32, 1.0, 0.0, 0.0], [1.0, 9.0, 0.0, 0.0]],
+        )
+        .unwrap();
+        let cells = neighbor::GpuCellList::new(&ctx, &grid, &buf).unwrap();
+        let e = cells.build(&ctx).unwrap_err().to_string();
+        assert!(e.contains("position[1]"), "{e}");
+    }
+}

@@ -1,0 +1,110 @@
+//! Conserved quantities and reference sums (plain f64, independent of the fast kernels).
+
+use rayon::prelude::*;
+
+use crate::config::ForceLaw;
+use crate::particles::Particles;
+
+/// Energies, momenta and the force balance of one state.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Diagnostics {
+    /// Kinetic energy `sum m v^2 / 2`.
+    pub kinetic: f64,
+    /// Potential energy `sum_{i<j} q_i q_j phi(r_ij)` with the force law's potential.
+    pub potential: f64,
+    /// `kinetic + potential`.
+    pub total: f64,
+    /// Total momentum `sum m v`.
+    pub momentum: [f64; 3],
+    /// Total angular momentum about the origin `sum m r x v`.
+    pub angular_momentum: [f64; 3],
+    /// Sum of all forces `sum m a` (zero by Newton's third law, up to round-off).
+    pub force_sum: [f64; 3],
+    /// `sum |m a|`, the scale against which `force_sum` is small.
+    pub force_magnitude_sum: f64,
+}
+
+/// Potential energy `sum_{i<j} q_i q_j phi(r_ij)`, summed in f64 (O(N^2), rayon).
+pub fn potential_energy(p: &Particles, law: ForceLaw) -> f64 {
+    let x = &p.position;
+    let q = &p.charge;
+    (0..p.len())
+        .into_par_iter()
+        .map(|i| {
+            let mut s = 0.0;
+            for j in i + 1..p.len() {
+                let r = dist(x[i], x[j]);
+                s += q[j] * law.potential(r);
+            }
+            q[i] * s
+        })
+        .sum()
+}
+
+/// Accelerations by a plain scalar f64 double loop (a reference for tests).
+pub fn reference_accelerations(p: &Particles, law: ForceLaw) -> Vec<[f64; 3]> {
+    let x = &p.position;
+    (0..p.len())
+        .into_par_iter()
+        .map(|i| {
+            let mut e = [0.0; 3];
+            for j in 0..p.len() {
+                if j == i {
+                    continue;
+                }
+                let d = [0, 1, 2].map(|k| x[i][k] - x[j][k]);
+                let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                let w = match law {
+                    ForceLaw::Exact => r2.powf(-1.5),
+                    ForceLaw::Exclusion { radius } if r2 > radius * radius => r2.powf(-1.5),
+                    ForceLaw::Exclusion { .. } => 0.0,
+                    ForceLaw::Plummer { epsilon } => (r2 + epsilon * epsilon).powf(-1.5),
+                };
+                for k in 0..3 {
+                    e[k] += p.charge[j] * w * d[k];
+                }
+            }
+            e.map(|c| c * p.charge[i] / p.mass[i])
+        })
+        .collect()
+}
+
+fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+/// Diagnostics of `p` with accelerations `acc` (from the backend) under `law`.
+pub fn diagnostics(p: &Particles, acc: &[[f64; 3]], law: ForceLaw) -> Diagnostics {
+    let mut kinetic = 0.0;
+    let mut momentum = [0.0; 3];
+    let mut angular_momentum = [0.0; 3];
+    let mut force_sum = [0.0; 3];
+    let mut force_magnitude_sum = 0.0;
+    for i in 0..p.len() {
+        let (m, x, v) = (p.mass[i], p.position[i], p.velocity[i]);
+        kinetic += 0.5 * m * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+        for k in 0..3 {
+            momentum[k] += m * v[k];
+        }
+        angular_momentum[0] += m * (x[1] * v[2] - x[2] * v[1]);
+        angular_momentum[1] += m * (x[2] * v[0] - x[0] * v[2]);
+        angular_momentum[2] += m * (x[0] * v[1] - x[1] * v[0]);
+        if let Some(a) = acc.get(i) {
+            let f = a.map(|c| c * m);
+            for k in 0..3 {
+                force_sum[k] += f[k];
+            }
+            force_magnitude_sum += (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
+        }
+    }
+    let potential = potential_energy(p, law);
+    Diagnostics {
+        kinetic,
+        potential,
+        total: kinetic + potential,
+        momentum,
+        angular_momentum,
+        force_sum,
+        force_magnitude_sum,
+    }
+}

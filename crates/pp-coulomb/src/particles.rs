@@ -1,0 +1,325 @@
+//! Particles with per-particle charge and mass, species, and seeded initial conditions.
+
+use backend::{Error, Result, require_finite, require_positive};
+use rand::{RngExt, SeedableRng};
+use rand_pcg::Pcg64;
+
+/// A particle species: normalised charge and mass.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Species {
+    /// Name, e.g. `"electron"`.
+    pub name: String,
+    /// Normalised charge (units of the charge unit; may be negative).
+    pub charge: f64,
+    /// Normalised mass (> 0).
+    pub mass: f64,
+}
+
+impl Species {
+    /// A species with the given name, charge and mass.
+    pub fn new(name: impl Into<String>, charge: f64, mass: f64) -> Self {
+        Self {
+            name: name.into(),
+            charge,
+            mass,
+        }
+    }
+}
+
+/// Where [`Particles::fill`] places particles (uniformly at random).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Region {
+    /// The cube `[min, min + length)^3`.
+    Cube {
+        /// Lower corner.
+        min: [f64; 3],
+        /// Edge length (> 0).
+        length: f64,
+    },
+    /// The ball of the given centre and radius.
+    Sphere {
+        /// Centre.
+        center: [f64; 3],
+        /// Radius (> 0).
+        radius: f64,
+    },
+}
+
+/// Velocity distribution of [`Particles::fill`]; the mean of each fill is removed exactly.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Velocities {
+    /// All velocities zero.
+    Cold,
+    /// Maxwellian: each component normal with standard deviation `thermal_speed`.
+    Maxwellian {
+        /// Standard deviation of each component.
+        thermal_speed: f64,
+    },
+    /// Each component uniform in `[-half_width, half_width)`.
+    Uniform {
+        /// Half-width of the interval.
+        half_width: f64,
+    },
+}
+
+/// Particles in structure-of-arrays form (host side, f64).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Particles {
+    /// Positions.
+    pub position: Vec<[f64; 3]>,
+    /// Velocities.
+    pub velocity: Vec<[f64; 3]>,
+    /// Per-particle charge.
+    pub charge: Vec<f64>,
+    /// Per-particle mass.
+    pub mass: Vec<f64>,
+    /// Per-particle index into `species_table`.
+    pub species: Vec<u32>,
+    /// The species.
+    pub species_table: Vec<Species>,
+}
+
+impl Particles {
+    /// No particles, no species.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.position.len()
+    }
+
+    /// Whether there are no particles.
+    pub fn is_empty(&self) -> bool {
+        self.position.is_empty()
+    }
+
+    /// Registers a species and returns its index. Charge must be finite, mass finite and > 0.
+    pub fn add_species(&mut self, species: Species) -> Result<u32> {
+        require_finite(
+            &format!("charge of species '{}'", species.name),
+            species.charge,
+        )?;
+        require_positive(&format!("mass of species '{}'", species.name), species.mass)?;
+        self.species_table.push(species);
+        Ok(self.species_table.len() as u32 - 1)
+    }
+
+    fn species_ref(&self, species: u32) -> Result<&Species> {
+        self.species_table.get(species as usize).ok_or_else(|| {
+            Error::invalid(
+                "species",
+                species,
+                format!(
+                    "no such species ({} registered); call add_species first",
+                    self.species_table.len()
+                ),
+            )
+        })
+    }
+
+    /// Adds one particle of `species`.
+    pub fn push(&mut self, species: u32, position: [f64; 3], velocity: [f64; 3]) -> Result<()> {
+        let s = self.species_ref(species)?.clone();
+        for (k, c) in position.iter().enumerate() {
+            require_finite(&format!("position[{}][{k}]", self.len()), *c)?;
+        }
+        for (k, c) in velocity.iter().enumerate() {
+            require_finite(&format!("velocity[{}][{k}]", self.len()), *c)?;
+        }
+        self.position.push(position);
+        self.velocity.push(velocity);
+        self.charge.push(s.charge);
+        self.mass.push(s.mass);
+        self.species.push(species);
+        Ok(())
+    }
+
+    /// Adds `count` particles of `species`, uniform in `region`, with velocities drawn from
+    /// `velocities` and their mean removed, from a `rand_pcg::Pcg64` seeded with `seed`.
+    pub fn fill(
+        &mut self,
+        species: u32,
+        count: usize,
+        region: Region,
+        velocities: Velocities,
+        seed: u64,
+    ) -> Result<()> {
+        let s = self.species_ref(species)?.clone();
+        match region {
+            Region::Cube { min, length } => {
+                require_positive("cube length", length)?;
+                for (k, c) in min.iter().enumerate() {
+                    require_finite(&format!("cube min[{k}]"), *c)?;
+                }
+            }
+            Region::Sphere { center, radius } => {
+                require_positive("sphere radius", radius)?;
+                for (k, c) in center.iter().enumerate() {
+                    require_finite(&format!("sphere center[{k}]"), *c)?;
+                }
+            }
+        }
+        match velocities {
+            Velocities::Cold => {}
+            Velocities::Maxwellian { thermal_speed } => {
+                backend::require_non_negative("thermal_speed", thermal_speed)?;
+            }
+            Velocities::Uniform { half_width } => {
+                backend::require_non_negative("half_width", half_width)?;
+            }
+        }
+        let mut rng = Pcg64::seed_from_u64(seed);
+        let start = self.len();
+        for _ in 0..count {
+            let p = match region {
+                Region::Cube { min, length } => [
+                    min[0] + length * rng.random::<f64>(),
+                    min[1] + length * rng.random::<f64>(),
+                    min[2] + length * rng.random::<f64>(),
+                ],
+                Region::Sphere { center, radius } => loop {
+                    let d: [f64; 3] = std::array::from_fn(|_| 2.0 * rng.random::<f64>() - 1.0);
+                    if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] <= 1.0 {
+                        break std::array::from_fn(|k| center[k] + radius * d[k]);
+                    }
+                },
+            };
+            let v = match velocities {
+                Velocities::Cold => [0.0; 3],
+                Velocities::Maxwellian { thermal_speed } => {
+                    std::array::from_fn(|_| thermal_speed * normal(&mut rng))
+                }
+                Velocities::Uniform { half_width } => {
+                    std::array::from_fn(|_| half_width * (2.0 * rng.random::<f64>() - 1.0))
+                }
+            };
+            self.position.push(p);
+            self.velocity.push(v);
+            self.charge.push(s.charge);
+            self.mass.push(s.mass);
+            self.species.push(species);
+        }
+        if count > 0 {
+            let mut mean = [0.0; 3];
+            for v in &self.velocity[start..] {
+                for k in 0..3 {
+                    mean[k] += v[k] / count as f64;
+                }
+            }
+            for v in &mut self.velocity[start..] {
+                for k in 0..3 {
+                    v[k] -= mean[k];
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Checks lengths, finiteness and masses; errors name the first bad particle.
+    pub fn validate(&self) -> Result<()> {
+        let n = self.len();
+        for (name, len) in [
+            ("velocity", self.velocity.len()),
+            ("charge", self.charge.len()),
+            ("mass", self.mass.len()),
+            ("species", self.species.len()),
+        ] {
+            if len != n {
+                return Err(Error::invalid(
+                    format!("length of {name}"),
+                    len,
+                    format!("must equal the number of positions, {n}"),
+                ));
+            }
+        }
+        for i in 0..n {
+            for k in 0..3 {
+                require_finite(&format!("position[{i}][{k}]"), self.position[i][k])?;
+                require_finite(&format!("velocity[{i}][{k}]"), self.velocity[i][k])?;
+            }
+            require_finite(&format!("charge[{i}]"), self.charge[i])?;
+            require_positive(&format!("mass[{i}]"), self.mass[i])?;
+        }
+        Ok(())
+    }
+}
+
+/// A standard normal deviate (Box–Muller).
+fn normal(rng: &mut Pcg64) -> f64 {
+    let u1 = 1.0 - rng.random::<f64>(); // (0, 1]
+    let u2 = rng.random::<f64>();
+    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fill_is_seeded_centred_and_inside() {
+        let mut p = Particles::new();
+        let e = p.add_species(Species::new("e", -1.0, 1.0)).unwrap();
+        let ion = p.add_species(Species::new("ion", 1.0, 1836.0)).unwrap();
+        let sphere = Region::Sphere {
+            center: [1.0, 2.0, 3.0],
+            radius: 2.0,
+        };
+        p.fill(
+            e,
+            1000,
+            sphere,
+            Velocities::Maxwellian { thermal_speed: 0.5 },
+            7,
+        )
+        .unwrap();
+        p.fill(
+            ion,
+            1000,
+            sphere,
+            Velocities::Uniform { half_width: 0.1 },
+            8,
+        )
+        .unwrap();
+        assert_eq!(p.len(), 2000);
+        assert_eq!(p.mass[1500], 1836.0);
+        for x in &p.position {
+            let r2: f64 = (0..3).map(|k| (x[k] - [1.0, 2.0, 3.0][k]).powi(2)).sum();
+            assert!(r2 <= 4.0);
+        }
+        for range in [0..1000, 1000..2000] {
+            for k in 0..3 {
+                let m: f64 = p.velocity[range.clone()].iter().map(|v| v[k]).sum();
+                assert!(m.abs() < 1e-12, "{m}");
+            }
+        }
+        let var: f64 = p.velocity[..1000].iter().map(|v| v[0] * v[0]).sum::<f64>() / 1000.0;
+        assert!((var.sqrt() - 0.5).abs() < 0.05, "{}", var.sqrt());
+        let mut q = Particles::new();
+        q.add_species(Species::new("e", -1.0, 1.0)).unwrap();
+        q.add_species(Species::new("ion", 1.0, 1836.0)).unwrap();
+        q.fill(
+            e,
+            1000,
+            sphere,
+            Velocities::Maxwellian { thermal_speed: 0.5 },
+            7,
+        )
+        .unwrap();
+        assert_eq!(q.position[..], p.position[..1000]);
+    }
+
+    #[test]
+    fn bad_species_and_values() {
+        let mut p = Particles::new();
+        assert!(p.add_species(Species::new("x", 1.0, 0.0)).is_err());
+        assert!(p.push(0, [0.0; 3], [0.0; 3]).is_err());
+        let s = p.add_species(Species::new("x", 1.0, 1.0)).unwrap();
+        let e = p.push(s, [f64::NAN, 0.0, 0.0], [0.0; 3]).unwrap_err();
+        assert!(e.to_string().contains("position[0][0]"), "{e}");
+        p.push(s, [0.0; 3], [0.0; 3]).unwrap();
+        p.mass[0] = 0.0;
+        assert!(p.validate().unwrap_err().to_string().contains("mass[0]"));
+    }
+}

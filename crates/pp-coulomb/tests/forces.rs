@@ -1,0 +1,232 @@
+//! Force kernels against the plain f64 reference, Newton's third law, CPU vs GPU, bad input.
+
+use backend::testing::gpu_or_skip;
+use backend::{Backend, Simulation};
+use pp_coulomb::{
+    Config, ForceLaw, Integrator, Particles, PpCoulomb, Precision, Region, Species, Velocities,
+    reference_accelerations,
+};
+
+/// Electrons and heavier ions in a cube (several species, per-particle charge and mass).
+fn plasma(n: usize, seed: u64) -> Particles {
+    let mut p = Particles::new();
+    let e = p.add_species(Species::new("electron", -1.0, 1.0)).unwrap();
+    let ion = p.add_species(Species::new("ion", 2.0, 100.0)).unwrap();
+    let cube = Region::Cube {
+        min: [-10.0; 3],
+        length: 20.0,
+    };
+    let v = Velocities::Maxwellian { thermal_speed: 0.3 };
+    p.fill(e, n - n / 3, cube, v, seed).unwrap();
+    p.fill(ion, n / 3, cube, v, seed + 1).unwrap();
+    p
+}
+
+const LAWS: [ForceLaw; 3] = [
+    ForceLaw::Exact,
+    ForceLaw::Exclusion { radius: 1.5 },
+    ForceLaw::Plummer { epsilon: 0.4 },
+];
+
+fn norm(a: [f64; 3]) -> f64 {
+    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
+}
+
+/// max_i |a_i - b_i| / rms_i |b_i|.
+fn max_error_over_rms(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    let rms = (b.iter().map(|x| norm(*x).powi(2)).sum::<f64>() / b.len() as f64).sqrt();
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| norm([x[0] - y[0], x[1] - y[1], x[2] - y[2]]))
+        .fold(0.0, f64::max)
+        / rms
+}
+
+/// sqrt(sum_i |a_i - b_i|^2 / sum_i |b_i|^2): the L2 relative error over all particles.
+fn l2_relative(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    let num: f64 = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| norm([x[0] - y[0], x[1] - y[1], x[2] - y[2]]).powi(2))
+        .sum();
+    let den: f64 = b.iter().map(|y| norm(*y).powi(2)).sum();
+    (num / den).sqrt()
+}
+
+fn accelerations(p: &Particles, law: ForceLaw, prec: Precision, b: Backend<'_>) -> Vec<[f64; 3]> {
+    let config = Config::new(0.01, law).with_precision(prec);
+    PpCoulomb::new(p.clone(), config, b)
+        .unwrap()
+        .accelerations()
+        .unwrap()
+}
+
+#[test]
+fn cpu_kernels_match_reference_and_third_law() {
+    let p = plasma(1003, 1); // not a multiple of the SIMD width
+    for law in LAWS {
+        let reference = reference_accelerations(&p, law);
+        // Both CPU paths: AVX-512 rsqrt + Newton (where the CPU has it) and sqrt + divide.
+        for rsqrt in [true, false] {
+            let cpu = |prec| {
+                let config = Config::new(0.01, law)
+                    .with_precision(prec)
+                    .with_rsqrt(rsqrt);
+                let mut sim = PpCoulomb::new(p.clone(), config, Backend::Cpu).unwrap();
+                (sim.accelerations().unwrap(), sim.backend_name())
+            };
+            let (f64_acc, name64) = cpu(Precision::F64);
+            let (f32_acc, name32) = cpu(Precision::F32);
+            let e64 = max_error_over_rms(&f64_acc, &reference);
+            let e32 = max_error_over_rms(&f32_acc, &reference);
+            let l32 = l2_relative(&f32_acc, &reference);
+            println!(
+                "{law:?}: {name64} vs reference {e64:.2e}; {name32} vs reference {e32:.2e} \
+                 (max_i / rms), {l32:.2e} (L2)"
+            );
+            assert!(e64 < 1e-12, "{law:?} {name64}: {e64:e}");
+            assert!(
+                e32 < 1e-4 && l32 < 1e-5,
+                "{law:?} {name32}: {e32:e} {l32:e}"
+            );
+        }
+        let mut sim = PpCoulomb::new(p.clone(), Config::new(0.01, law), Backend::Cpu).unwrap();
+        let d = sim.diagnostics().unwrap();
+        let third = norm(d.force_sum) / d.force_magnitude_sum;
+        println!("{law:?}: |sum F| / sum |F| = {third:.2e}");
+        assert!(third < 1e-13, "{law:?}: third law {third:e}");
+    }
+}
+
+#[test]
+fn gpu_matches_cpu_f32_n4096_and_f64() {
+    let Some(ctx) = gpu_or_skip("gpu_matches_cpu_f32_n4096_and_f64") else {
+        return;
+    };
+    let p = plasma(4096, 2);
+    let law = ForceLaw::Plummer { epsilon: 0.1 };
+    let cpu32 = accelerations(&p, law, Precision::F32, Backend::Cpu);
+    let gpu32 = accelerations(&p, law, Precision::F32, Backend::Gpu(&ctx));
+    let cpu64 = accelerations(&p, law, Precision::F64, Backend::Cpu);
+    let e = l2_relative(&gpu32, &cpu32);
+    let emax = max_error_over_rms(&gpu32, &cpu32);
+    let e32_64 = l2_relative(&cpu32, &cpu64);
+    let egpu_64 = l2_relative(&gpu32, &cpu64);
+    println!(
+        "N=4096 f32: L2 relative |a_gpu - a_cpu| = {e:.2e} (max_i / rms: {emax:.2e}); \
+         f32 vs f64 (L2 relative): cpu {e32_64:.2e}, gpu {egpu_64:.2e}"
+    );
+    assert!(e < 1e-5, "gpu vs cpu f32: {e:e}");
+    for law in LAWS {
+        let p = plasma(300, 3);
+        let c = accelerations(&p, law, Precision::F64, Backend::Cpu);
+        if ctx.has_f64() {
+            let g = accelerations(&p, law, Precision::F64, Backend::Gpu(&ctx));
+            let e = max_error_over_rms(&g, &c);
+            println!("{law:?} f64 gpu vs cpu {e:.2e}");
+            assert!(e < 1e-12, "{law:?}: {e:e}");
+        }
+        let g = accelerations(&p, law, Precision::F32, Backend::Gpu(&ctx));
+        let e = max_error_over_rms(&g, &c);
+        assert!(e < 1e-5, "{law:?}: f32 gpu vs f64 cpu {e:e}");
+    }
+}
+
+#[test]
+fn gpu_and_cpu_trajectories_agree() {
+    let Some(ctx) = gpu_or_skip("gpu_and_cpu_trajectories_agree") else {
+        return;
+    };
+    let prec = if ctx.has_f64() {
+        Precision::F64
+    } else {
+        Precision::F32
+    };
+    let tol = if ctx.has_f64() { 1e-10 } else { 1e-4 };
+    for integrator in [Integrator::SymplecticEuler, Integrator::Leapfrog] {
+        let p = plasma(500, 4);
+        let config = Config::new(0.05, ForceLaw::Plummer { epsilon: 0.5 })
+            .with_integrator(integrator)
+            .with_precision(prec);
+        let mut cpu = PpCoulomb::new(p.clone(), config, Backend::Cpu).unwrap();
+        let mut gpu = PpCoulomb::new(p, config, Backend::Gpu(&ctx)).unwrap();
+        cpu.step(10).unwrap();
+        gpu.step(7).unwrap();
+        gpu.step(3).unwrap();
+        let (a, b) = (cpu.state().unwrap(), gpu.state().unwrap());
+        let dx = max_error_over_rms(&b.position, &a.position);
+        let dv = max_error_over_rms(&b.velocity, &a.velocity);
+        println!("{integrator:?}: positions {dx:.2e}, velocities {dv:.2e}");
+        assert!(dx < tol && dv < tol, "{integrator:?}: {dx:e} {dv:e}");
+        assert_eq!(gpu.steps_done(), 10);
+    }
+}
+
+#[test]
+fn zero_and_one_particle_are_fine() {
+    let mut backends = vec![Backend::Cpu];
+    let ctx = gpu_or_skip("zero_and_one_particle_are_fine");
+    if let Some(ctx) = &ctx {
+        backends.push(Backend::Gpu(ctx));
+    }
+    for b in backends {
+        let empty = PpCoulomb::new(Particles::new(), Config::new(0.1, ForceLaw::Exact), b);
+        let mut empty = empty.unwrap();
+        empty.step(3).unwrap();
+        assert!(empty.accelerations().unwrap().is_empty());
+        assert_eq!(empty.diagnostics().unwrap().total, 0.0);
+        let mut p = Particles::new();
+        let s = p.add_species(Species::new("e", -1.0, 1.0)).unwrap();
+        p.push(s, [1.0, 2.0, 3.0], [0.5, 0.0, 0.0]).unwrap();
+        let mut one = PpCoulomb::new(p, Config::new(0.1, ForceLaw::Exact), b).unwrap();
+        assert_eq!(one.accelerations().unwrap(), vec![[0.0; 3]]);
+        one.step(10).unwrap();
+        let x = one.state().unwrap().position[0];
+        assert!((x[0] - 1.5).abs() < 1e-6, "{x:?}");
+    }
+}
+
+#[test]
+fn bad_input_is_a_clear_error() {
+    let mut p = plasma(10, 5);
+    p.position[3][1] = f64::NAN;
+    let e = PpCoulomb::new(p, Config::new(0.1, ForceLaw::Exact), Backend::Cpu).unwrap_err();
+    assert!(e.to_string().contains("position[3][1]"), "{e}");
+    let mut p = plasma(10, 5);
+    p.mass[4] = 0.0;
+    let e = PpCoulomb::new(p, Config::new(0.1, ForceLaw::Exact), Backend::Cpu).unwrap_err();
+    assert!(e.to_string().contains("mass[4]"), "{e}");
+    let p = plasma(10, 5);
+    for bad in [
+        Config::new(f64::NAN, ForceLaw::Exact),
+        Config::new(0.1, ForceLaw::Plummer { epsilon: 0.0 }),
+        Config::new(0.1, ForceLaw::Exclusion { radius: -1.0 }),
+    ] {
+        assert!(PpCoulomb::new(p.clone(), bad, Backend::Cpu).is_err());
+    }
+}
+
+#[test]
+fn coincident_particles_in_exact_mode_name_the_pair() {
+    let mut p = plasma(200, 6);
+    p.position[150] = p.position[17];
+    let mut backends = vec![Backend::Cpu];
+    let ctx = gpu_or_skip("coincident_particles_in_exact_mode_name_the_pair");
+    if let Some(ctx) = &ctx {
+        backends.push(Backend::Gpu(ctx));
+    }
+    for b in backends {
+        let mut sim = PpCoulomb::new(p.clone(), Config::new(0.1, ForceLaw::Exact), b).unwrap();
+        let e = sim.step(1).unwrap_err().to_string();
+        assert!(
+            e.contains("17") && e.contains("150") && e.contains("coincident"),
+            "{e}"
+        );
+        // Softened or excluded laws handle the same configuration.
+        let soft = Config::new(0.1, ForceLaw::Plummer { epsilon: 0.1 });
+        let mut sim = PpCoulomb::new(p.clone(), soft, b).unwrap();
+        sim.step(1).unwrap();
+        let acc = sim.accelerations().unwrap();
+        assert!(acc.iter().flatten().all(|c| c.is_finite()));
+    }
+}

@@ -1,0 +1,423 @@
+//! GPU backend (WGSL): tiled stencil with a one-cell halo in workgroup memory, or a plain
+//! global-memory stencil, plus a ghost-cell kernel; many steps per submission.
+
+use backend::gpu::DISPATCH_WGSL;
+use backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Result, Simulation};
+
+use crate::boundary::{Boundary, fill_ghosts};
+use crate::grid::{Grid, pad};
+use crate::model::Model;
+use crate::real::Real;
+use crate::stepper::{Integrator, Stepping, check_dt, check_model, stable_dt};
+
+const COMMON_WGSL: &str = include_str!("../../../shaders/rd/stencil_common.wgsl");
+const TILED_WGSL: &str = include_str!("../../../shaders/rd/stencil_tiled.wgsl");
+const GLOBAL_WGSL: &str = include_str!("../../../shaders/rd/stencil_global.wgsl");
+const GHOSTS_WGSL: &str = include_str!("../../../shaders/rd/ghosts.wgsl");
+/// Index of the first model parameter in the params buffer (see `stencil_common.wgsl`).
+const MODEL_PARAMS_AT: usize = 22;
+/// Species the params layout has room for (Dirichlet values per edge).
+const MAX_SPECIES: usize = 4;
+
+/// Which stencil kernel the GPU backend runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum GpuKernel {
+    /// Tile plus one-cell halo staged in workgroup memory (the source's scheme).
+    #[default]
+    Tiled,
+    /// Every neighbour read straight from global memory (for comparison).
+    Global,
+}
+
+/// GPU backend options.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GpuOptions {
+    /// Stencil kernel.
+    pub kernel: GpuKernel,
+    /// Tile (= workgroup) size `(x, y)` in cells; a WGSL override constant.
+    pub tile: (u32, u32),
+    /// Steps recorded into one command buffer before it is submitted.
+    pub steps_per_submit: u32,
+}
+
+impl Default for GpuOptions {
+    fn default() -> Self {
+        Self {
+            kernel: GpuKernel::Tiled,
+            tile: (16, 16),
+            steps_per_submit: 100,
+        }
+    }
+}
+
+/// Reaction–diffusion on the GPU. The fields stay on the device between `step` calls;
+/// `state()` downloads them.
+///
+/// The stability bound is checked at construction and, for models whose diffusivity depends
+/// on the fields, again before each `step` call from the fields of the last `state()`
+/// download (the GPU does not read them back on its own).
+pub struct GpuRd<T: Real, M: Model> {
+    ctx: GpuContext,
+    model: M,
+    grid: Grid<T>,
+    stepping: Stepping,
+    options: GpuOptions,
+    a: GpuBuffer<T>,
+    params: GpuBuffer<T>,
+    stencil: Kernel,
+    ghosts: Kernel,
+    bind_ab: wgpu::BindGroup,
+    bind_ba: wgpu::BindGroup,
+    bind_ba_avg: wgpu::BindGroup,
+    ghosts_a: wgpu::BindGroup,
+    ghosts_b: wgpu::BindGroup,
+    stencil_avg: Kernel,
+    cur_is_a: bool,
+    steps: u64,
+    snapshot_fresh: bool,
+    // Kept alive for the bind groups.
+    b: GpuBuffer<T>,
+    _coef: GpuBuffer<T>,
+}
+
+impl<T: Real, M: Model> std::fmt::Debug for GpuRd<T, M> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GpuRd")
+            .field("model", &self.model)
+            .field("nx", &self.grid.nx())
+            .field("ny", &self.grid.ny())
+            .field("stepping", &self.stepping)
+            .field("options", &self.options)
+            .finish()
+    }
+}
+
+fn params_vec<T: Real, M: Model>(model: &M, grid: &Grid<T>, s: &Stepping) -> Vec<T> {
+    let mut p = vec![0.0f64; MODEL_PARAMS_AT];
+    p[0] = s.dt;
+    p[1] = 1.0 / (grid.h() * grid.h());
+    for (e, b) in grid.boundaries().edges().into_iter().enumerate() {
+        p[2 + e] = f64::from(b.code());
+        if let Boundary::Dirichlet(v) = b {
+            for (k, x) in v.iter().enumerate() {
+                p[6 + e * MAX_SPECIES + k] = *x;
+            }
+        }
+    }
+    p.extend(model.gpu_params());
+    p.into_iter().map(T::from_f64).collect()
+}
+
+impl<T: Real, M: Model> GpuRd<T, M> {
+    /// Uploads the grid and builds the kernels. Errors: bad model/grid/dt (as on the CPU),
+    /// `f64` without `SHADER_F64`, a tile over the device's workgroup limits, a grid over the
+    /// buffer or dispatch limits.
+    pub fn new(
+        ctx: &GpuContext,
+        grid: Grid<T>,
+        model: M,
+        stepping: Stepping,
+        options: GpuOptions,
+    ) -> Result<Self> {
+        check_model(&model, &grid)?;
+        check_dt(&model, &grid, &stepping)?;
+        if T::WGSL == "f64" && !ctx.has_f64() {
+            return Err(Error::Unsupported(format!(
+                "f64 fields on the GPU need SHADER_F64, which adapter '{}' lacks; use f32 or the CPU backend",
+                ctx.adapter_info().name
+            )));
+        }
+        if model.species() > MAX_SPECIES {
+            return Err(Error::invalid(
+                "number of species",
+                model.species(),
+                format!("the GPU backend supports at most {MAX_SPECIES}"),
+            ));
+        }
+        let (nx, ny) = (grid.nx(), grid.ny());
+        let ns = model.species();
+        let nf = ns + model.coefficients().len();
+        let (tx, ty) = options.tile;
+        let lim = ctx.limits();
+        let tile_bytes = u64::from(tx + 2) * u64::from(ty + 2) * nf as u64 * size_of::<T>() as u64;
+        if tx == 0
+            || ty == 0
+            || tx > lim.max_compute_workgroup_size_x
+            || ty > lim.max_compute_workgroup_size_y
+            || tx * ty > lim.max_compute_invocations_per_workgroup
+            || tile_bytes > u64::from(lim.max_compute_workgroup_storage_size)
+        {
+            return Err(Error::invalid(
+                "GPU tile",
+                format!("{tx} x {ty}"),
+                format!(
+                    "needs 1..={} x 1..={} with at most {} invocations and {} bytes of workgroup memory (this tile: {tile_bytes})",
+                    lim.max_compute_workgroup_size_x,
+                    lim.max_compute_workgroup_size_y,
+                    lim.max_compute_invocations_per_workgroup,
+                    lim.max_compute_workgroup_storage_size
+                ),
+            ));
+        }
+        if options.steps_per_submit == 0 {
+            return Err(Error::invalid("steps_per_submit", 0, "must be >= 1"));
+        }
+        let (gx, gy) = (nx.div_ceil(tx as usize), ny.div_ceil(ty as usize));
+        let maxg = lim.max_compute_workgroups_per_dimension as usize;
+        if gx > maxg || gy > maxg {
+            return Err(Error::invalid(
+                "grid size",
+                format!("{nx} x {ny}"),
+                format!(
+                    "needs {gx} x {gy} workgroups, over the device limit {maxg}; use a larger tile or split the grid"
+                ),
+            ));
+        }
+
+        let plane = (nx + 2) * (ny + 2);
+        let mut init = grid.padded();
+        for (s, f) in init.chunks_mut(plane).enumerate() {
+            fill_ghosts(f, nx, ny, s, grid.boundaries());
+        }
+        let coef_fields: Vec<Vec<T>> = model
+            .coefficients()
+            .iter()
+            .map(|c| c.iter().map(|&v| T::from_f64(v)).collect())
+            .collect();
+        let mut coef = pad(&coef_fields, nx, ny);
+        let cbc = grid.boundaries().for_coefficients();
+        for f in coef.chunks_mut(plane) {
+            fill_ghosts(f, nx, ny, 0, &cbc);
+        }
+        if coef.is_empty() {
+            coef.push(T::default());
+        }
+        let a = GpuBuffer::from_slice(ctx, "rd state a", &init)?;
+        let b = GpuBuffer::from_slice(ctx, "rd state b", &init)?;
+        let coef = GpuBuffer::from_slice(ctx, "rd coefficients", &coef)?;
+        let params =
+            GpuBuffer::from_slice(ctx, "rd params", &params_vec(&model, &grid, &stepping))?;
+
+        let header = format!("alias real = {};\n", T::WGSL);
+        let body = match options.kernel {
+            GpuKernel::Tiled => TILED_WGSL,
+            GpuKernel::Global => GLOBAL_WGSL,
+        };
+        let sources = [header.as_str(), COMMON_WGSL, model.wgsl(), body];
+        let constants = |avg: f64| {
+            [
+                ("NX", nx as f64),
+                ("NY", ny as f64),
+                ("NS", ns as f64),
+                ("NF", nf as f64),
+                ("TX", f64::from(tx)),
+                ("TY", f64::from(ty)),
+                ("AVERAGE", avg),
+            ]
+        };
+        let make = |label: &str, avg: f64| {
+            Kernel::new(
+                ctx,
+                &KernelDesc {
+                    label,
+                    sources: &sources,
+                    entry: "main",
+                    workgroup_size: tx * ty,
+                    constants: &constants(avg),
+                },
+            )
+        };
+        let stencil = make("rd stencil", 0.0)?;
+        let stencil_avg = make("rd stencil (Heun average)", 1.0)?;
+        let ghosts = Kernel::new(
+            ctx,
+            &KernelDesc {
+                label: "rd ghosts",
+                sources: &[header.as_str(), DISPATCH_WGSL, GHOSTS_WGSL],
+                entry: "main",
+                workgroup_size: 64,
+                constants: &[("NX", nx as f64), ("NY", ny as f64), ("NS", ns as f64)],
+            },
+        )?;
+        let sb = |k: &Kernel, src: &GpuBuffer<T>, dst: &GpuBuffer<T>| {
+            k.bind(
+                ctx,
+                &[
+                    src.binding(),
+                    dst.binding(),
+                    coef.binding(),
+                    params.binding(),
+                ],
+            )
+        };
+        let bind_ab = sb(&stencil, &a, &b)?;
+        let bind_ba = sb(&stencil, &b, &a)?;
+        let bind_ba_avg = sb(&stencil_avg, &b, &a)?;
+        let ghosts_a = ghosts.bind(ctx, &[a.binding(), params.binding()])?;
+        let ghosts_b = ghosts.bind(ctx, &[b.binding(), params.binding()])?;
+        Ok(Self {
+            ctx: ctx.clone(),
+            model,
+            grid,
+            stepping,
+            options,
+            a,
+            params,
+            stencil,
+            ghosts,
+            bind_ab,
+            bind_ba,
+            bind_ba_avg,
+            ghosts_a,
+            ghosts_b,
+            stencil_avg,
+            cur_is_a: true,
+            steps: 0,
+            snapshot_fresh: true,
+            b,
+            _coef: coef,
+        })
+    }
+
+    /// The model.
+    pub fn model(&self) -> &M {
+        &self.model
+    }
+
+    /// The options the kernels were built with.
+    pub fn options(&self) -> GpuOptions {
+        self.options
+    }
+
+    /// Current time-stepping settings.
+    pub fn stepping(&self) -> Stepping {
+        self.stepping
+    }
+
+    /// Changes the time step (checked against the bound from the last known fields).
+    pub fn set_stepping(&mut self, stepping: Stepping) -> Result<()> {
+        check_dt(&self.model, &self.grid, &stepping)?;
+        self.params
+            .upload(&self.ctx, &params_vec(&self.model, &self.grid, &stepping))?;
+        self.stepping = stepping;
+        Ok(())
+    }
+
+    /// Largest stable `dt` for the last known fields.
+    pub fn stable_dt(&self) -> f64 {
+        stable_dt(&self.model, &self.grid)
+    }
+
+    /// Simulated time, `steps_done * dt` (for a constant `dt`).
+    pub fn time(&self) -> f64 {
+        self.steps as f64 * self.stepping.dt
+    }
+
+    fn record_step(&mut self, pass: &mut wgpu::ComputePass<'_>) -> Result<()> {
+        let ghost_items = (self.grid.species() * 2 * (self.grid.nx() + self.grid.ny())) as u64;
+        let (gx, gy) = (
+            self.grid.nx().div_ceil(self.options.tile.0 as usize) as u32,
+            self.grid.ny().div_ceil(self.options.tile.1 as usize) as u32,
+        );
+        match self.stepping.integrator {
+            Integrator::Euler => {
+                let (bind, ghost) = if self.cur_is_a {
+                    (&self.bind_ab, &self.ghosts_b)
+                } else {
+                    (&self.bind_ba, &self.ghosts_a)
+                };
+                self.stencil.dispatch_grid(pass, bind, gx, gy);
+                self.ghosts
+                    .dispatch_items(&self.ctx, pass, ghost, ghost_items)?;
+                self.cur_is_a = !self.cur_is_a;
+            }
+            Integrator::Heun => {
+                // Heun keeps the state in `a`: a -> b (Euler stage), then a = (a + b + dt F(b)) / 2.
+                self.stencil.dispatch_grid(pass, &self.bind_ab, gx, gy);
+                self.ghosts
+                    .dispatch_items(&self.ctx, pass, &self.ghosts_b, ghost_items)?;
+                self.stencil_avg
+                    .dispatch_grid(pass, &self.bind_ba_avg, gx, gy);
+                self.ghosts
+                    .dispatch_items(&self.ctx, pass, &self.ghosts_a, ghost_items)?;
+            }
+        }
+        Ok(())
+    }
+
+    fn current(&self) -> &GpuBuffer<T> {
+        if self.cur_is_a { &self.a } else { &self.b }
+    }
+
+    /// Makes `a` hold the state (Heun reads and writes `a` only).
+    fn settle_in_a(&mut self) -> Result<()> {
+        if !self.cur_is_a {
+            let mut enc = self.ctx.encoder("rd copy b -> a");
+            enc.copy_buffer_to_buffer(self.b.raw(), 0, self.a.raw(), 0, self.a.raw().size());
+            self.ctx.submit(enc);
+            self.cur_is_a = true;
+        }
+        Ok(())
+    }
+}
+
+impl<T: Real, M: Model> Simulation for GpuRd<T, M> {
+    type State = Grid<T>;
+
+    fn step(&mut self, steps: u32) -> Result<()> {
+        if self.model.field_dependent_diffusivity() {
+            check_dt(&self.model, &self.grid, &self.stepping)?;
+        }
+        if self.stepping.integrator == Integrator::Heun {
+            self.settle_in_a()?;
+        }
+        let mut left = steps;
+        while left > 0 {
+            let n = left.min(self.options.steps_per_submit);
+            let mut enc = self.ctx.encoder("rd steps");
+            {
+                let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("rd steps"),
+                    timestamp_writes: None,
+                });
+                for _ in 0..n {
+                    self.record_step(&mut pass)?;
+                }
+            }
+            self.ctx.submit(enc);
+            left -= n;
+        }
+        self.ctx.wait()?;
+        if steps > 0 {
+            self.snapshot_fresh = false;
+        }
+        self.steps += u64::from(steps);
+        Ok(())
+    }
+
+    fn state(&mut self) -> Result<Grid<T>> {
+        if !self.snapshot_fresh {
+            let data = self.current().download(&self.ctx)?;
+            self.grid.set_from_padded(&data);
+            self.snapshot_fresh = true;
+        }
+        Ok(self.grid.clone())
+    }
+
+    fn steps_done(&self) -> u64 {
+        self.steps
+    }
+
+    fn backend_name(&self) -> String {
+        let k = match self.options.kernel {
+            GpuKernel::Tiled => "tiled",
+            GpuKernel::Global => "global",
+        };
+        format!(
+            "gpu {k} {}x{} ({})",
+            self.options.tile.0,
+            self.options.tile.1,
+            self.ctx.adapter_info().name
+        )
+    }
+}

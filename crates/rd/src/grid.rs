@@ -1,0 +1,183 @@
+//! The grid: species fields on a square 2D lattice with spacing `h` and edge conditions.
+
+use backend::{Error, Result, require_positive};
+
+use crate::boundary::Boundaries;
+use crate::real::Real;
+
+/// One or more species fields on an `nx x ny` grid of square cells of side `h`.
+///
+/// Field `s` is stored row-major: cell `(i, j)` is `fields[s][j * nx + i]`, `i` along x.
+/// This is also the host-side snapshot ([`backend::Simulation::State`]) of every rd backend.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Grid<T: Real> {
+    nx: usize,
+    ny: usize,
+    h: f64,
+    boundaries: Boundaries,
+    fields: Vec<Vec<T>>,
+}
+
+impl<T: Real> Grid<T> {
+    /// A grid from its fields; checks sizes, `h > 0`, finite values and the boundaries.
+    pub fn new(
+        nx: usize,
+        ny: usize,
+        h: f64,
+        boundaries: Boundaries,
+        fields: Vec<Vec<T>>,
+    ) -> Result<Self> {
+        if nx == 0 || ny == 0 {
+            return Err(Error::invalid(
+                "grid size",
+                format!("{nx} x {ny}"),
+                "both dimensions must be >= 1",
+            ));
+        }
+        if nx.checked_mul(ny).is_none_or(|n| n > u32::MAX as usize / 8) {
+            return Err(Error::invalid(
+                "grid size",
+                format!("{nx} x {ny}"),
+                "too many cells for 32-bit indexing; split the domain",
+            ));
+        }
+        require_positive("grid spacing h", h)?;
+        if fields.is_empty() {
+            return Err(Error::invalid(
+                "fields",
+                0,
+                "give at least one species field",
+            ));
+        }
+        for (s, f) in fields.iter().enumerate() {
+            if f.len() != nx * ny {
+                return Err(Error::invalid(
+                    format!("length of field {s}"),
+                    f.len(),
+                    format!("must be nx * ny = {}", nx * ny),
+                ));
+            }
+            if let Some(k) = f.iter().position(|v| !v.to_f64().is_finite()) {
+                return Err(Error::invalid(
+                    format!("field {s} at cell ({}, {})", k % nx, k / nx),
+                    f[k],
+                    "every value must be finite",
+                ));
+            }
+        }
+        boundaries.validate(fields.len())?;
+        Ok(Self {
+            nx,
+            ny,
+            h,
+            boundaries,
+            fields,
+        })
+    }
+
+    /// A grid with `species` fields, all set to `value`.
+    pub fn uniform(
+        nx: usize,
+        ny: usize,
+        h: f64,
+        boundaries: Boundaries,
+        species: usize,
+        value: T,
+    ) -> Result<Self> {
+        let n = nx.saturating_mul(ny);
+        Self::new(nx, ny, h, boundaries, vec![vec![value; n]; species])
+    }
+
+    /// Cells along x.
+    pub fn nx(&self) -> usize {
+        self.nx
+    }
+    /// Cells along y.
+    pub fn ny(&self) -> usize {
+        self.ny
+    }
+    /// Cell side.
+    pub fn h(&self) -> f64 {
+        self.h
+    }
+    /// Edge conditions.
+    pub fn boundaries(&self) -> &Boundaries {
+        &self.boundaries
+    }
+    /// Number of species fields.
+    pub fn species(&self) -> usize {
+        self.fields.len()
+    }
+    /// All fields.
+    pub fn fields(&self) -> &[Vec<T>] {
+        &self.fields
+    }
+    /// Field `s` (row-major, `j * nx + i`); panics if `s >= species()`.
+    pub fn field(&self, s: usize) -> &[T] {
+        &self.fields[s]
+    }
+    /// Mutable field `s`: values written here are checked again when a simulation is built.
+    pub fn field_mut(&mut self, s: usize) -> &mut [T] {
+        &mut self.fields[s]
+    }
+    /// Value of species `s` at cell `(i, j)`.
+    pub fn get(&self, s: usize, i: usize, j: usize) -> T {
+        self.fields[s][j * self.nx + i]
+    }
+    /// Integral of species `s` over the domain, `h^2 * sum`, accumulated in `f64`.
+    pub fn total(&self, s: usize) -> f64 {
+        self.fields[s].iter().map(|v| v.to_f64()).sum::<f64>() * self.h * self.h
+    }
+    /// Largest absolute value of species `s`.
+    pub fn max_abs(&self, s: usize) -> f64 {
+        self.fields[s]
+            .iter()
+            .map(|v| v.to_f64().abs())
+            .fold(0.0, f64::max)
+    }
+    /// Converts to another precision.
+    pub fn convert<U: Real>(&self) -> Grid<U> {
+        Grid {
+            nx: self.nx,
+            ny: self.ny,
+            h: self.h,
+            boundaries: self.boundaries.clone(),
+            fields: self
+                .fields
+                .iter()
+                .map(|f| f.iter().map(|v| U::from_f64(v.to_f64())).collect())
+                .collect(),
+        }
+    }
+
+    /// The fields padded with one ghost layer, concatenated: `species * (nx + 2) * (ny + 2)`.
+    pub(crate) fn padded(&self) -> Vec<T> {
+        pad(&self.fields, self.nx, self.ny)
+    }
+
+    /// Replaces the fields from padded storage (the inverse of [`Grid::padded`]).
+    pub(crate) fn set_from_padded(&mut self, p: &[T]) {
+        let (nx, ny) = (self.nx, self.ny);
+        let plane = (nx + 2) * (ny + 2);
+        for (s, f) in self.fields.iter_mut().enumerate() {
+            for j in 0..ny {
+                let r = s * plane + (j + 1) * (nx + 2) + 1;
+                f[j * nx..(j + 1) * nx].copy_from_slice(&p[r..r + nx]);
+            }
+        }
+    }
+}
+
+/// Pads row-major `nx x ny` fields with a zero ghost layer and concatenates them.
+pub(crate) fn pad<T: Real>(fields: &[Vec<T>], nx: usize, ny: usize) -> Vec<T> {
+    let w = nx + 2;
+    let plane = w * (ny + 2);
+    let mut out = vec![T::default(); plane * fields.len()];
+    for (s, f) in fields.iter().enumerate() {
+        for j in 0..ny {
+            let r = s * plane + (j + 1) * w + 1;
+            out[r..r + nx].copy_from_slice(&f[j * nx..(j + 1) * nx]);
+        }
+    }
+    out
+}

@@ -1,0 +1,112 @@
+//! The model trait: what a reaction–diffusion model supplies to both backends.
+
+use std::fmt::Debug;
+
+use backend::Result;
+
+use crate::grid::Grid;
+use crate::real::Real;
+
+/// One row segment of the padded input fields, handed to [`Model::update_row`].
+///
+/// Storage is padded with one ghost layer: plane `p` of `buffer` holds `(nx + 2) * (ny + 2)`
+/// values, row-major with row width `width = nx + 2`. The segment covers padded columns
+/// `i0..i1` of padded row `row` (interior rows and columns start at 1).
+#[derive(Clone, Copy, Debug)]
+pub struct RowIn<'a, T: Real> {
+    /// Species planes (the state being advanced).
+    pub species: &'a [T],
+    /// Coefficient planes (static fields such as the colony model's `d`), possibly empty.
+    pub coefficients: &'a [T],
+    /// Values per plane, `(nx + 2) * (ny + 2)`.
+    pub plane: usize,
+    /// Row width, `nx + 2`.
+    pub width: usize,
+    /// Padded row index (1..=ny).
+    pub row: usize,
+    /// First padded column of the segment (>= 1).
+    pub i0: usize,
+    /// One past the last padded column (<= nx + 1).
+    pub i1: usize,
+}
+
+/// The five stencil slices (centre and the four neighbours) of one field over a row segment,
+/// all of the same length.
+#[derive(Clone, Copy, Debug)]
+pub struct Stencil<'a, T> {
+    /// Centre cells.
+    pub c: &'a [T],
+    /// West neighbours (`i - 1`).
+    pub w: &'a [T],
+    /// East neighbours (`i + 1`).
+    pub e: &'a [T],
+    /// South neighbours (`j - 1`).
+    pub s: &'a [T],
+    /// North neighbours (`j + 1`).
+    pub n: &'a [T],
+}
+
+impl<'a, T: Real> RowIn<'a, T> {
+    fn slices(&self, buf: &'a [T], p: usize) -> Stencil<'a, T> {
+        let base = p * self.plane + self.row * self.width;
+        let (a, b) = (base + self.i0, base + self.i1);
+        Stencil {
+            c: &buf[a..b],
+            w: &buf[a - 1..b - 1],
+            e: &buf[a + 1..b + 1],
+            s: &buf[a - self.width..b - self.width],
+            n: &buf[a + self.width..b + self.width],
+        }
+    }
+    /// Stencil slices of species `s`.
+    pub fn species_stencil(&self, s: usize) -> Stencil<'a, T> {
+        self.slices(self.species, s)
+    }
+    /// Stencil slices of coefficient field `k`.
+    pub fn coefficient_stencil(&self, k: usize) -> Stencil<'a, T> {
+        self.slices(self.coefficients, k)
+    }
+}
+
+/// A reaction–diffusion model: reaction terms plus a diffusion operator on the 5-point stencil.
+///
+/// The CPU backend calls [`Model::update_row`] on cache-blocked row segments; the GPU backend
+/// compiles [`Model::wgsl`] into its tiled and global-memory kernels with [`Model::gpu_params`]
+/// as run-time parameters. Both evaluate the same formula.
+pub trait Model: Clone + Debug + Send + Sync {
+    /// Short name, e.g. `"gray-scott"`.
+    fn name(&self) -> &'static str;
+    /// Number of species fields the model advances.
+    fn species(&self) -> usize;
+    /// Checks the parameters (and coefficient field sizes against `nx x ny`).
+    fn validate(&self, nx: usize, ny: usize) -> Result<()>;
+    /// Static coefficient fields (row-major `nx x ny`), e.g. the colony model's `d(x, y)`.
+    fn coefficients(&self) -> &[Vec<f64>] {
+        &[]
+    }
+    /// Largest effective diffusivity for the given fields (sets the stability bound
+    /// `dt <= h^2 / (4 D_max)`).
+    fn max_diffusivity<T: Real>(&self, grid: &Grid<T>) -> f64;
+    /// Whether [`Model::max_diffusivity`] depends on the fields (then backends re-check the
+    /// stability bound from the current fields before each `step` call).
+    fn field_dependent_diffusivity(&self) -> bool {
+        false
+    }
+    /// Writes `u + dt * F(u)` over the segment into `out` (one slice per species, each of
+    /// length `i1 - i0`); with `average`, writes `(out + u + dt * F(u)) / 2` instead (the second
+    /// stage of Heun's method). `inv_h2 = 1 / h^2`.
+    fn update_row<T: Real>(
+        &self,
+        input: &RowIn<'_, T>,
+        dt: f64,
+        inv_h2: f64,
+        out: &mut [&mut [T]],
+        average: bool,
+    );
+    /// WGSL defining `fn model_update(dt: real, ih2: real)`, which reads the stencil with
+    /// `ld(field, dx, dy)` (species first, then coefficient fields), the model parameters with
+    /// `mp(k)` and writes species `s` with `put(s, value)`.
+    fn wgsl(&self) -> &'static str;
+    /// Parameter values read by `mp(k)` in [`Model::wgsl`].
+    fn gpu_params(&self) -> Vec<f64>;
+}

@@ -1,0 +1,128 @@
+//! Time integration settings and the stability guard.
+
+use backend::{Error, Result, require_positive};
+
+use crate::grid::Grid;
+use crate::model::Model;
+use crate::real::Real;
+
+/// Explicit time integrator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Integrator {
+    /// Forward Euler (first order; the source's scheme): one stencil pass per step.
+    #[default]
+    Euler,
+    /// Heun's method (explicit trapezoidal, second order): two stencil passes per step.
+    Heun,
+}
+
+impl Integrator {
+    /// Stencil passes per step.
+    pub fn stages(self) -> u32 {
+        match self {
+            Integrator::Euler => 1,
+            Integrator::Heun => 2,
+        }
+    }
+}
+
+/// What to do when `dt` exceeds the stability bound.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Guard {
+    /// Refuse with [`Error::Unstable`] (default).
+    #[default]
+    Enforce,
+    /// Run anyway (for experiments on the stability limit itself).
+    Override,
+}
+
+/// Time-stepping settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stepping {
+    /// Time step.
+    pub dt: f64,
+    /// Integrator.
+    pub integrator: Integrator,
+    /// Stability guard.
+    pub guard: Guard,
+}
+
+impl Stepping {
+    /// Euler with the guard enforced.
+    pub fn euler(dt: f64) -> Self {
+        Self {
+            dt,
+            integrator: Integrator::Euler,
+            guard: Guard::Enforce,
+        }
+    }
+    /// Heun with the guard enforced.
+    pub fn heun(dt: f64) -> Self {
+        Self {
+            dt,
+            integrator: Integrator::Heun,
+            guard: Guard::Enforce,
+        }
+    }
+    /// The same settings with the guard overridden.
+    pub fn unguarded(self) -> Self {
+        Self {
+            guard: Guard::Override,
+            ..self
+        }
+    }
+}
+
+/// Largest stable time step for the current fields: `h^2 / (4 D_max)` with the model's
+/// largest effective diffusivity (5-point Laplacian, explicit Euler; Heun's real stability
+/// interval `[-2, 0]` is the same). `f64::INFINITY` when nothing diffuses.
+pub fn stable_dt<T: Real, M: Model>(model: &M, grid: &Grid<T>) -> f64 {
+    let d = model.max_diffusivity(grid);
+    if d > 0.0 {
+        grid.h() * grid.h() / (4.0 * d)
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// Checks `dt` against [`stable_dt`] unless the guard is overridden.
+pub(crate) fn check_dt<T: Real, M: Model>(model: &M, grid: &Grid<T>, s: &Stepping) -> Result<()> {
+    require_positive("dt", s.dt)?;
+    let bound = stable_dt(model, grid);
+    if s.guard == Guard::Enforce && s.dt > bound {
+        return Err(Error::Unstable {
+            dt: s.dt,
+            bound,
+            reason: format!(
+                "{} model, 5-point Laplacian: D_max dt / h^2 <= 1/4 with D_max = {:e}, h = {:e}",
+                model.name(),
+                model.max_diffusivity(grid),
+                grid.h()
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// Checks the model against the grid (species count, parameters, coefficient sizes).
+pub(crate) fn check_model<T: Real, M: Model>(model: &M, grid: &Grid<T>) -> Result<()> {
+    model.validate(grid.nx(), grid.ny())?;
+    if model.species() != grid.species() {
+        return Err(Error::invalid(
+            "number of species fields",
+            grid.species(),
+            format!("the {} model needs {}", model.name(), model.species()),
+        ));
+    }
+    // Fields may have been edited through `Grid::field_mut`: re-check them.
+    for s in 0..grid.species() {
+        if let Some(k) = grid.field(s).iter().position(|v| !v.to_f64().is_finite()) {
+            return Err(Error::invalid(
+                format!("field {s} at cell ({}, {})", k % grid.nx(), k / grid.nx()),
+                grid.field(s)[k],
+                "every value must be finite",
+            ));
+        }
+    }
+    Ok(())
+}

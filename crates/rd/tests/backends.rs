@@ -1,0 +1,107 @@
+//! CPU and GPU backends against each other, and the GPU-specific options.
+
+use backend::testing::gpu_or_skip;
+use backend::{Error, Simulation};
+use rd::scenes::colony_scene;
+use rd::{CpuRd, GpuKernel, GpuOptions, GpuRd, Grid, Integrator, Stepping};
+
+fn max_rel(a: &Grid<f32>, b: &Grid<f32>) -> f64 {
+    let mut worst = 0.0f64;
+    for s in 0..a.species() {
+        let scale = b.max_abs(s).max(1e-30);
+        for (x, y) in a.field(s).iter().zip(b.field(s)) {
+            worst = worst.max(f64::from((x - y).abs()) / scale);
+        }
+    }
+    worst
+}
+
+/// The colony scene on 72 x 60 (not a multiple of the tile), 1000 steps, f32: the CPU
+/// and every GPU kernel variant agree within 1e-5 relative.
+#[test]
+fn cpu_and_gpu_agree_after_1000_steps() {
+    let Some(ctx) = gpu_or_skip("cpu_and_gpu_agree_after_1000_steps") else {
+        return;
+    };
+    let (grid, model) = colony_scene::<f32>(72, 60, 7).unwrap();
+    for integrator in [Integrator::Euler, Integrator::Heun] {
+        let stepping = Stepping {
+            dt: 0.005,
+            integrator,
+            ..Stepping::euler(0.005)
+        };
+        let mut cpu = CpuRd::new(grid.clone(), model.clone(), stepping).unwrap();
+        cpu.step(1000).unwrap();
+        let reference = cpu.state().unwrap();
+        let moved = max_rel(&grid, &reference);
+        assert!(moved > 1e-2, "the scene must evolve ({moved})");
+        for (kernel, tile) in [
+            (GpuKernel::Tiled, (16, 16)),
+            (GpuKernel::Tiled, (32, 8)),
+            (GpuKernel::Global, (16, 16)),
+        ] {
+            let options = GpuOptions {
+                kernel,
+                tile,
+                steps_per_submit: 250,
+            };
+            let mut gpu = GpuRd::new(&ctx, grid.clone(), model.clone(), stepping, options).unwrap();
+            gpu.step(400).unwrap();
+            gpu.step(600).unwrap();
+            let g = gpu.state().unwrap();
+            let err = max_rel(&g, &reference);
+            println!("{integrator:?} {kernel:?} {tile:?}: max rel diff {err:e}");
+            assert!(err < 1e-5, "{integrator:?} {kernel:?} {tile:?}: {err:e}");
+        }
+    }
+}
+
+/// f64 on the GPU (lavapipe has SHADER_F64) matches the f64 CPU reference closely.
+#[test]
+fn gpu_f64_matches_cpu_f64() {
+    let Some(ctx) = gpu_or_skip("gpu_f64_matches_cpu_f64") else {
+        return;
+    };
+    let (grid, model) = colony_scene::<f64>(40, 40, 3).unwrap();
+    let stepping = Stepping::heun(0.005);
+    let mut cpu = CpuRd::new(grid.clone(), model.clone(), stepping).unwrap();
+    cpu.step(300).unwrap();
+    let c = cpu.state().unwrap();
+    match GpuRd::new(&ctx, grid, model, stepping, GpuOptions::default()) {
+        Ok(mut gpu) => {
+            gpu.step(300).unwrap();
+            let g = gpu.state().unwrap();
+            for s in 0..2 {
+                for (x, y) in g.field(s).iter().zip(c.field(s)) {
+                    assert!((x - y).abs() < 1e-12, "{x} vs {y}");
+                }
+            }
+        }
+        Err(Error::Unsupported(m)) => assert!(!ctx.has_f64(), "{m}"),
+        Err(e) => panic!("{e}"),
+    }
+}
+
+/// Tiles over the device's workgroup limits are refused with a clear error.
+#[test]
+fn gpu_rejects_bad_tiles() {
+    let Some(ctx) = gpu_or_skip("gpu_rejects_bad_tiles") else {
+        return;
+    };
+    let (grid, model) = colony_scene::<f32>(32, 32, 1).unwrap();
+    for tile in [(0, 16), (16, 0), (1024, 1024)] {
+        let options = GpuOptions {
+            tile,
+            ..GpuOptions::default()
+        };
+        let err = GpuRd::new(
+            &ctx,
+            grid.clone(),
+            model.clone(),
+            Stepping::euler(0.005),
+            options,
+        )
+        .unwrap_err();
+        assert!(matches!(err, Error::InvalidParameter { .. }), "{err}");
+    }
+}

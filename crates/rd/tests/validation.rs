@@ -1,0 +1,313 @@
+//! Physics validation: heat kernel convergence orders, conservation, stability guard,
+//! Dirichlet profile, colony reaction bookkeeping.
+
+use backend::rng::rng_uniform;
+use backend::testing::gpu_or_skip;
+use backend::{Backend, Error, Simulation};
+use rd::scenes::colony_scene;
+use rd::{
+    Boundaries, Boundary, Colony, CpuRd, Diffusion, Grid, Integrator, Rd, Stepping, stable_dt,
+};
+
+const L: f64 = 40.0;
+
+/// Heat kernel of a unit mass at time `t` (D = 1) centred in the periodic box.
+fn heat_kernel(n: usize, t: f64) -> Vec<f64> {
+    let h = L / n as f64;
+    let mut u = Vec::with_capacity(n * n);
+    for j in 0..n {
+        for i in 0..n {
+            let x = (i as f64 + 0.5) * h - L / 2.0;
+            let y = (j as f64 + 0.5) * h - L / 2.0;
+            u.push((-(x * x + y * y) / (4.0 * t)).exp() / (4.0 * std::f64::consts::PI * t));
+        }
+    }
+    u
+}
+
+fn sci(v: &[f64]) -> String {
+    v.iter()
+        .map(|x| format!("{x:.3e}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn l2(a: &[f64], b: &[f64], h: f64) -> f64 {
+    (a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() * h * h).sqrt()
+}
+
+/// Runs the heat kernel from t = 1 to t = 2 on an `n x n` periodic grid.
+fn gaussian_run(n: usize, dt: f64, integrator: Integrator) -> Vec<f64> {
+    let h = L / n as f64;
+    let grid = Grid::new(n, n, h, Boundaries::periodic(), vec![heat_kernel(n, 1.0)]).unwrap();
+    let steps = (1.0 / dt).round() as u32;
+    assert!((steps as f64 * dt - 1.0).abs() < 1e-12);
+    let stepping = Stepping {
+        dt,
+        integrator,
+        ..Stepping::euler(dt)
+    };
+    let mut sim = CpuRd::new(grid, Diffusion::new(&[1.0]).unwrap(), stepping).unwrap();
+    sim.step(steps).unwrap();
+    sim.state().unwrap().field(0).to_vec()
+}
+
+/// Space: Heun with dt = 0.05 h^2 (time error ~ dt^2, negligible) against the analytic heat
+/// kernel; the error falls ~4x per halving of h.
+#[test]
+fn gaussian_second_order_in_space() {
+    let mut errs = Vec::new();
+    for n in [80, 160, 320] {
+        let h = L / n as f64;
+        let u = gaussian_run(n, 0.05 * h * h, Integrator::Heun);
+        errs.push(l2(&u, &heat_kernel(n, 2.0), h));
+    }
+    let orders: Vec<f64> = errs.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
+    println!(
+        "space: L2 errors {}, observed orders {orders:.3?}",
+        sci(&errs)
+    );
+    for o in orders {
+        assert!((o - 2.0).abs() < 0.1, "spatial order {o}");
+    }
+}
+
+/// Time: on a fixed grid (h = 0.5) the spatial error is the same for every dt, so the error
+/// against a same-grid Heun reference with a 64x smaller dt isolates the time error: it falls
+/// ~2x (Euler) and ~4x (Heun) per halving of dt.
+#[test]
+fn gaussian_time_orders() {
+    let n = 80;
+    let reference = gaussian_run(n, 0.05 / 64.0, Integrator::Heun);
+    let h = L / n as f64;
+    for (integrator, want) in [(Integrator::Euler, 1.0), (Integrator::Heun, 2.0)] {
+        let errs: Vec<f64> = [0.05, 0.025, 0.0125]
+            .iter()
+            .map(|&dt| l2(&gaussian_run(n, dt, integrator), &reference, h))
+            .collect();
+        let orders: Vec<f64> = errs.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
+        println!(
+            "time {integrator:?}: errors {}, observed orders {orders:.3?}",
+            sci(&errs)
+        );
+        for o in orders {
+            assert!((o - want).abs() < 0.1, "{integrator:?} time order {o}");
+        }
+    }
+}
+
+fn random_field(nx: usize, ny: usize, seed: u32) -> Vec<f64> {
+    (0..nx * ny)
+        .map(|k| 1.0 + f64::from(rng_uniform(seed, 0, k as u32)))
+        .collect()
+}
+
+/// No-flux edges conserve the total of each species to 1e-12 relative over 10^4 steps (f64).
+#[test]
+fn no_flux_conserves_mass() {
+    let (nx, ny) = (24, 20);
+    let grid = Grid::new(
+        nx,
+        ny,
+        0.5,
+        Boundaries::no_flux(),
+        vec![random_field(nx, ny, 1), random_field(nx, ny, 2)],
+    )
+    .unwrap();
+    let before = [grid.total(0), grid.total(1)];
+    let model = Diffusion::new(&[1.0, 0.3]).unwrap();
+    let dt = 0.9 * stable_dt(&model, &grid);
+    let mut sim = CpuRd::new(grid, model, Stepping::heun(dt)).unwrap();
+    sim.step(10_000).unwrap();
+    let g = sim.state().unwrap();
+    for (s, b) in before.iter().enumerate() {
+        let rel = (g.total(s) - b).abs() / b;
+        println!("species {s}: relative change of total {rel:e}");
+        assert!(rel < 1e-12, "species {s}: {rel:e}");
+    }
+    // ... and the field has actually diffused towards uniform.
+    assert!(rd::scenes::variance(&g, 0) < 1e-6);
+}
+
+/// The colony model: total b changes each step by exactly dt * h^2 * sum(reaction) (the flux
+/// form moves b between cells without creating any), and b + n is conserved.
+#[test]
+fn colony_b_changes_only_through_reaction() {
+    let (grid, model) = colony_scene::<f64>(48, 40, 5).unwrap();
+    let dt = 0.005;
+    let h2 = grid.h() * grid.h();
+    let start = grid.total(0) + grid.total(1);
+    let b0 = grid.total(0);
+    let mut sim = CpuRd::new(grid, model.clone(), Stepping::euler(dt)).unwrap();
+    for _ in 0..200 {
+        let g = sim.state().unwrap();
+        let r: f64 = g
+            .field(0)
+            .iter()
+            .zip(g.field(1))
+            .map(|(b, n)| model.reaction(*b, *n))
+            .sum();
+        let before = g.total(0);
+        sim.step(1).unwrap();
+        let after = sim.state().unwrap().total(0);
+        let err = (after - before - dt * h2 * r).abs() / before;
+        assert!(err < 1e-13, "b bookkeeping off by {err:e}");
+    }
+    sim.step(2000).unwrap();
+    let g = sim.state().unwrap();
+    let rel = (g.total(0) + g.total(1) - start).abs() / start;
+    println!(
+        "b + n relative change after 2200 steps: {rel:e} (b: {:.6} -> {:.6})",
+        b0,
+        g.total(0)
+    );
+    assert!(rel < 1e-12, "{rel:e}");
+}
+
+fn checker_noise_grid(n: usize) -> Grid<f64> {
+    let f = (0..n * n)
+        .map(|k| 1e-3 * f64::from(rng_uniform(9, 0, k as u32)))
+        .collect();
+    Grid::new(n, n, 1.0, Boundaries::periodic(), vec![f]).unwrap()
+}
+
+/// The guard's bound is tight: 0.99 x bound stays bounded, 1.01 x bound is refused, and with
+/// the override it blows up.
+#[test]
+fn stability_guard_is_tight() {
+    let model = Diffusion::new(&[0.8]).unwrap();
+    let grid = checker_noise_grid(32);
+    let bound = stable_dt(&model, &grid);
+    assert!((bound - 1.0 / 3.2).abs() < 1e-15, "bound {bound}");
+    for integrator in [Integrator::Euler, Integrator::Heun] {
+        let s = |dt| Stepping {
+            dt,
+            integrator,
+            ..Stepping::euler(dt)
+        };
+        let mut ok = CpuRd::new(grid.clone(), model.clone(), s(0.99 * bound)).unwrap();
+        ok.step(3000).unwrap();
+        assert!(ok.state().unwrap().max_abs(0) <= grid.max_abs(0));
+
+        let err = CpuRd::new(grid.clone(), model.clone(), s(1.01 * bound)).unwrap_err();
+        assert!(matches!(err, Error::Unstable { .. }), "{err}");
+        println!("{integrator:?} refused: {err}");
+
+        let mut wild =
+            CpuRd::new(grid.clone(), model.clone(), s(1.01 * bound).unguarded()).unwrap();
+        wild.step(3000).unwrap();
+        let m = wild.state().unwrap().max_abs(0);
+        assert!(
+            m > 1e3 * grid.max_abs(0),
+            "{integrator:?}: overridden run stayed at {m}"
+        );
+    }
+}
+
+/// The colony bound follows the fields: raising b (so d n b > 1) lowers the bound, and a
+/// `step` call re-checks it.
+#[test]
+fn colony_guard_follows_fields() {
+    let (mut grid, model) = colony_scene::<f64>(16, 16, 2).unwrap();
+    // h = 0.5 and n diffuses with D = 1 > d n b: bound h^2 / 4.
+    assert_eq!(stable_dt(&model, &grid), 0.25 / 4.0);
+    grid.field_mut(0)[5] = 4.0;
+    let kappa = model.d()[5] * 4.0 * grid.field(1)[5];
+    assert!((stable_dt(&model, &grid) - 0.25 / (4.0 * kappa)).abs() < 1e-15);
+    let err = CpuRd::new(grid, model, Stepping::euler(0.25 / 4.0)).unwrap_err();
+    assert!(matches!(err, Error::Unstable { .. }), "{err}");
+}
+
+/// Dirichlet 0 (west) and 1 (east) with no-flux north/south relax to the linear profile,
+/// which the scheme represents exactly: on both backends.
+#[test]
+fn dirichlet_relaxes_to_linear_profile() {
+    let (nx, ny) = (16, 4);
+    let bc = Boundaries {
+        west: Boundary::Dirichlet(vec![0.0]),
+        east: Boundary::Dirichlet(vec![1.0]),
+        south: Boundary::NoFlux,
+        north: Boundary::NoFlux,
+    };
+    let grid = Grid::new(nx, ny, 1.0, bc, vec![vec![0.3f32; nx * ny]]).unwrap();
+    let model = Diffusion::new(&[1.0]).unwrap();
+    let ctx = gpu_or_skip("dirichlet_relaxes_to_linear_profile");
+    let mut backends = vec![Backend::Cpu];
+    if let Some(c) = ctx.as_ref() {
+        backends.push(Backend::Gpu(c));
+    }
+    for backend in backends {
+        let mut sim = Rd::new(backend, grid.clone(), model.clone(), Stepping::euler(0.24)).unwrap();
+        sim.step(3000).unwrap();
+        let g = sim.state().unwrap();
+        for j in 0..ny {
+            for i in 0..nx {
+                let want = (i as f64 + 0.5) / nx as f64;
+                let got = f64::from(g.get(0, i, j));
+                assert!(
+                    (got - want).abs() < 1e-5,
+                    "{} ({i},{j}): {got} vs {want}",
+                    sim.backend_name()
+                );
+            }
+        }
+    }
+}
+
+/// Bad input gives clear errors, never a panic.
+#[test]
+fn bad_input_is_refused() {
+    let bc = Boundaries::no_flux;
+    let inv = |r: backend::Result<Grid<f64>>| match r {
+        Err(Error::InvalidParameter { name, .. }) => name,
+        other => panic!("expected InvalidParameter, got {other:?}"),
+    };
+    println!("{}", inv(Grid::new(0, 4, 1.0, bc(), vec![vec![]])));
+    println!("{}", inv(Grid::new(4, 4, 0.0, bc(), vec![vec![0.0; 16]])));
+    println!("{}", inv(Grid::new(4, 4, -1.0, bc(), vec![vec![0.0; 16]])));
+    println!(
+        "{}",
+        inv(Grid::new(4, 4, f64::NAN, bc(), vec![vec![0.0; 16]]))
+    );
+    println!("{}", inv(Grid::new(4, 4, 1.0, bc(), vec![vec![0.0; 15]])));
+    println!("{}", inv(Grid::new(4, 4, 1.0, bc(), vec![])));
+    let mut nan = vec![0.0; 16];
+    nan[6] = f64::NAN;
+    let name = inv(Grid::new(4, 4, 1.0, bc(), vec![nan]));
+    assert!(name.contains("(2, 1)"), "{name}");
+    let half_periodic = Boundaries {
+        west: Boundary::Periodic,
+        ..Boundaries::no_flux()
+    };
+    inv(Grid::new(4, 4, 1.0, half_periodic, vec![vec![0.0; 16]]));
+    inv(Grid::new(
+        4,
+        4,
+        1.0,
+        Boundaries::all(Boundary::Dirichlet(vec![1.0, 2.0])),
+        vec![vec![0.0; 16]],
+    ));
+
+    assert!(Diffusion::new(&[-1.0]).is_err());
+    assert!(Diffusion::new(&[f64::NAN]).is_err());
+    assert!(Diffusion::new(&[]).is_err());
+    assert!(rd::GrayScott::new(1.0, -0.5, 0.03, 0.06).is_err());
+    assert!(Colony::new(-0.5, 2, 2, vec![1.0; 4]).is_err());
+    assert!(Colony::new(0.5, 2, 2, vec![1.0; 3]).is_err());
+    assert!(Colony::new(0.5, 2, 2, vec![1.0, -1.0, 1.0, 1.0]).is_err());
+
+    let grid = Grid::new(4, 4, 1.0, bc(), vec![vec![0.0; 16]]).unwrap();
+    let one = Diffusion::new(&[1.0]).unwrap();
+    let two = Diffusion::new(&[1.0, 1.0]).unwrap();
+    assert!(CpuRd::new(grid.clone(), two, Stepping::euler(0.1)).is_err());
+    for dt in [0.0, -0.1, f64::NAN, f64::INFINITY] {
+        let e = CpuRd::new(grid.clone(), one.clone(), Stepping::euler(dt).unguarded());
+        assert!(matches!(e, Err(Error::InvalidParameter { .. })), "dt {dt}");
+    }
+    let (cgrid, _) = colony_scene::<f64>(8, 8, 1).unwrap();
+    let small = Colony::new(0.5, 4, 4, vec![1.0; 16]).unwrap();
+    assert!(CpuRd::new(cgrid, small, Stepping::euler(0.001)).is_err());
+    let mut edited = grid;
+    edited.field_mut(0)[3] = f64::INFINITY;
+    assert!(CpuRd::new(edited, one, Stepping::euler(0.1)).is_err());
+}

@@ -1,0 +1,48 @@
+//! rd: a short bacterial-colony run (the source's scene scaled to 128 x 128).
+
+use std::path::Path;
+use std::time::Instant;
+
+use output::heatmap::{HeatmapOptions, write_heatmap};
+use simkit::backend::{Backend, Result, Simulation};
+use simkit::rd::scenes::colony_scene;
+use simkit::rd::{Rd, Stepping};
+
+use crate::Row;
+
+/// 128 x 128 colony scene, 3000 Euler steps in f32; writes `b.png`; checks that b + n
+/// (conserved by the model: the reaction moves n into b, the fluxes only move things) holds.
+pub fn run(backend: Backend<'_>, out: &Path) -> Result<Row> {
+    let n = 128;
+    let steps = 3000;
+    let (grid, model) = colony_scene::<f32>(n, n, 7)?;
+    let start = grid.total(0) + grid.total(1);
+    let b0 = grid.total(0);
+    let mut sim = Rd::new(backend, grid, model, Stepping::euler(0.005))?;
+    let t = Instant::now();
+    sim.step(steps)?;
+    let secs = t.elapsed().as_secs_f64();
+    let g = sim.state()?;
+    write_heatmap(
+        out.join("b.png"),
+        g.field(0),
+        n,
+        n,
+        &HeatmapOptions::new()
+            .upscale(4)
+            .title(format!("colony b at t = {:.0}", sim.time())),
+    )?;
+    let drift = (g.total(0) + g.total(1) - start).abs() / start;
+    Ok(Row {
+        scene: "rd: bacterial colony 128^2".into(),
+        backend: sim.backend_name(),
+        steps: u64::from(steps),
+        throughput: (n * n) as f64 * f64::from(steps) / secs,
+        unit: "cell updates/s",
+        check: format!(
+            "total b {:.1} -> {:.1}; b + n drift {drift:.1e} (f32, want < 1e-5)",
+            b0,
+            g.total(0)
+        ),
+    })
+}

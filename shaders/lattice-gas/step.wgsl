@@ -1,0 +1,85 @@
+// One FHP step (pull streaming + collision + optional force, inflow, outflow) for 4 sites
+// packed in one u32 word. Include after common/rng.wgsl and common/dispatch.wgsl.
+// FLAGS (override): bit 0 periodic x, 1 periodic y, 2 inflow, 3 outflow, 4 body force.
+
+override FLAGS: u32 = 0u;
+
+struct Params {
+    width: u32,
+    height: u32,
+    n_sites: u32,
+    n_words: u32,
+    seed: u32,
+    force_seed: u32,
+    threshold: u32,
+    pad: u32,
+}
+
+@group(0) @binding(0) var<storage, read> src: array<u32>;
+@group(0) @binding(1) var<storage, read_write> dst: array<u32>;
+@group(0) @binding(2) var<storage, read> table: array<u32>;
+@group(0) @binding(3) var<uniform> P: Params;
+@group(0) @binding(4) var<storage, read> counter: array<u32>;
+
+const WG: u32 = 64u;
+var<workgroup> lut: array<u32, 512>;
+
+// Byte of site (i, j), where i and j may lie one outside the lattice: wrapped or zero.
+fn site_byte(i: i32, j: i32) -> u32 {
+    var ii = i;
+    var jj = j;
+    let w = i32(P.width);
+    let h = i32(P.height);
+    if (ii < 0 || ii >= w) {
+        if ((FLAGS & 1u) == 0u) { return 0u; }
+        ii = (ii + w) % w;
+    }
+    if (jj < 0 || jj >= h) {
+        if ((FLAGS & 2u) == 0u) { return 0u; }
+        jj = (jj + h) % h;
+    }
+    let s = u32(jj) * P.width + u32(ii);
+    return (src[s >> 2u] >> ((s & 3u) * 8u)) & 0xffu;
+}
+
+@compute @workgroup_size(64)
+fn fhp_step(@builtin(local_invocation_id) lid: vec3<u32>,
+            @builtin(workgroup_id) wid: vec3<u32>,
+            @builtin(num_workgroups) nwg: vec3<u32>) {
+    for (var k = lid.x; k < 512u; k += WG) {
+        lut[k] = table[k];
+    }
+    workgroupBarrier();
+    let word = linear_workgroup(wid, nwg) * WG + lid.x;
+    if (word >= P.n_words) { return; }
+    let t = counter[0];
+    let key = pcg_hash(t ^ pcg_hash(P.seed));
+    let fkey = pcg_hash(t ^ pcg_hash(P.force_seed));
+    var out = 0u;
+    for (var b = 0u; b < 4u; b++) {
+        let s = word * 4u + b;
+        if (s >= P.n_sites) { break; }
+        let i = i32(s % P.width);
+        let j = i32(s / P.width);
+        let own = (src[s >> 2u] >> (b * 8u)) & 0xffu;
+        var n = (own & 128u) | (site_byte(i - 1, j) & 1u) | (site_byte(i + 1, j) & 8u);
+        if ((j & 1) == 1) {
+            n |= (site_byte(i, j + 1) & 2u) | (site_byte(i + 1, j + 1) & 4u)
+               | (site_byte(i + 1, j - 1) & 16u) | (site_byte(i, j - 1) & 32u);
+        } else {
+            n |= (site_byte(i - 1, j + 1) & 2u) | (site_byte(i, j + 1) & 4u)
+               | (site_byte(i, j - 1) & 16u) | (site_byte(i - 1, j - 1) & 32u);
+        }
+        let r = (pcg_hash((s >> 5u) ^ key) >> (s & 31u)) & 1u;
+        var v = lut[(n << 1u) | r];
+        if ((FLAGS & 16u) != 0u) {
+            if ((v & 137u) == 8u && (pcg_hash(s ^ fkey) >> 8u) < P.threshold) {
+                v = v ^ 9u;
+            }
+        }
+        if ((FLAGS & 4u) != 0u && i == 0 && (v & 128u) == 0u) { v = 1u; }
+        if ((FLAGS & 8u) != 0u && i == i32(P.width) - 1 && (v & 128u) == 0u) { v = 0u; }
+        out |= v << (b * 8u);
+    }
+    dst[word] = out;
+}
