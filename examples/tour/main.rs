@@ -96,14 +96,20 @@ fn main() {
 }
 
 fn print_table(rows: &[Row]) {
+    let width = |title: &str, f: &dyn Fn(&Row) -> usize| {
+        rows.iter().map(f).max().unwrap_or(0).max(title.len())
+    };
+    let ws = width("scene", &|r| r.scene.chars().count());
+    let wb = width("backend", &|r| r.backend.chars().count());
+    let wu = width("unit", &|r| r.unit.chars().count());
     println!(
-        "\n{:<22} {:<28} {:>8} {:>12}  {:<26} validation",
+        "\n{:<ws$}  {:<wb$}  {:>8}  {:>10}  {:<wu$}  validation",
         "scene", "backend", "steps", "throughput", "unit"
     );
-    println!("{}", "-".repeat(120));
+    println!("{}", "-".repeat(ws + wb + wu + 44));
     for r in rows {
         println!(
-            "{:<22} {:<28} {:>8} {:>12.3e}  {:<26} {}",
+            "{:<ws$}  {:<wb$}  {:>8}  {:>10.3e}  {:<wu$}  {}",
             r.scene, r.backend, r.steps, r.throughput, r.unit, r.check
         );
     }
