@@ -1,5 +1,5 @@
-// Integrator passes. kick_drift: v += a coef[0]; x_out = x_in + v coef[1] (positions are
-// double-buffered: x_in is never written). kick: v += a coef[0].
+// Integrator pass kick_drift: v += a coef[0]; x_out = x_in + v coef[1] (positions are
+// double-buffered: x_in is never written). The lone kick of leapfrog is in kick.wgsl.
 
 override N: u32;
 const WG: u32 = 128u;

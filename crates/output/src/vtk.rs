@@ -157,6 +157,25 @@ impl PointArrays {
     }
 }
 
+/// Checks that `len` interleaved values hold whole particles of `dim` (2 or 3) coordinates.
+pub(crate) fn check_interleaved(len: usize, dim: usize) -> Result<()> {
+    if dim != 2 && dim != 3 {
+        return Err(Error::invalid(
+            "dim",
+            dim,
+            "positions have 2 or 3 coordinates per particle",
+        ));
+    }
+    if !len.is_multiple_of(dim) {
+        return Err(Error::invalid(
+            "positions.len()",
+            len,
+            format!("must be a multiple of dim = {dim} (interleaved x, y[, z])"),
+        ));
+    }
+    Ok(())
+}
+
 fn pad3<T: Copy + Into<f64>>(data: &[T], components: usize) -> Vec<f64> {
     if components == 3 {
         return data.iter().map(|&v| v.into()).collect();
@@ -297,20 +316,7 @@ impl Particles {
     /// Particles from interleaved coordinates with `dim` (2 or 3) values per particle;
     /// 2D positions get `z = 0`. Works with `bytemuck::cast_slice` of `Vec2`/`Vec3` arrays.
     pub fn new<T: Copy + Into<f64>>(positions: &[T], dim: usize) -> Result<Self> {
-        if dim != 2 && dim != 3 {
-            return Err(Error::invalid(
-                "dim",
-                dim,
-                "positions have 2 or 3 coordinates per particle",
-            ));
-        }
-        if !positions.len().is_multiple_of(dim) {
-            return Err(Error::invalid(
-                "positions.len()",
-                positions.len(),
-                format!("must be a multiple of dim = {dim} (interleaved x, y[, z])"),
-            ));
-        }
+        check_interleaved(positions.len(), dim)?;
         Ok(Self {
             positions: pad3(positions, dim),
             arrays: PointArrays::default(),

@@ -28,6 +28,7 @@ use std::path::Path;
 
 use crate::atomic::{AtomicFile, io_error, write_atomic};
 use crate::numfmt;
+use crate::vtk::check_interleaved;
 use backend::{Error, Result};
 
 #[derive(Debug, Clone, PartialEq)]
@@ -53,20 +54,7 @@ impl XyzFrame {
     /// A frame from interleaved positions with `dim` (2 or 3) coordinates per particle.
     /// Every particle starts with species `X`.
     pub fn new<T: Copy + Into<f64>>(positions: &[T], dim: usize) -> Result<Self> {
-        if dim != 2 && dim != 3 {
-            return Err(Error::invalid(
-                "dim",
-                dim,
-                "positions have 2 or 3 coordinates per particle",
-            ));
-        }
-        if !positions.len().is_multiple_of(dim) {
-            return Err(Error::invalid(
-                "positions.len()",
-                positions.len(),
-                format!("must be a multiple of dim = {dim} (interleaved x, y[, z])"),
-            ));
-        }
+        check_interleaved(positions.len(), dim)?;
         let n = positions.len() / dim;
         let mut pos = Vec::with_capacity(n * 3);
         for (i, p) in positions.chunks_exact(dim).enumerate() {
