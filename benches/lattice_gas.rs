@@ -1,5 +1,6 @@
 //! Site updates per second of the FHP lattice gas on periodic lattices of 1024^2 and 4096^2,
-//! for the lookup-table CPU, multi-spin CPU and GPU backends (FHP-I, d = 0.3).
+//! for the lookup-table CPU, multi-spin CPU and both GPU layouts (bit-planes and bytes with
+//! the table in workgroup memory), FHP-I, d = 0.3.
 //!
 //! ```text
 //! cargo bench --bench lattice_gas
@@ -9,8 +10,8 @@
 use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use simkit::backend::GpuContext;
-use simkit::lattice_gas::{Engine, Lattice, Params, simulation};
+use simkit::backend::{GpuContext, Simulation};
+use simkit::lattice_gas::{GpuLattice, GpuLayout, Lattice, LutCpu, MultiSpinCpu, Params};
 
 fn bench(c: &mut Criterion) {
     let gpu = GpuContext::new().ok();
@@ -21,18 +22,38 @@ fn bench(c: &mut Criterion) {
     for n in [1024usize, 4096] {
         let mut lattice = Lattice::new(n, n).expect("size");
         lattice.fill_random(0.3, 1).expect("density");
-        let mut engines = vec![("lut", Engine::Lut), ("multispin", Engine::MultiSpin)];
+        let p = Params::default;
+        type Sim = Box<dyn Simulation<State = Lattice>>;
+        let mut sims: Vec<(&str, Sim)> = vec![
+            (
+                "lut",
+                Box::new(LutCpu::new(lattice.clone(), p()).expect("lut")),
+            ),
+            (
+                "multispin",
+                Box::new(MultiSpinCpu::new(lattice.clone(), p()).expect("multispin")),
+            ),
+        ];
         if let Some(ctx) = gpu.as_ref() {
-            engines.push(("gpu", Engine::Gpu(ctx)));
+            for (name, layout) in [
+                ("gpu-bitplanes", GpuLayout::BitPlanes),
+                ("gpu-bytes", GpuLayout::Bytes),
+            ] {
+                let sim = GpuLattice::with_layout(ctx, lattice.clone(), p(), layout).expect("gpu");
+                sims.push((name, Box::new(sim)));
+            }
         }
-        for (name, engine) in engines {
-            let steps: u32 = if n == 1024 { 8 } else { 2 };
-            let mut sim = simulation(lattice.clone(), Params::default(), engine).expect("backend");
+        for (name, mut sim) in sims {
+            let steps: u32 = match (n, name) {
+                (_, "gpu-bytes") => 1,
+                (1024, _) => 8,
+                _ => 2,
+            };
             group.throughput(Throughput::Elements((n * n) as u64 * u64::from(steps)));
             group.bench_function(BenchmarkId::new(name, n), |b| {
                 b.iter(|| {
                     sim.step(steps).expect("step");
-                    if let Engine::Gpu(ctx) = engine {
+                    if let Some(ctx) = gpu.as_ref().filter(|_| name.starts_with("gpu")) {
                         // Include the device time: wait for the queue to drain.
                         ctx.wait().expect("sync");
                     }

@@ -18,8 +18,8 @@ use rand::{RngExt, SeedableRng};
 use rayon::prelude::*;
 use simkit::backend::{GpuBuffer, GpuContext};
 use simkit::neighbor::{
-    CellGrid, GpuCellList, GpuNeighborList, LinkedCells, ListKind, NeighborSearch, SortedCells,
-    VerletList, positions_to_f32,
+    BruteForce, CellGrid, GpuCellList, GpuNeighborList, LinkedCells, ListKind, NeighborSearch,
+    SortedCells, VerletList, positions_to_f32,
 };
 
 const CUTOFF: f64 = 2.5;
@@ -94,6 +94,15 @@ fn cpu_methods(c: &mut Criterion) {
                 black_box(k)
             })
         });
+        if n <= 10_000 {
+            let mut brute = BruteForce::new(&grid);
+            g.bench_with_input(BenchmarkId::new("brute_force_serial", n), &n, |b, _| {
+                b.iter(|| {
+                    brute.build(&p).expect("build");
+                    black_box(brute.pair_count().expect("pairs"))
+                })
+            });
+        }
         let mut linked = LinkedCells::new(&grid);
         g.bench_with_input(BenchmarkId::new("linked_cells_serial", n), &n, |b, _| {
             b.iter(|| {

@@ -2,6 +2,10 @@
 //! advanced by one Euler step): the bacterial colony model (f32) and Gray–Scott (f64 and f32)
 //! at 512^2 and 4096^2, CPU with 1 and 2 threads, GPU tiled and global-memory kernels.
 //!
+//! Each iteration is one `step` call of 20 steps (512^2) or 10 steps (4096^2); for the colony
+//! model that includes the stability re-check `step` makes once per call from the current
+//! fields (a parallel pass over b, n and d).
+//!
 //! `cargo bench --bench rd` (add `-- colony` etc. to filter). GPU figures come from whatever
 //! adapter `GpuContext::new()` picks (lavapipe on a machine without a GPU).
 
@@ -13,7 +17,7 @@ use simkit::rd::scenes::{colony_scene, gray_scott_square};
 use simkit::rd::{GpuKernel, GpuOptions, GrayScott, Grid, Model, Rd, Real, Stepping};
 
 fn steps_for(n: usize) -> u32 {
-    if n <= 512 { 20 } else { 1 }
+    if n <= 512 { 20 } else { 10 }
 }
 
 fn bench_sim<T: Real, M: Model>(

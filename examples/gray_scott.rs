@@ -16,12 +16,19 @@ use simkit::rd::{GrayScott, Rd, Stepping};
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().collect();
-    let steps: u32 = args
-        .iter()
-        .position(|a| a == "--steps")
-        .and_then(|i| args.get(i + 1))
-        .map_or(Ok(20_000), |s| s.parse())
-        .map_err(|e| simkit::backend::Error::invalid("--steps", &args.join(" "), format!("{e}")))?;
+    let steps: u32 = match args.iter().position(|a| a == "--steps") {
+        Some(i) => {
+            let value = args.get(i + 1).map_or("", |s| s.as_str());
+            value.parse().map_err(|e| {
+                simkit::backend::Error::invalid(
+                    "--steps",
+                    value,
+                    format!("give a step count ({e})"),
+                )
+            })?
+        }
+        None => 20_000,
+    };
     let n = 256;
     let ctx = if args.iter().any(|a| a == "--gpu") {
         Some(GpuContext::new()?)

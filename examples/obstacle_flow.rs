@@ -13,7 +13,7 @@ use std::time::Instant;
 
 use simkit::backend::{Backend, GpuContext, Result};
 use simkit::lattice_gas::observables::{BlockField, TimeAverage};
-use simkit::lattice_gas::{Engine, Lattice, Obstacle, Params, ROW_SPACING, simulation};
+use simkit::lattice_gas::{Engine, Lattice, Obstacle, Params, ROW_SPACING, RuleSet, simulation};
 use simkit::output::gif::GifWriter;
 use simkit::output::heatmap::HeatmapOptions;
 use simkit::output::vector_field::{VectorFieldOptions, render_vector_field};
@@ -50,6 +50,8 @@ fn main() -> Result<()> {
         inflow: true,
         outflow: true,
         seed: 2026,
+        // The source's collision table.
+        rules: RuleSet::Full,
         ..Params::default()
     };
     let mut sim = simulation(lattice, params, Engine::for_backend(backend, w))?;
@@ -74,7 +76,7 @@ fn main() -> Result<()> {
         stepping += t.elapsed().as_secs_f64();
         done += n;
         avg.add(&BlockField::from_lattice(&state, block)?)?;
-        if done % frame_every == 0 || done == steps {
+        if done.is_multiple_of(frame_every) || done == steps {
             let field = avg.field().expect("at least one sample");
             let title = format!("FHP channel, step {done}, {block}x{block} blocks");
             field.write_velocity_png(out.join(format!("frame_{frame:03}.png")), &title)?;

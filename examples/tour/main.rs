@@ -13,6 +13,9 @@ use simkit::backend::{Backend, GpuContext, Result};
 
 // Scene modules: one per crate, each `pub fn run(backend: Backend<'_>, out: &Path) -> Result<Row>`.
 // TOUR-MODULES (keep this marker: crate work adds `mod <crate>;` lines below it)
+mod dem;
+mod lattice_gas;
+mod neighbor;
 mod pp_coulomb;
 mod rd;
 
@@ -37,6 +40,9 @@ type Scene = fn(Backend<'_>, &Path) -> Result<Row>;
 fn scenes() -> Vec<(&'static str, Scene)> {
     vec![
         // TOUR-SCENES (keep this marker: crate work adds `("name", module::run),` lines below it)
+        ("dem", dem::run),
+        ("neighbor", neighbor::run),
+        ("lattice_gas", lattice_gas::run),
         ("rd", rd::run),
         ("pp_coulomb", pp_coulomb::run),
     ]

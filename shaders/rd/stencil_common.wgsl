@@ -1,4 +1,6 @@
-// Shared part of the rd stencil kernels. Prepended by the host: `alias real = f32|f64;`.
+// Shared part of the rd stencil kernels. Prepended by the host: `alias real = f32|f64;` and
+// the generated bindings (one storage buffer per species for the source `src<s>` and the
+// destination `dst<s>`, then `coef` and `params`) with `load_global(f, idx)` and `put(s, v)`.
 // Storage is padded with one ghost layer: plane = (NX + 2) * (NY + 2) values per field.
 // params: [0] dt, [1] 1/h^2, [2..6] boundary codes, [6..22] Dirichlet values, [22..] model.
 
@@ -11,11 +13,6 @@ override TY: u32 = 16u;    // tile height
 override AVERAGE: bool = false; // Heun second stage: dst = (dst + new) / 2
 
 const MP0: u32 = 22u;
-
-@group(0) @binding(0) var<storage, read> src: array<real>;
-@group(0) @binding(1) var<storage, read_write> dst: array<real>;
-@group(0) @binding(2) var<storage, read> coef: array<real>;
-@group(0) @binding(3) var<storage, read> params: array<real>;
 
 // Padded index of the cell being updated by this invocation.
 var<private> cell: u32;
@@ -30,20 +27,4 @@ fn plane() -> u32 {
 
 fn mp(k: u32) -> real {
     return params[MP0 + k];
-}
-
-fn load_global(f: u32, idx: u32) -> real {
-    if f < NS {
-        return src[f * plane() + idx];
-    }
-    return coef[(f - NS) * plane() + idx];
-}
-
-fn put(s: u32, v: real) {
-    let k = s * plane() + cell;
-    if AVERAGE {
-        dst[k] = real(0.5) * (dst[k] + v);
-    } else {
-        dst[k] = v;
-    }
 }

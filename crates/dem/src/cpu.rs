@@ -136,7 +136,12 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
             aux: vec![[T::ZERO; D]; n],
             body,
             list,
-            pos64: vec![[0.0; D]; n],
+            // Only the f32 engine needs an f64 copy of the positions for the list.
+            pos64: if std::any::TypeId::of::<T>() == std::any::TypeId::of::<f64>() {
+                Vec::new()
+            } else {
+                vec![[0.0; D]; n]
+            },
             gravity,
             prep,
             time: 0.0,
@@ -169,12 +174,24 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
     }
 
     fn refresh_list(&mut self) -> Result<()> {
-        self.pos64
-            .par_iter_mut()
-            .zip(self.pos.par_iter())
-            .with_min_len(4096)
-            .for_each(|(a, b)| *a = std::array::from_fn(|d| b[d].to_f64()));
-        self.list.update(&self.pos64)?;
+        // In f64 the list reads the positions directly; in f32 through an f64 copy.
+        let any: &dyn std::any::Any = &self.pos;
+        let pos64: &[[f64; D]] = match any.downcast_ref::<Vec<[f64; D]>>() {
+            Some(p) => p,
+            None => {
+                self.pos64
+                    .par_iter_mut()
+                    .zip(self.pos.par_iter())
+                    .with_min_len(4096)
+                    .for_each(|(a, b)| *a = std::array::from_fn(|d| b[d].to_f64()));
+                &self.pos64
+            }
+        };
+        // The force loop reads our own (wrapped) positions, so the list only needs a
+        // rebuild check, not its stored copy of the positions.
+        if self.list.needs_rebuild(pos64)? {
+            self.list.build(pos64)?;
+        }
         Ok(())
     }
 
@@ -195,11 +212,17 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
         let pos = &self.pos;
         let v: &[[T; D]] = if use_aux { &self.aux } else { &self.vel };
         let g = self.gravity;
-        // Walls (and gravity) first, per particle.
+        let list = &self.list;
+        let per: [bool; D] = std::array::from_fn(|d| self.prep.periodic[d]);
+        let len: [T; D] = std::array::from_fn(|d| T::of(self.prep.len[d]));
+        let half: [T; D] = std::array::from_fn(|d| T::of(0.5 * self.prep.len[d]));
+        // One pass per particle: gravity, walls, then the contact forces gathered over its
+        // full neighbour list in a fixed order (each particle writes only its own
+        // acceleration: no atomics, results independent of the thread count).
         self.acc
             .par_iter_mut()
             .enumerate()
-            .with_min_len(1024)
+            .with_min_len(256)
             .for_each(|(i, f)| {
                 let m = body.mass[i];
                 for d in 0..D {
@@ -249,42 +272,49 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
                     }
                     tangential::<T, D, FRICTION>(f, n, vn, vrel, fnorm, m, &w.coeff);
                 }
-            });
-        // Particle pairs: full-list gather, each particle writes only its own force.
-        self.list
-            .par_for_each_particle(&mut self.acc, |f, i, j, sep, r2| {
-                let rsum = body.radius[i] + body.radius[j];
-                let r2t = T::of(r2);
-                if r2t >= rsum * rsum {
-                    return;
+                for &j in list.list_of(i) {
+                    let j = j as usize;
+                    let rsum = r + body.radius[j];
+                    // Minimum-image separation (positions are wrapped into the box).
+                    let mut sep = [T::ZERO; D];
+                    let mut r2 = T::ZERO;
+                    for d in 0..D {
+                        let mut s = pos[i][d] - pos[j][d];
+                        if per[d] {
+                            if s > half[d] {
+                                s = s - len[d];
+                            } else if s < -half[d] {
+                                s += len[d];
+                            }
+                        }
+                        sep[d] = s;
+                        r2 += s * s;
+                    }
+                    if r2 >= rsum * rsum {
+                        continue;
+                    }
+                    let dist = r2.sqrt();
+                    let delta = rsum - dist;
+                    let inv = T::of(1.0) / dist;
+                    let mut n = [T::ZERO; D];
+                    let mut vrel = [T::ZERO; D];
+                    let mut vn = T::ZERO;
+                    for d in 0..D {
+                        n[d] = sep[d] * inv;
+                        vrel[d] = v[i][d] - v[j][d];
+                        vn += vrel[d] * n[d];
+                    }
+                    let mj = body.mass[j];
+                    let mij = m * mj / (m + mj);
+                    let c =
+                        &body.coeff[pair_index(body.species[i], body.species[j], body.n_species)];
+                    let fnorm = mij * (c.kappa * delta - c.two_b * vn);
+                    for d in 0..D {
+                        f[d] += fnorm * n[d];
+                    }
+                    tangential::<T, D, FRICTION>(f, n, vn, vrel, fnorm, mij, c);
                 }
-                let dist = r2t.sqrt();
-                let delta = rsum - dist;
-                let inv = T::of(1.0) / dist;
-                let mut n = [T::ZERO; D];
-                let mut vrel = [T::ZERO; D];
-                let mut vn = T::ZERO;
-                for d in 0..D {
-                    n[d] = T::of(sep[d]) * inv;
-                    vrel[d] = v[i][d] - v[j][d];
-                    vn += vrel[d] * n[d];
-                }
-                let (mi, mj) = (body.mass[i], body.mass[j]);
-                let mij = mi * mj / (mi + mj);
-                let c = &body.coeff[pair_index(body.species[i], body.species[j], body.n_species)];
-                let fnorm = mij * (c.kappa * delta - c.two_b * vn);
-                for d in 0..D {
-                    f[d] += fnorm * n[d];
-                }
-                tangential::<T, D, FRICTION>(f, n, vn, vrel, fnorm, mij, c);
-            })?;
-        let mass = &body.mass;
-        self.acc
-            .par_iter_mut()
-            .enumerate()
-            .with_min_len(4096)
-            .for_each(|(i, f)| {
-                let inv = T::of(1.0) / mass[i];
+                let inv = T::of(1.0) / m;
                 for c in f.iter_mut() {
                     *c = *c * inv;
                 }

@@ -136,24 +136,24 @@ pub(crate) fn compute(
     }
     let mut mtot = 0.0;
     let mut mz = 0.0;
-    for i in 0..p.n {
-        let m = p.mass[i];
+    for ((&m, xi), vi) in p.mass.iter().zip(x).zip(v) {
         mtot += m;
-        mz += m * x[i][p.vertical];
-        for d in 0..3 {
-            out.momentum[d] += m * v[i][d];
+        mz += m * xi[p.vertical];
+        for (mom, c) in out.momentum.iter_mut().zip(vi) {
+            *mom += m * c;
         }
-        out.kinetic += 0.5 * m * v[i].iter().map(|c| c * c).sum::<f64>();
-        out.potential += m * p.gravity * (x[i][p.vertical] - p.lo[p.vertical]);
+        out.kinetic += 0.5 * m * vi.iter().map(|c| c * c).sum::<f64>();
+        out.potential += m * p.gravity * (xi[p.vertical] - p.lo[p.vertical]);
     }
     out.com_height = mz / mtot;
     let vmean = out.momentum.map(|c| c / mtot);
     let mut t = 0.0;
-    for i in 0..p.n {
-        t += p.mass[i]
-            * (0..p.axes)
-                .map(|d| (v[i][d] - vmean[d]).powi(2))
-                .sum::<f64>();
+    for (&m, vi) in p.mass.iter().zip(v) {
+        t += m * vi[..p.axes]
+            .iter()
+            .zip(&vmean)
+            .map(|(c, mean)| (c - mean).powi(2))
+            .sum::<f64>();
     }
     out.granular_temperature = t / (p.n * p.axes) as f64;
     let mut worst = 0.0f64;
@@ -170,14 +170,14 @@ pub(crate) fn compute(
         }
     })?;
     let (zw, _) = p.wall_motion(time);
-    for i in 0..p.n {
+    for ((&xi, &r), &m) in x.iter().zip(&p.radius).zip(&p.mass) {
         for w in &p.walls {
-            let (depth, _) = wall_overlap(p, w, x[i], p.radius[i], zw);
+            let (depth, _) = wall_overlap(p, w, xi, r, zw);
             if depth > 0.0 {
-                out.elastic += 0.5 * p.mass[i] * w.coeff.kappa * depth * depth;
+                out.elastic += 0.5 * m * w.coeff.kappa * depth * depth;
                 out.wall_contacts += 1;
                 worst = worst.max(depth);
-                worst_ratio = worst_ratio.max(depth / p.radius[i]);
+                worst_ratio = worst_ratio.max(depth / r);
             }
         }
     }

@@ -46,6 +46,15 @@ struct GpuParams {
     pad: [u32; 2],
 }
 
+/// The cell-list buffers the force kernel reads.
+struct CellBuffers<'a> {
+    grid: &'a Uniform<neighbor::GpuGridParams>,
+    cell_start: &'a GpuBuffer<u32>,
+    sorted_ids: &'a GpuBuffer<u32>,
+    sorted_pos: &'a GpuBuffer<[f32; 4]>,
+    wrapped: &'a GpuBuffer<[f32; 4]>,
+}
+
 enum Cells {
     Two(GpuCellList<2>),
     Three(GpuCellList<3>),
@@ -80,32 +89,22 @@ impl Cells {
         }
     }
 
-    /// (grid uniform, cell_start, sorted_ids, sorted_pos, wrapped)
-    #[allow(clippy::type_complexity)]
-    fn buffers(
-        &self,
-    ) -> (
-        &Uniform<neighbor::GpuGridParams>,
-        &GpuBuffer<u32>,
-        &GpuBuffer<u32>,
-        &GpuBuffer<[f32; 4]>,
-        &GpuBuffer<[f32; 4]>,
-    ) {
+    fn buffers(&self) -> CellBuffers<'_> {
         match self {
-            Cells::Two(c) => (
-                c.params(),
-                c.cell_start(),
-                c.sorted_ids(),
-                c.sorted_pos(),
-                c.wrapped(),
-            ),
-            Cells::Three(c) => (
-                c.params(),
-                c.cell_start(),
-                c.sorted_ids(),
-                c.sorted_pos(),
-                c.wrapped(),
-            ),
+            Cells::Two(c) => CellBuffers {
+                grid: c.params(),
+                cell_start: c.cell_start(),
+                sorted_ids: c.sorted_ids(),
+                sorted_pos: c.sorted_pos(),
+                wrapped: c.wrapped(),
+            },
+            Cells::Three(c) => CellBuffers {
+                grid: c.params(),
+                cell_start: c.cell_start(),
+                sorted_ids: c.sorted_ids(),
+                sorted_pos: c.sorted_pos(),
+                wrapped: c.wrapped(),
+            },
         }
     }
 }
@@ -120,14 +119,16 @@ pub(crate) struct GpuEngine {
     force: (Kernel, wgpu::BindGroup),
     tick: (Kernel, wgpu::BindGroup),
     steps: u64,
-    // Kept alive for the bind groups.
-    _buffers: (
-        GpuBuffer<[f32; 4]>,
-        GpuBuffer<[f32; 4]>,
-        GpuBuffer<u32>,
-        GpuBuffer<[f32; 4]>,
-        GpuBuffer<u32>,
-    ),
+    _bound: BoundOnly,
+}
+
+/// Buffers only the kernels touch (held so they live as long as the bind groups).
+struct BoundOnly {
+    _acc: GpuBuffer<[f32; 4]>,
+    _vpred: GpuBuffer<[f32; 4]>,
+    _species: GpuBuffer<u32>,
+    _table: GpuBuffer<[f32; 4]>,
+    _clock: GpuBuffer<u32>,
     _params: Uniform<GpuParams>,
 }
 
@@ -249,7 +250,13 @@ impl GpuEngine {
         };
         let params = Uniform::new(ctx, "dem params", &pv);
         let cells = Cells::new(ctx, &prep, &pos)?;
-        let (grid, cell_start, sorted_ids, sorted_pos, wrapped) = cells.buffers();
+        let CellBuffers {
+            grid,
+            cell_start,
+            sorted_ids,
+            sorted_pos,
+            wrapped,
+        } = cells.buffers();
         let k = kernel(ctx, DRIFT_WGSL, "dem_drift", 64, &[])?;
         let b = k.bind(
             ctx,
@@ -316,8 +323,14 @@ impl GpuEngine {
             force,
             tick,
             steps: 0,
-            _buffers: (acc, vpred, species, table, clock),
-            _params: params,
+            _bound: BoundOnly {
+                _acc: acc,
+                _vpred: vpred,
+                _species: species,
+                _table: table,
+                _clock: clock,
+                _params: params,
+            },
         })
     }
 }

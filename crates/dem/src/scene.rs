@@ -410,15 +410,9 @@ impl Scene {
     /// species, z = 0 in 2D).
     pub fn add_particle(&mut self, p: Particle) -> Result<&mut Self> {
         let i = self.particles.len();
-        for d in 0..3 {
-            backend::require_finite(
-                &format!("particle[{i}].position.{}", AXES[d]),
-                p.position[d],
-            )?;
-            backend::require_finite(
-                &format!("particle[{i}].velocity.{}", AXES[d]),
-                p.velocity[d],
-            )?;
+        for ((axis, &x), &v) in AXES.iter().zip(&p.position).zip(&p.velocity) {
+            backend::require_finite(&format!("particle[{i}].position.{axis}"), x)?;
+            backend::require_finite(&format!("particle[{i}].velocity.{axis}"), v)?;
         }
         if self.dim == Dim::Two && (p.position[2] != 0.0 || p.velocity[2] != 0.0) {
             return Err(Error::invalid(
@@ -543,14 +537,15 @@ impl Scene {
                 "add at least one particle",
             ));
         }
-        if let Some(v) = self.vibration {
-            if self.periodic[self.dim.vertical()] && v.amplitude > 0.0 {
-                return Err(Error::invalid(
-                    "periodic axes",
-                    format!("{:?}", self.periodic),
-                    "the vertical axis of a vibrating scene cannot be periodic",
-                ));
-            }
+        if let Some(v) = self.vibration
+            && self.periodic[self.dim.vertical()]
+            && v.amplitude > 0.0
+        {
+            return Err(Error::invalid(
+                "periodic axes",
+                format!("{:?}", self.periodic),
+                "the vertical axis of a vibrating scene cannot be periodic",
+            ));
         }
         Ok(())
     }

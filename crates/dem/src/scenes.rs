@@ -156,7 +156,8 @@ pub struct MonolayerParams {
     pub e_ab: f64,
     /// Restitution against the walls.
     pub e_wall: f64,
-    /// Coulomb friction coefficient.
+    /// Coulomb friction coefficient (default 0: without rotation, a sphere sliding on the
+    /// plates is stopped by friction where a real one would roll, and the layer freezes).
     pub mu: f64,
     /// Vibration strength `Gamma`.
     pub gamma: f64,
@@ -170,7 +171,8 @@ pub struct MonolayerParams {
 
 impl Default for MonolayerParams {
     /// 400 spheres in a cylinder of radius 14 d (area fraction about 0.5), `e_AA = 0.95`,
-    /// `e_BB = 0.6`, `e_AB = 0.775`, `Gamma = 3` at 50 Hz, `t_c = 5e-4 s` (chapter 3's).
+    /// `e_BB = 0.6`, `e_AB = 0.775`, no friction, `Gamma = 3` at 50 Hz, `t_c = 5e-4 s`
+    /// (chapter 3's).
     fn default() -> Self {
         Self {
             n: 400,
@@ -179,7 +181,7 @@ impl Default for MonolayerParams {
             e_bb: 0.6,
             e_ab: 0.775,
             e_wall: 0.8,
-            mu: 0.2,
+            mu: 0.0,
             gamma: 3.0,
             freq_hz: 50.0,
             contact_time_s: 5e-4,
@@ -191,7 +193,8 @@ impl Default for MonolayerParams {
 /// The vibrated binary monolayer: equal spheres (d = 1, m = 1) of two species with
 /// different restitution in a vertical cylinder of height 1.5 d whose floor, lid and side
 /// wall vibrate. Spheres are placed on rings from the wall inwards, species alternating,
-/// then shuffled by random swaps.
+/// then shuffled by random swaps, with small random horizontal velocities (up to the plate
+/// speed `A omega`) that break the symmetry of the in-phase vertical bouncing.
 pub fn segregation_monolayer(p: &MonolayerParams) -> Result<(Scene, Units)> {
     let u = Units::new(0.6, 0.2, p.freq_hz)?;
     let tc = u.time(p.contact_time_s);
@@ -240,8 +243,18 @@ pub fn segregation_monolayer(p: &MonolayerParams) -> Result<(Scene, Units)> {
         let b = backend::rng::rng_u32(p.seed, 1, k) as usize % p.n;
         species.swap(a, b);
     }
+    // Small random horizontal velocities (up to the plate speed A omega) break the symmetry:
+    // without them every sphere bounces vertically in phase and nothing mixes or separates.
+    let vmax = u.amplitude(p.gamma);
     for (k, xy) in spots.iter().enumerate() {
-        s.add_particle(Particle::new([xy[0], xy[1], 0.5], 0.5, 1.0).with_species(species[k]))?;
+        let h = |stream: u32| {
+            vmax * (2.0 * backend::rng::rng_uniform(p.seed, 2 + stream, k as u32) as f64 - 1.0)
+        };
+        s.add_particle(
+            Particle::new([xy[0], xy[1], 0.5], 0.5, 1.0)
+                .with_species(species[k])
+                .with_velocity([h(0), h(1), 0.0]),
+        )?;
     }
     Ok((s, u))
 }

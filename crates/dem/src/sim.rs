@@ -29,8 +29,10 @@ pub struct State {
 /// scene.add_particle(Particle::new([1.0, 2.0, 0.0], 0.5, 1.0).with_velocity([1.0, 0.0, 0.0]))?;
 /// scene.add_particle(Particle::new([2.5, 2.0, 0.0], 0.5, 1.0))?;
 /// let mut sim = Dem::new(&scene, &Config::default(), Backend::Cpu)?;
-/// sim.step(200)?; // 200 * t_c / 30: the collision is over
+/// // dt = t_c / 30: the gap of 0.5 closes after 300 steps, the contact lasts 30 more.
+/// sim.step(400)?;
 /// let v = sim.state()?.velocities;
+/// // Equal masses, e = 0.9: v0' = (1 - e) / 2, v1' = (1 + e) / 2.
 /// assert!((v[0][0] - 0.05).abs() < 0.01 && (v[1][0] - 0.95).abs() < 0.01);
 /// # Ok(())
 /// # }

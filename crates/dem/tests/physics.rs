@@ -26,7 +26,7 @@ fn gas(dim: Dim, n_side: usize, spacing: f64, e: f64, friction: bool) -> Scene {
                     p[2] = (z as f64 + 0.5) * spacing;
                     v[2] = h(2);
                 }
-                let mass = if k % 3 == 0 { 2.0 } else { 1.0 };
+                let mass = if k.is_multiple_of(3) { 2.0 } else { 1.0 };
                 s.add_particle(Particle::new(p, 0.5, mass).with_velocity(v))
                     .unwrap();
             }
@@ -76,8 +76,8 @@ fn momentum_is_conserved_to_round_off() {
         sim.step(600).unwrap();
         let d = sim.diagnostics().unwrap();
         assert!(d.contacts > 0 || d.kinetic < 0.99 * sim.diagnostics().unwrap().kinetic);
-        for c in 0..3 {
-            let err = (d.momentum[c] - p0[c]).abs() / scale;
+        for (c, (now, start)) in d.momentum.iter().zip(&p0).enumerate() {
+            let err = (now - start).abs() / scale;
             assert!(
                 err < 1e-13,
                 "{dim:?}: momentum {c} changed by {err:e} of sum |p|"
@@ -349,4 +349,48 @@ fn units_follow_the_source_normalisation() {
     assert!((u.velocity_cm_s(1.0) - 0.6 * omega).abs() < 1e-12);
     assert!(Units::new(0.0, 0.2, 30.0).is_err());
     assert!(Units::new(0.6, 0.2, f64::NAN).is_err());
+}
+
+#[test]
+fn ready_made_scenes_build_and_run() {
+    use dem::scenes::{
+        BedParams, MonolayerParams, granular_box, like_neighbor_fraction, segregation_monolayer,
+        vibrating_bed,
+    };
+    let (bed, u) = vibrating_bed(&BedParams {
+        n: 200,
+        width: 20,
+        ..BedParams::default()
+    })
+    .unwrap();
+    assert!((u.gravity() - 980.0 / (0.6 * (40.0 * std::f64::consts::PI).powi(2))).abs() < 1e-12);
+    let (mono, _) = segregation_monolayer(&MonolayerParams::default()).unwrap();
+    let mixed = like_neighbor_fraction(
+        &mono,
+        &mono
+            .particles()
+            .iter()
+            .map(|p| p.position)
+            .collect::<Vec<_>>(),
+        1.2,
+    );
+    assert!(mixed > 0.4 && mixed < 0.6, "initial like fraction {mixed}");
+    let boxed = granular_box(6, 6, 4, 1).unwrap();
+    for (scene, cfg) in [
+        (bed, Config::default()),
+        (mono, Config::default()),
+        (boxed, Config::default().with_dt(1e-4)),
+    ] {
+        let mut sim = Dem::new(&scene, &cfg, Backend::Cpu).unwrap();
+        sim.step(200).unwrap();
+        let d = sim.diagnostics().unwrap();
+        assert!(d.finite && d.max_overlap_ratio < 0.1, "{d:?}");
+    }
+    assert!(
+        segregation_monolayer(&MonolayerParams {
+            n: 5000,
+            ..MonolayerParams::default()
+        })
+        .is_err()
+    );
 }

@@ -1,27 +1,57 @@
-//! GPU backend (WGSL): one byte per site packed four to a `u32`, the collision table in
-//! workgroup memory, pull streaming, ping-pong buffers, a device-side step counter and many
-//! steps per submission.
+//! GPU backend (WGSL) with two layouts, both bit-identical to the CPU backends:
+//!
+//! - [`GpuLayout::BitPlanes`] (the default when the width is a multiple of 32): six bit-planes
+//!   of `u32` words, 32 sites per invocation, collisions as boolean logic (the multi-spin
+//!   scheme of the CPU backend);
+//! - [`GpuLayout::Bytes`]: one byte per site packed four to a `u32`, the collision table in
+//!   workgroup memory as in the source (any width).
+//!
+//! Both use pull streaming, ping-pong buffers, a device-side step counter and many steps per
+//! submission. On lavapipe the bit-planes run about 30x faster (docs/lattice-gas.md).
 
 use backend::gpu::{DISPATCH_WGSL, Uniform};
 use backend::rng::RNG_WGSL;
-use backend::{GpuBuffer, GpuContext, Kernel, KernelDesc, Result, Simulation};
+use backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Result, Simulation};
 use bytemuck::{Pod, Zeroable};
 
 use crate::random::{FORCE_STREAM, force_threshold};
-use crate::{CollisionTable, Lattice, Params};
+use crate::{CollisionTable, Lattice, Params, RuleSet, WALL};
 
 const STEP_WGSL: &str = include_str!("../../../shaders/lattice-gas/step.wgsl");
+const PLANES_WGSL: &str = include_str!("../../../shaders/lattice-gas/planes.wgsl");
 const COUNTER_WGSL: &str = include_str!("../../../shaders/lattice-gas/counter.wgsl");
 
 /// Steps recorded into one command submission.
 pub const STEPS_PER_SUBMIT: u32 = 64;
 
+/// How the GPU backend stores the lattice.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GpuLayout {
+    /// One byte per site, four per `u32`, collision by table lookup (any width).
+    Bytes,
+    /// Six bit-planes of 32-site words, collision as boolean logic (width a multiple of 32).
+    BitPlanes,
+}
+
+impl GpuLayout {
+    /// The faster layout that fits a lattice of `width` sites per row.
+    pub fn for_width(width: usize) -> Self {
+        if width.is_multiple_of(32) {
+            GpuLayout::BitPlanes
+        } else {
+            GpuLayout::Bytes
+        }
+    }
+}
+
+/// Shader parameters (the same 32-byte block for both layouts).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct GpuParams {
     width: u32,
     height: u32,
-    n_sites: u32,
+    /// Byte layout: sites; bit-planes: words per row.
+    n_sites_or_nw: u32,
     n_words: u32,
     seed: u32,
     force_seed: u32,
@@ -34,6 +64,9 @@ pub struct GpuLattice {
     ctx: GpuContext,
     width: usize,
     height: usize,
+    layout: GpuLayout,
+    /// Wall words (bit-plane layout only; walls never change).
+    walls: Vec<u32>,
     buffers: [GpuBuffer<u32>; 2],
     /// Bind groups stepping buffer 0 -> 1 and 1 -> 0.
     binds: [wgpu::BindGroup; 2],
@@ -50,29 +83,61 @@ pub struct GpuLattice {
 }
 
 impl GpuLattice {
-    /// Uploads `lattice` and compiles the step kernel for the boundaries of `params`.
+    /// Uploads `lattice` in the layout [`GpuLayout::for_width`] picks and compiles the step
+    /// kernel for the boundaries and rules of `params`.
     pub fn new(ctx: &GpuContext, lattice: Lattice, params: Params) -> Result<Self> {
+        let layout = GpuLayout::for_width(lattice.width());
+        Self::with_layout(ctx, lattice, params, layout)
+    }
+
+    /// As [`GpuLattice::new`] with an explicit layout; [`GpuLayout::BitPlanes`] needs a
+    /// width that is a multiple of 32.
+    pub fn with_layout(
+        ctx: &GpuContext,
+        lattice: Lattice,
+        params: Params,
+        layout: GpuLayout,
+    ) -> Result<Self> {
         params.validate(&lattice)?;
         let (w, h) = (lattice.width(), lattice.height());
         let n_sites = w * h;
-        let n_words = n_sites.div_ceil(4);
-        let mut words = vec![0u32; n_words];
-        for (s, &c) in lattice.cells().iter().enumerate() {
-            words[s / 4] |= u32::from(c) << (8 * (s % 4));
-        }
+        let (words, walls, n_items, size_field) = match layout {
+            GpuLayout::Bytes => {
+                let n_words = n_sites.div_ceil(4);
+                let mut words = vec![0u32; n_words];
+                for (s, &c) in lattice.cells().iter().enumerate() {
+                    words[s / 4] |= u32::from(c) << (8 * (s % 4));
+                }
+                (words, vec![0u32], n_words, n_sites)
+            }
+            GpuLayout::BitPlanes => {
+                if !w.is_multiple_of(32) {
+                    return Err(Error::invalid(
+                        "width",
+                        w,
+                        "the GPU bit-plane layout packs 32 sites per word: use a multiple of 32, or GpuLayout::Bytes",
+                    ));
+                }
+                let (planes, walls) = to_planes(&lattice);
+                (planes, walls, n_sites / 32, w / 32)
+            }
+        };
         let a = GpuBuffer::from_slice(ctx, "fhp lattice A", &words)?;
-        let b = GpuBuffer::<u32>::zeroed(ctx, "fhp lattice B", n_words)?;
-        let table: Vec<u32> = CollisionTable::new(params.rules)
-            .entries
-            .iter()
-            .map(|&e| u32::from(e))
-            .collect();
-        let table = GpuBuffer::from_slice(ctx, "fhp collision table", &table)?;
+        let b = GpuBuffer::<u32>::zeroed(ctx, "fhp lattice B", words.len())?;
+        let table: Vec<u32> = match layout {
+            GpuLayout::Bytes => CollisionTable::new(params.rules)
+                .entries
+                .iter()
+                .map(|&e| u32::from(e))
+                .collect(),
+            GpuLayout::BitPlanes => walls.clone(),
+        };
+        let table = GpuBuffer::from_slice(ctx, "fhp collision table / walls", &table)?;
         let gp = GpuParams {
             width: w as u32,
             height: h as u32,
-            n_sites: n_sites as u32,
-            n_words: n_words as u32,
+            n_sites_or_nw: size_field as u32,
+            n_words: n_items as u32,
             seed: params.seed,
             force_seed: params.seed ^ FORCE_STREAM,
             threshold: force_threshold(params.body_force),
@@ -80,16 +145,30 @@ impl GpuLattice {
         };
         let uniform = Uniform::new(ctx, "fhp params", &gp);
         let counter = GpuBuffer::from_slice(ctx, "fhp step counter", &[0u32])?;
-        let step_kernel = Kernel::new(
-            ctx,
-            &KernelDesc {
-                label: "fhp_step",
-                sources: &[RNG_WGSL, DISPATCH_WGSL, STEP_WGSL],
-                entry: "fhp_step",
-                workgroup_size: 64,
-                constants: &[("FLAGS", f64::from(params.flags()))],
-            },
-        )?;
+        let flags = f64::from(params.flags());
+        let full = f64::from(u8::from(params.rules == RuleSet::Full));
+        let step_kernel = match layout {
+            GpuLayout::Bytes => Kernel::new(
+                ctx,
+                &KernelDesc {
+                    label: "fhp_step",
+                    sources: &[RNG_WGSL, DISPATCH_WGSL, STEP_WGSL],
+                    entry: "fhp_step",
+                    workgroup_size: 64,
+                    constants: &[("FLAGS", flags)],
+                },
+            )?,
+            GpuLayout::BitPlanes => Kernel::new(
+                ctx,
+                &KernelDesc {
+                    label: "fhp_planes",
+                    sources: &[RNG_WGSL, DISPATCH_WGSL, PLANES_WGSL],
+                    entry: "fhp_planes",
+                    workgroup_size: 64,
+                    constants: &[("FLAGS", flags), ("FULL", full)],
+                },
+            )?,
+        };
         let counter_kernel = Kernel::new(
             ctx,
             &KernelDesc {
@@ -118,12 +197,18 @@ impl GpuLattice {
             ctx: ctx.clone(),
             width: w,
             height: h,
+            layout,
+            walls: if layout == GpuLayout::BitPlanes {
+                walls
+            } else {
+                Vec::new()
+            },
             buffers: [a, b],
             binds,
             counter_bind,
             step_kernel,
             counter_kernel,
-            n_words: n_words as u64,
+            n_words: n_items as u64,
             current: 0,
             steps: 0,
             _table: table,
@@ -167,11 +252,26 @@ impl Simulation for GpuLattice {
 
     fn state(&mut self) -> Result<Lattice> {
         let words = self.buffers[self.current].download(&self.ctx)?;
-        let n = self.width * self.height;
-        let cells: Vec<u8> = (0..n)
-            .map(|s| (words[s / 4] >> (8 * (s % 4))) as u8)
-            .collect();
-        Ok(Lattice::from_raw(self.width, self.height, cells))
+        let (w, h) = (self.width, self.height);
+        let cells: Vec<u8> = match self.layout {
+            GpuLayout::Bytes => (0..w * h)
+                .map(|s| (words[s / 4] >> (8 * (s % 4))) as u8)
+                .collect(),
+            GpuLayout::BitPlanes => {
+                let nw = w / 32;
+                (0..w * h)
+                    .map(|s| {
+                        let (i, j) = (s % w, s / w);
+                        let (k, b) = (i / 32, i % 32);
+                        let wall = (((self.walls[j * nw + k] >> b) & 1) as u8) << 7;
+                        (0..6).fold(wall, |v, d| {
+                            v | ((((words[(j * 6 + d) * nw + k] >> b) & 1) as u8) << d)
+                        })
+                    })
+                    .collect()
+            }
+        };
+        Ok(Lattice::from_raw(w, h, cells))
     }
 
     fn steps_done(&self) -> u64 {
@@ -179,6 +279,31 @@ impl Simulation for GpuLattice {
     }
 
     fn backend_name(&self) -> String {
-        format!("gpu ({})", self.ctx.adapter_info().name)
+        let layout = match self.layout {
+            GpuLayout::Bytes => "bytes",
+            GpuLayout::BitPlanes => "bit-planes",
+        };
+        format!("gpu {layout} ({})", self.ctx.adapter_info().name)
     }
+}
+
+/// Six planes of 32-site words per row (`planes[(j * 6 + d) * nw + k]`) and the wall words.
+fn to_planes(lattice: &Lattice) -> (Vec<u32>, Vec<u32>) {
+    let (w, h) = (lattice.width(), lattice.height());
+    let nw = w / 32;
+    let mut planes = vec![0u32; 6 * h * nw];
+    let mut walls = vec![0u32; h * nw];
+    for (s, &c) in lattice.cells().iter().enumerate() {
+        let (i, j) = (s % w, s / w);
+        let (k, b) = (i / 32, i % 32);
+        for d in 0..6 {
+            if c & (1 << d) != 0 {
+                planes[(j * 6 + d) * nw + k] |= 1 << b;
+            }
+        }
+        if c & WALL != 0 {
+            walls[j * nw + k] |= 1 << b;
+        }
+    }
+    (planes, walls)
 }

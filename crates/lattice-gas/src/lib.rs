@@ -5,8 +5,12 @@
 //!   a site; [`Obstacle`] masks (rectangle, disc, bitmap/PNG).
 //! - [`RuleSet`]: FHP-I or the full conservation-law table ([`CollisionTable`] generates both).
 //! - [`Params`]: seed, periodic axes, inflow/outflow columns, body force.
-//! - Backends implementing [`backend::Simulation`] with `State = Lattice`: [`LutCpu`],
-//!   [`MultiSpinCpu`], [`GpuLattice`]; [`simulation`] picks one from an [`Engine`].
+//! - Backends implementing [`backend::Simulation`] with `State = Lattice`, bit-identical for
+//!   the same seed and scene: [`LutCpu`] (one byte per site, table lookup), [`MultiSpinCpu`]
+//!   (64-site bit-planes, boolean collisions, AVX-512/AVX2 dispatch) and [`GpuLattice`]
+//!   (WGSL, [`GpuLayout::BitPlanes`] or [`GpuLayout::Bytes`]); [`simulation`] picks one from
+//!   an [`Engine`].
+//! - [`viscosity`]: the shear-wave viscosity measurement and the FHP-I theory.
 //! - [`observables`]: block-averaged density and velocity, time averages, PNG and VTK output.
 //! - [`random`]: the exact use of the counter-based random bits shared by all backends.
 //!
@@ -33,7 +37,7 @@ pub mod random;
 pub mod rules;
 pub mod viscosity;
 
-pub use gpu::GpuLattice;
+pub use gpu::{GpuLattice, GpuLayout};
 pub use lattice::{Lattice, Obstacle, Params, ROW_SPACING};
 pub use lut::LutCpu;
 pub use multispin::MultiSpinCpu;

@@ -121,36 +121,58 @@ impl RowCtx<'_> {
         self.pad_row(Some(j), mid);
         self.pad_row(self.neighbour_row(j, true), up);
         self.pad_row(self.neighbour_row(j, false), down);
-        let base = (j * w) as u32;
-        let odd = j & 1 == 1;
-        let mut word = 0u32;
-        for i in 0..w {
-            let s = base + i as u32;
-            if i == 0 || s & 31 == 0 {
-                word = pcg_hash((s >> 5) ^ self.key);
-            }
-            // Padded index i + 1 is site i; sources at i - 1 / i + 1 are i / i + 2.
-            let mut n = (mid[i] & 1) | (mid[i + 2] & 8) | (mid[i + 1] & WALL);
-            if odd {
-                n |= (up[i + 1] & 2) | (up[i + 2] & 4) | (down[i + 2] & 16) | (down[i + 1] & 32);
-            } else {
-                n |= (up[i] & 2) | (up[i + 1] & 4) | (down[i + 1] & 16) | (down[i] & 32);
-            }
-            let r = (word >> (s & 31)) & 1;
-            let mut v = self.table[(usize::from(n) << 1) | r as usize];
-            if FORCE
-                && v & (WALL | EAST | WEST) == WEST
-                && (pcg_hash(s ^ self.force_key) >> 8) < self.threshold
-            {
-                v ^= EAST | WEST;
-            }
-            out[i] = v;
+        if j & 1 == 1 {
+            self.sites::<FORCE, true>(j, out, mid, up, down);
+        } else {
+            self.sites::<FORCE, false>(j, out, mid, up, down);
         }
         if self.params.inflow && out[0] & WALL == 0 {
             out[0] = EAST;
         }
         if self.params.outflow && out[w - 1] & WALL == 0 {
             out[w - 1] = 0;
+        }
+    }
+
+    /// Gather + collide for the sites of row `j`, in runs of sites that share one
+    /// chirality hash (32 consecutive site indices).
+    #[inline(always)]
+    fn sites<const FORCE: bool, const ODD: bool>(
+        &self,
+        j: usize,
+        out: &mut [u8],
+        mid: &[u8],
+        up: &[u8],
+        down: &[u8],
+    ) {
+        let w = self.w;
+        let base = (j * w) as u32;
+        let mut i = 0;
+        while i < w {
+            let s0 = base + i as u32;
+            let run = (32 - (s0 & 31) as usize).min(w - i);
+            let word = pcg_hash((s0 >> 5) ^ self.key) >> (s0 & 31);
+            for (q, o) in out[i..i + run].iter_mut().enumerate() {
+                let i = i + q;
+                // Padded index i + 1 is site i; sources at i - 1 / i + 1 are i / i + 2.
+                let mut n = (mid[i] & 1) | (mid[i + 2] & 8) | (mid[i + 1] & WALL);
+                if ODD {
+                    n |=
+                        (up[i + 1] & 2) | (up[i + 2] & 4) | (down[i + 2] & 16) | (down[i + 1] & 32);
+                } else {
+                    n |= (up[i] & 2) | (up[i + 1] & 4) | (down[i + 1] & 16) | (down[i] & 32);
+                }
+                let r = (word >> q) & 1;
+                let mut v = self.table[(usize::from(n) << 1) | r as usize];
+                if FORCE
+                    && v & (WALL | EAST | WEST) == WEST
+                    && (pcg_hash((s0 + q as u32) ^ self.force_key) >> 8) < self.threshold
+                {
+                    v ^= EAST | WEST;
+                }
+                *o = v;
+            }
+            i += run;
         }
     }
 }

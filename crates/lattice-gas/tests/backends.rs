@@ -2,9 +2,10 @@
 //! bad input.
 
 use backend::GpuContext;
+use backend::Simulation;
 use backend::testing::gpu_or_skip;
 use lattice_gas::random::chirality;
-use lattice_gas::{Engine, Lattice, Obstacle, Params, RuleSet, simulation};
+use lattice_gas::{Engine, GpuLattice, GpuLayout, Lattice, Obstacle, Params, RuleSet, simulation};
 
 fn periodic_box(w: usize, h: usize, d: f64, seed: u32) -> Lattice {
     let mut l = Lattice::new(w, h).unwrap();
@@ -48,6 +49,15 @@ fn engines(ctx: Option<&GpuContext>) -> Vec<Engine<'_>> {
     e
 }
 
+/// The byte-layout GPU backend (the engines above get bit-planes for widths divisible by 32).
+fn run_gpu_bytes(ctx: &GpuContext, lattice: &Lattice, params: &Params, steps: u32) -> Lattice {
+    let mut sim =
+        GpuLattice::with_layout(ctx, lattice.clone(), params.clone(), GpuLayout::Bytes).unwrap();
+    sim.step(steps).unwrap();
+    assert!(sim.backend_name().contains("bytes"));
+    sim.state().unwrap()
+}
+
 fn run(lattice: &Lattice, params: &Params, engine: Engine<'_>, steps: u32) -> Lattice {
     let mut sim = simulation(lattice.clone(), params.clone(), engine).unwrap();
     sim.step(steps).unwrap();
@@ -77,6 +87,11 @@ fn conservation_over_1000_steps_every_backend_both_rule_sets() {
             // The lattice did change.
             assert_ne!(sim.state().unwrap(), lattice);
         }
+        if let Some(ctx) = ctx.as_ref() {
+            let l = run_gpu_bytes(ctx, &lattice, &params, 1000);
+            assert_eq!(l.particle_count(), n0, "{rules:?} gpu bytes");
+            assert_eq!(l.momentum_units(), p0, "{rules:?} gpu bytes");
+        }
     }
 }
 
@@ -95,6 +110,10 @@ fn backends_bit_identical_channel_and_periodic_box() {
                     got == reference,
                     "{rules:?} {engine:?} differs from the LUT backend"
                 );
+            }
+            if let Some(ctx) = ctx.as_ref() {
+                let got = run_gpu_bytes(ctx, lattice, &params, 500);
+                assert!(got == reference, "{rules:?} GPU bytes differs from LUT");
             }
         }
     }
@@ -117,6 +136,12 @@ fn body_force_bit_identical_and_drives_flow() {
     let reference = run(&l, &params, Engine::Lut, 300);
     for engine in engines(ctx.as_ref()).into_iter().skip(1) {
         assert!(run(&l, &params, engine, 300) == reference, "{engine:?}");
+    }
+    if let Some(ctx) = ctx.as_ref() {
+        assert!(
+            run_gpu_bytes(ctx, &l, &params, 300) == reference,
+            "GPU bytes"
+        );
     }
     assert!(reference.momentum_units().0 > l.momentum_units().0 + 200);
     assert_eq!(reference.particle_count(), l.particle_count());
@@ -209,10 +234,78 @@ fn bad_input_is_refused() {
     assert!(l.set(64, 0, 1).is_err());
     // Multi-spin needs a width that is a multiple of 64.
     let narrow = Lattice::new(48, 4).unwrap();
-    assert!(simulation(narrow, Params::default(), Engine::MultiSpin).is_err());
+    assert!(simulation(narrow.clone(), Params::default(), Engine::MultiSpin).is_err());
+    assert!(simulation(narrow.clone(), Params::default(), Engine::Lut).is_ok());
+    // The GPU bit-plane layout needs a multiple of 32.
+    if let Some(ctx) = gpu_or_skip("lattice-gas bad layout") {
+        let e = GpuLattice::with_layout(
+            &ctx,
+            Lattice::new(40, 4).unwrap(),
+            Params::default(),
+            GpuLayout::BitPlanes,
+        );
+        assert!(e.is_err());
+        assert!(GpuLattice::with_layout(&ctx, narrow, Params::default(), GpuLayout::Bytes).is_ok());
+        let w96 = Lattice::new(96, 4).unwrap();
+        assert!(
+            GpuLattice::with_layout(&ctx, w96, Params::default(), GpuLayout::BitPlanes).is_ok()
+        );
+    }
     let inflow_periodic = Params {
         inflow: true,
         ..Params::default()
     };
     assert!(simulation(Lattice::new(64, 4).unwrap(), inflow_periodic, Engine::Lut).is_err());
+}
+
+#[test]
+fn gpu_matches_lut_on_odd_sizes() {
+    // Widths that are not multiples of 4 (the GPU packs four sites per word) or 64.
+    let Some(ctx) = gpu_or_skip("lattice-gas odd sizes") else {
+        return;
+    };
+    let (chan, chan_params) = channel(50, 31);
+    let boxed = periodic_box(37, 18, 0.3, 4);
+    let forced = Params {
+        body_force: 0.05,
+        periodic_y: false,
+        rules: RuleSet::Full,
+        ..Params::default()
+    };
+    for (lattice, params) in [
+        (&chan, chan_params),
+        (&boxed, Params::default()),
+        (&boxed, forced),
+    ] {
+        let reference = run(lattice, &params, Engine::Lut, 200);
+        assert_ne!(&reference, lattice);
+        assert!(
+            run(lattice, &params, Engine::Gpu(&ctx), 200) == reference,
+            "{params:?}"
+        );
+    }
+}
+
+#[test]
+fn obstacle_from_png_mask() {
+    // 8 x 6 image, a dark 2 x 2 square at image columns 2..4, image rows 0..2 (the top).
+    let mut img = image::GrayImage::from_pixel(8, 6, image::Luma([255u8]));
+    for (x, y) in [(2, 0), (3, 0), (2, 1), (3, 1)] {
+        img.put_pixel(x, y, image::Luma([10u8]));
+    }
+    let path = std::env::temp_dir().join(format!("lattice_gas_mask_{}.png", std::process::id()));
+    img.save(&path).unwrap();
+    let obstacle = Obstacle::from_png(&path).unwrap();
+    std::fs::remove_file(&path).unwrap();
+    let mut l = Lattice::new(8, 6).unwrap();
+    l.add_obstacle(&obstacle).unwrap();
+    let walls: Vec<(usize, usize)> = (0..6)
+        .flat_map(|j| (0..8).map(move |i| (i, j)))
+        .filter(|&(i, j)| l.get(i, j).unwrap() & lattice_gas::WALL != 0)
+        .collect();
+    // Image row 0 is the top row of the lattice (j = 5).
+    assert_eq!(walls, vec![(2, 4), (3, 4), (2, 5), (3, 5)]);
+    // A mask of another size is refused, and so is a missing file.
+    assert!(Lattice::new(8, 8).unwrap().add_obstacle(&obstacle).is_err());
+    assert!(Obstacle::from_png(std::env::temp_dir().join("no_such_lattice_gas_mask.png")).is_err());
 }

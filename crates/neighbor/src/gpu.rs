@@ -260,6 +260,7 @@ impl<const D: usize> GpuCellList<D> {
             &[
                 params.binding(),
                 cell_start.binding(),
+                cell_of.binding(),
                 scattered.binding(),
                 sorted_ids.binding(),
                 wrapped.binding(),
@@ -306,7 +307,9 @@ impl<const D: usize> GpuCellList<D> {
         self.scatter
             .0
             .dispatch_items(ctx, pass, &self.scatter.1, self.n as u64)?;
-        self.sort.0.dispatch_items(ctx, pass, &self.sort.1, nc)?;
+        self.sort
+            .0
+            .dispatch_items(ctx, pass, &self.sort.1, self.n as u64)?;
         Ok(())
     }
 

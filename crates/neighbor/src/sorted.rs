@@ -10,6 +10,41 @@ use crate::traverse::{Scratch, View, visit_cells, visit_particle};
 /// Cells handed to one rayon task in parallel traversals.
 const CELLS_PER_TASK: usize = 64;
 
+/// Below this many particles the counting sort runs as one chunk.
+const PAR_SORT_MIN: usize = 1 << 15;
+
+/// A slice that several rayon tasks write at distinct indices.
+pub(crate) struct SharedSlice<T> {
+    ptr: *mut T,
+    len: usize,
+}
+
+// SAFETY: only used for writes at indices that no two tasks share (see `write`).
+unsafe impl<T: Send> Send for SharedSlice<T> {}
+// SAFETY: as above; no reads go through it.
+unsafe impl<T: Send> Sync for SharedSlice<T> {}
+
+impl<T> SharedSlice<T> {
+    pub(crate) fn new(data: &mut [T]) -> Self {
+        Self {
+            ptr: data.as_mut_ptr(),
+            len: data.len(),
+        }
+    }
+
+    /// Writes `value` at `index`.
+    ///
+    /// # Safety
+    /// No other write or read of `index` may happen concurrently, and the slice it was made
+    /// from must outlive the call without being otherwise accessed.
+    #[inline]
+    pub(crate) unsafe fn write(&self, index: usize, value: T) {
+        assert!(index < self.len, "scatter index out of range");
+        // SAFETY: in bounds (checked above); exclusive per the caller's contract.
+        unsafe { self.ptr.add(index).write(value) };
+    }
+}
+
 /// Particles sorted by cell with a counting sort: counts per cell, exclusive prefix sum
 /// (`cell_start`), then a scatter of the particle ids into cell order (`order`, ascending
 /// ids inside each cell). The wrapped positions are kept in that order as structure of
@@ -44,8 +79,10 @@ impl<const D: usize> SortedCells<D> {
 
     /// Sorts `positions` into cells (wrapping periodic axes, validating every coordinate).
     ///
-    /// The cell assignment and the gather of positions run in parallel on the rayon pool;
-    /// the counting sort itself is serial (it is a small part of the cost). The result does
+    /// Parallel on the rayon pool: the cell assignment, then a two-pass counting sort over
+    /// contiguous chunks of particles (each chunk counts its particles per cell; a prefix
+    /// sum over cells and chunks gives every chunk its own write cursor per cell; each chunk
+    /// scatters its ids and positions). Ids stay ascending inside a cell, so the result does
     /// not depend on the number of threads.
     pub fn build(&mut self, positions: &[[f64; D]]) -> Result<()> {
         let n = positions.len();
@@ -69,32 +106,73 @@ impl<const D: usize> SortedCells<D> {
                 *c = g.cell_of(*w) as u32;
                 Ok::<(), Error>(())
             })?;
-        // Counting sort: counts, exclusive prefix sum, scatter (ascending ids per cell).
+        // Pass 1: counts per cell of every chunk. Chunk-private counts cost `n_cells` words
+        // each, so sparse grids (many more cells than particles) use one chunk.
         let nc = g.n_cells();
+        let threads = rayon::current_num_threads().max(1);
+        let chunks = if n >= PAR_SORT_MIN && nc.saturating_mul(threads) <= 4 * n {
+            threads
+        } else {
+            1
+        };
+        let chunk_len = n.div_ceil(chunks).max(1);
+        let mut cursors: Vec<Vec<u32>> = self
+            .cell_of
+            .par_chunks(chunk_len)
+            .map(|cells| {
+                let mut count = vec![0u32; nc];
+                for &c in cells {
+                    count[c as usize] += 1;
+                }
+                count
+            })
+            .collect();
+        // Prefix sum over (cell, chunk): chunk t writes cell c from cursors[t][c] on.
         self.cell_start.clear();
         self.cell_start.resize(nc + 1, 0);
-        for &c in &self.cell_of {
-            self.cell_start[c as usize] += 1;
+        let mut acc = 0u32;
+        for c in 0..nc {
+            self.cell_start[c] = acc;
+            for cur in cursors.iter_mut() {
+                let k = cur[c];
+                cur[c] = acc;
+                acc += k;
+            }
         }
-        backend::prefix::exclusive_scan(&mut self.cell_start);
+        self.cell_start[nc] = acc;
+        // Pass 2: every chunk scatters its ids, ranks and positions into cell order.
         self.order.resize(n, 0);
         self.rank.resize(n, 0);
-        let mut cursor: Vec<u32> = self.cell_start[..nc].to_vec();
-        for (i, &c) in self.cell_of.iter().enumerate() {
-            let slot = &mut cursor[c as usize];
-            self.order[*slot as usize] = i as u32;
-            self.rank[i] = *slot;
-            *slot += 1;
-        }
-        let order = &self.order;
-        let wrapped = &self.wrapped;
-        for (d, col) in self.coords.iter_mut().enumerate() {
+        for col in &mut self.coords {
             col.resize(n, 0.0);
-            col.par_iter_mut()
-                .zip(order.par_iter())
-                .with_min_len(8192)
-                .for_each(|(x, &i)| *x = wrapped[i as usize][d]);
         }
+        let order = SharedSlice::new(&mut self.order);
+        let coords: [SharedSlice<f64>; D] =
+            std::array::from_fn(|d| SharedSlice::new(&mut self.coords[d]));
+        let (wrapped, cell_of) = (&self.wrapped, &self.cell_of);
+        self.rank
+            .par_chunks_mut(chunk_len)
+            .zip(cursors.par_iter_mut())
+            .enumerate()
+            .for_each(|(t, (ranks, cursor))| {
+                let first = t * chunk_len;
+                for (k, r) in ranks.iter_mut().enumerate() {
+                    let i = first + k;
+                    let slot = &mut cursor[cell_of[i] as usize];
+                    let s = *slot as usize;
+                    *slot += 1;
+                    *r = s as u32;
+                    // SAFETY: the cursors of all chunks and cells cover 0..n without overlap
+                    // (prefix sum of the counts), and every particle takes one slot, so each
+                    // index `s` is written by exactly one particle of one task.
+                    unsafe {
+                        order.write(s, i as u32);
+                        for (d, col) in coords.iter().enumerate() {
+                            col.write(s, wrapped[i][d]);
+                        }
+                    }
+                }
+            });
         Ok(())
     }
 
@@ -142,7 +220,7 @@ impl<const D: usize> SortedCells<D> {
 
     /// Wrapped coordinate `d` of every particle in sorted order (structure of arrays).
     pub fn sorted_coords(&self, d: usize) -> &[f64] {
-        &self.coords[d]
+        &self.coords[d][..self.order.len()]
     }
 
     /// Copies `data` (one value per particle, original order) into sorted order, so that a

@@ -1,8 +1,8 @@
 //! The hot loop: one particle against runs of sorted neighbour cells.
 //!
 //! Squared distances of a whole run are computed into a buffer first (a branch-free loop the
-//! compiler vectorises), then the indices within the cutoff are compacted without branches,
-//! and only the hits reach the caller's callback. The entry points are compiled for AVX2+FMA
+//! compiler vectorises), then turned into 64-bit hit masks (also vectorised), and only the
+//! hits reach the caller's callback. The entry points are compiled for AVX2+FMA
 //! and AVX-512 as well as the baseline and picked at run time (`multiversion`).
 
 use std::ops::Range;
@@ -23,7 +23,6 @@ pub(crate) struct View<'a, const D: usize> {
 /// Scratch buffers of one traversal (one per thread).
 pub(crate) struct Scratch<const D: usize> {
     r2: Vec<f64>,
-    hits: Vec<u32>,
     shell: Shell<D>,
 }
 
@@ -31,7 +30,6 @@ impl<const D: usize> Scratch<D> {
     pub fn new() -> Self {
         Self {
             r2: Vec::new(),
-            hits: Vec::new(),
             shell: Shell::new(),
         }
     }
@@ -58,7 +56,6 @@ fn particle_runs<const D: usize, const MI: bool, F: FnMut(usize, usize, [f64; D]
     lengths: [f64; D],
     periodic: [bool; D],
     r2buf: &mut Vec<f64>,
-    hits: &mut Vec<u32>,
     f: &mut F,
 ) {
     let pi: [f64; D] = std::array::from_fn(|d| v.coords[d][i]);
@@ -75,7 +72,6 @@ fn particle_runs<const D: usize, const MI: bool, F: FnMut(usize, usize, [f64; D]
         let n = j1 - j0;
         if r2buf.len() < n {
             r2buf.resize(n, 0.0);
-            hits.resize(n, 0);
         }
         let buf = &mut r2buf[..n];
         if !MI && D == 3 {
@@ -127,37 +123,36 @@ fn particle_runs<const D: usize, const MI: bool, F: FnMut(usize, usize, [f64; D]
                 }
             }
         }
-        let mut m = 0usize;
-        let hit_buf = &mut hits[..n];
-        for (jj, &r2) in buf.iter().enumerate() {
-            hit_buf[m] = jj as u32;
-            m += usize::from(r2 <= rc2);
-        }
-        for &jj in &hit_buf[..m] {
-            let j = j0 + jj as usize;
-            if own == Own::AllButSelf && j == i {
-                continue;
+        // 64 candidates at a time: a bit mask of the hits (a compare-and-or reduction the
+        // compiler vectorises), then one step per hit.
+        for (chunk_no, chunk) in buf.chunks(64).enumerate() {
+            let mut mask = 0u64;
+            for (k, &r2) in chunk.iter().enumerate() {
+                mask |= u64::from(r2 <= rc2) << k;
             }
-            let mut sep = [0.0; D];
-            for d in 0..D {
-                let mut dx = pi[d] - v.coords[d][j];
-                if MI && periodic[d] {
-                    if dx > half_len[d] {
-                        dx -= lengths[d];
-                    } else if dx < -half_len[d] {
-                        dx += lengths[d];
-                    }
-                } else {
-                    dx -= run.shift[d];
+            while mask != 0 {
+                let jj = chunk_no * 64 + mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                let j = j0 + jj;
+                if own == Own::AllButSelf && j == i {
+                    continue;
                 }
-                sep[d] = dx;
+                let mut sep = [0.0; D];
+                for d in 0..D {
+                    let mut dx = pi[d] - v.coords[d][j];
+                    if MI && periodic[d] {
+                        if dx > half_len[d] {
+                            dx -= lengths[d];
+                        } else if dx < -half_len[d] {
+                            dx += lengths[d];
+                        }
+                    } else {
+                        dx -= run.shift[d];
+                    }
+                    sep[d] = dx;
+                }
+                f(v.order[i] as usize, v.order[j] as usize, sep, buf[jj]);
             }
-            f(
-                v.order[i] as usize,
-                v.order[j] as usize,
-                sep,
-                buf[jj as usize],
-            );
         }
     }
 }
@@ -189,17 +184,7 @@ fn visit_impl<const D: usize, const MI: bool, F: FnMut(usize, usize, [f64; D], f
         let runs = s.shell.as_slice();
         for i in a..b {
             particle_runs::<D, MI, F>(
-                v,
-                i,
-                runs,
-                own,
-                rc2,
-                half_len,
-                lengths,
-                periodic,
-                &mut s.r2,
-                &mut s.hits,
-                f,
+                v, i, runs, own, rc2, half_len, lengths, periodic, &mut s.r2, f,
             );
         }
     }
@@ -253,31 +238,11 @@ pub(crate) fn visit_particle<const D: usize, F: FnMut(usize, usize, [f64; D], f6
     let runs = s.shell.as_slice();
     if g.needs_min_image_per_pair() {
         particle_runs::<D, true, F>(
-            v,
-            rank,
-            runs,
-            own,
-            rc2,
-            half_len,
-            lengths,
-            periodic,
-            &mut s.r2,
-            &mut s.hits,
-            f,
+            v, rank, runs, own, rc2, half_len, lengths, periodic, &mut s.r2, f,
         );
     } else {
         particle_runs::<D, false, F>(
-            v,
-            rank,
-            runs,
-            own,
-            rc2,
-            half_len,
-            lengths,
-            periodic,
-            &mut s.r2,
-            &mut s.hits,
-            f,
+            v, rank, runs, own, rc2, half_len, lengths, periodic, &mut s.r2, f,
         );
     }
 }

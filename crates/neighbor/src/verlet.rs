@@ -4,8 +4,14 @@ use rayon::prelude::*;
 
 use backend::{Error, Result};
 
-use crate::traverse::{Scratch, visit_particle};
+use std::ops::Range;
+
+use crate::sorted::SharedSlice;
+use crate::traverse::{Scratch, visit_cells};
 use crate::{CellGrid, NeighborSearch, SortedCells};
+
+/// Cells handed to one rayon task when building a list.
+const CELLS_PER_BLOCK: usize = 64;
 
 /// Which pairs a [`VerletList`] stores.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -59,54 +65,83 @@ impl<const D: usize> VerletList<D> {
     }
 
     /// Builds the list from `positions`.
+    ///
+    /// Parallel over blocks of cells (each block owns the contiguous sorted range of its
+    /// particles): a count pass, a prefix sum in particle order, and a fill pass; the entries
+    /// of every particle are then sorted ascending, so the list does not depend on the
+    /// number of threads.
     pub fn build(&mut self, positions: &[[f64; D]]) -> Result<()> {
         self.cells.build(positions)?;
         let n = positions.len();
         let half = self.kind == ListKind::Half;
         let cells = &self.cells;
         let v = cells.view();
-        let count = |i: usize, s: &mut Scratch<D>| {
-            let mut k = 0usize;
-            let (rank, cell) = (cells.rank()[i] as usize, cells.cell_of()[i] as usize);
-            visit_particle(&v, rank, cell, half, s, &mut |_, _, _, _| k += 1);
-            k
-        };
-        let counts: Vec<usize> = (0..n)
-            .into_par_iter()
-            .with_min_len(256)
-            .map_init(Scratch::new, |s, i| count(i, s))
+        let nc = cells.grid().n_cells();
+        let cs = cells.cell_start();
+        let rank = cells.rank();
+        let blocks: Vec<Range<usize>> = (0..nc.div_ceil(CELLS_PER_BLOCK))
+            .map(|b| b * CELLS_PER_BLOCK..((b + 1) * CELLS_PER_BLOCK).min(nc))
             .collect();
+        // Count pass: entries per particle, indexed by sorted rank.
+        let mut counts = vec![0usize; n];
+        let mut parts: Vec<(Range<usize>, &mut [usize])> = Vec::with_capacity(blocks.len());
+        let mut rest = counts.as_mut_slice();
+        for b in &blocks {
+            let len = (cs[b.end] - cs[b.start]) as usize;
+            let (a, r) = rest.split_at_mut(len);
+            parts.push((b.clone(), a));
+            rest = r;
+        }
+        parts
+            .into_par_iter()
+            .for_each_init(Scratch::new, |s, (b, out)| {
+                let base = cs[b.start] as usize;
+                visit_cells(&v, b, half, s, &mut |i, _, _, _| {
+                    out[rank[i] as usize - base] += 1;
+                });
+            });
+        // Offsets in particle order.
         self.offsets.clear();
         self.offsets.reserve(n + 1);
         let mut acc = 0usize;
-        for c in &counts {
+        for &r in rank {
             self.offsets.push(acc);
-            acc += c;
+            acc += counts[r as usize];
         }
         self.offsets.push(acc);
+        // Fill pass: every block writes the lists of its own particles.
         self.neighbors.clear();
         self.neighbors.resize(acc, 0);
-        let mut slices: Vec<&mut [u32]> = Vec::with_capacity(n);
-        let mut rest = self.neighbors.as_mut_slice();
-        for c in &counts {
-            let (a, b) = rest.split_at_mut(*c);
-            slices.push(a);
-            rest = b;
-        }
-        slices
-            .into_par_iter()
-            .enumerate()
-            .with_min_len(256)
-            .for_each_init(Scratch::new, |s, (i, out)| {
-                let mut k = 0usize;
-                let (rank, cell) = (cells.rank()[i] as usize, cells.cell_of()[i] as usize);
-                visit_particle(&v, rank, cell, half, s, &mut |_, j, _, _| {
-                    out[k] = j as u32;
-                    k += 1;
-                });
-                out.sort_unstable();
+        let offsets = &self.offsets;
+        let order = cells.order();
+        let entries = SharedSlice::new(&mut self.neighbors);
+        blocks.into_par_iter().for_each_init(Scratch::new, |s, b| {
+            let (first, last) = (cs[b.start] as usize, cs[b.end] as usize);
+            let mut cursor: Vec<usize> = order[first..last]
+                .iter()
+                .map(|&i| offsets[i as usize])
+                .collect();
+            visit_cells(&v, b, half, s, &mut |i, j, _, _| {
+                let slot = &mut cursor[rank[i] as usize - first];
+                // SAFETY: particle i's entries offsets[i]..offsets[i + 1] belong to this
+                // block alone (i is in one of its cells), and the count pass gave exactly
+                // that many entries, so every slot is written once by one task.
+                unsafe { entries.write(*slot, j as u32) };
+                *slot += 1;
             });
-        self.reference = cells.wrapped().to_vec();
+        });
+        let mut lists: Vec<&mut [u32]> = Vec::with_capacity(n);
+        let mut rest = self.neighbors.as_mut_slice();
+        for w in self.offsets.windows(2) {
+            let (a, r) = rest.split_at_mut(w[1] - w[0]);
+            lists.push(a);
+            rest = r;
+        }
+        lists
+            .into_par_iter()
+            .with_min_len(1024)
+            .for_each(|l| l.sort_unstable());
+        self.reference = self.cells.wrapped().to_vec();
         self.current.clone_from(&self.reference);
         self.builds += 1;
         Ok(())

@@ -208,3 +208,106 @@ fn errors_name_the_particle() {
         assert!(e.contains("position[1]"), "{e}");
     }
 }
+
+#[test]
+fn parallel_counting_sort_is_thread_count_independent() {
+    use neighbor::LinkedCells;
+    use rand::{RngExt, SeedableRng};
+    // Large enough for the chunked two-pass sort; compared across pool sizes and with
+    // linked cells.
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(5);
+    let n = 70_000;
+    let side = (n as f64).cbrt();
+    let p: Vec<[f64; 3]> = (0..n)
+        .map(|_| std::array::from_fn(|_| rng.random::<f64>() * side))
+        .collect();
+    let grid = CellGrid::new([0.0; 3], [side; 3], [true, false, true], 1.2).unwrap();
+    let build = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut s = SortedCells::new(&grid);
+            s.build(&p).unwrap();
+            s
+        })
+    };
+    let one = build(1);
+    for threads in [2, 3, 4] {
+        let many = build(threads);
+        assert_eq!(one.cell_start(), many.cell_start());
+        assert_eq!(one.order(), many.order(), "{threads} threads");
+        assert_eq!(one.rank(), many.rank());
+        for d in 0..3 {
+            assert_eq!(one.sorted_coords(d), many.sorted_coords(d));
+        }
+    }
+    for c in 0..grid.n_cells() {
+        let ids = &one.order()[one.cell_start()[c] as usize..one.cell_start()[c + 1] as usize];
+        assert!(
+            ids.windows(2).all(|w| w[0] < w[1]),
+            "ids ascending in a cell"
+        );
+        assert!(ids.iter().all(|&i| one.cell_of()[i as usize] as usize == c));
+    }
+    for (k, &i) in one.order().iter().enumerate() {
+        assert_eq!(one.rank()[i as usize] as usize, k);
+        assert_eq!(one.sorted_coords(0)[k], one.wrapped()[i as usize][0]);
+    }
+    let mut linked = LinkedCells::new(&grid);
+    linked.build(&p).unwrap();
+    let mut sorted = build(4);
+    let want = linked.neighbor_counts().unwrap();
+    assert_eq!(sorted.neighbor_counts().unwrap(), want);
+    assert_eq!(
+        sorted.par_pair_count(),
+        want.iter().map(|&c| c as usize).sum::<usize>() / 2
+    );
+}
+
+#[test]
+fn clamped_positions_outside_closed_faces_keep_exact_pairs() {
+    use neighbor::OutOfBox;
+    // Opt-in clamping: particles up to 3 cutoffs outside the closed y and z faces are put
+    // in the boundary cells, and every method still finds exactly the brute-force pairs.
+    use rand::{RngExt, SeedableRng};
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(21);
+    let grid = CellGrid::new([0.0; 3], [6.0, 5.0, 4.0], [true, false, false], 1.0)
+        .unwrap()
+        .with_out_of_box(OutOfBox::Clamp);
+    let p: Vec<[f64; 3]> = (0..1500)
+        .map(|_| {
+            [
+                rng.random::<f64>() * 6.0,
+                rng.random::<f64>() * 11.0 - 3.0,
+                rng.random::<f64>() * 10.0 - 3.0,
+            ]
+        })
+        .collect();
+    let r = check_cpu(&grid, &p);
+    assert!(!r.is_empty());
+    if let Some(ctx) = gpu_or_skip("clamped_positions") {
+        check_gpu(&ctx, &grid, &p, &r);
+    }
+    // Without the opt-in the same positions are an error naming a particle.
+    let strict = CellGrid::new([0.0; 3], [6.0, 5.0, 4.0], [true, false, false], 1.0).unwrap();
+    let e = SortedCells::new(&strict).build(&p).unwrap_err().to_string();
+    assert!(e.contains("position["), "{e}");
+}
+
+#[test]
+fn reorder_and_restore_are_inverse_permutations() {
+    let grid = CellGrid::new([0.0; 2], [4.0, 4.0], [true, true], 1.0).unwrap();
+    let p = vec![[3.5, 3.5], [0.2, 0.1], [2.2, 0.3], [0.4, 0.2], [3.9, 0.0]];
+    let mut s = SortedCells::new(&grid);
+    s.build(&p).unwrap();
+    let data: Vec<usize> = (0..p.len()).collect();
+    let sorted = s.reorder(&data).unwrap();
+    // Cell order: cell (0,0) holds 1 and 3 (ascending), then (2,0) holds 2, (3,0) holds 4,
+    // then (3,3) holds 0.
+    assert_eq!(sorted, vec![1, 3, 2, 4, 0]);
+    assert_eq!(s.restore(&sorted).unwrap(), data);
+    assert!(s.reorder(&data[..3]).is_err());
+    assert!(s.restore(&data[..3]).is_err());
+}

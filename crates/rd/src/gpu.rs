@@ -1,5 +1,10 @@
 //! GPU backend (WGSL): tiled stencil with a one-cell halo in workgroup memory, or a plain
 //! global-memory stencil, plus a ghost-cell kernel; many steps per submission.
+//!
+//! Each species lives in its own pair of storage buffers (ping-pong), so the largest grid is
+//! set by one species plane against `max_storage_buffer_binding_size`, not by all of them.
+
+use std::fmt::Write as _;
 
 use backend::gpu::DISPATCH_WGSL;
 use backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Result, Simulation};
@@ -62,21 +67,21 @@ pub struct GpuRd<T: Real, M: Model> {
     grid: Grid<T>,
     stepping: Stepping,
     options: GpuOptions,
-    a: GpuBuffer<T>,
+    a: Vec<GpuBuffer<T>>,
     params: GpuBuffer<T>,
     stencil: Kernel,
-    ghosts: Kernel,
+    ghosts: Vec<Kernel>,
     bind_ab: wgpu::BindGroup,
     bind_ba: wgpu::BindGroup,
     bind_ba_avg: wgpu::BindGroup,
-    ghosts_a: wgpu::BindGroup,
-    ghosts_b: wgpu::BindGroup,
+    ghosts_a: Vec<wgpu::BindGroup>,
+    ghosts_b: Vec<wgpu::BindGroup>,
     stencil_avg: Kernel,
     cur_is_a: bool,
     steps: u64,
     snapshot_fresh: bool,
     // Kept alive for the bind groups.
-    b: GpuBuffer<T>,
+    b: Vec<GpuBuffer<T>>,
     _coef: GpuBuffer<T>,
 }
 
@@ -106,6 +111,49 @@ fn params_vec<T: Real, M: Model>(model: &M, grid: &Grid<T>, s: &Stepping) -> Vec
     }
     p.extend(model.gpu_params());
     p.into_iter().map(T::from_f64).collect()
+}
+
+/// WGSL bindings for `ns` species (`src<s>`, `dst<s>`, then `coef`, `params`) and the
+/// accessors the stencil bodies use: `load_global(f, idx)` and `put(s, v)`.
+fn bindings_wgsl(ns: usize) -> String {
+    let mut w = String::new();
+    for s in 0..ns {
+        let _ = writeln!(
+            w,
+            "@group(0) @binding({s}) var<storage, read> src{s}: array<real>;"
+        );
+    }
+    for s in 0..ns {
+        let _ = writeln!(
+            w,
+            "@group(0) @binding({}) var<storage, read_write> dst{s}: array<real>;",
+            ns + s
+        );
+    }
+    let _ = writeln!(
+        w,
+        "@group(0) @binding({}) var<storage, read> coef: array<real>;",
+        2 * ns
+    );
+    let _ = writeln!(
+        w,
+        "@group(0) @binding({}) var<storage, read> params: array<real>;",
+        2 * ns + 1
+    );
+    w.push_str("fn load_global(f: u32, idx: u32) -> real {\n");
+    for s in 0..ns {
+        let _ = writeln!(w, "    if f == {s}u {{ return src{s}[idx]; }}");
+    }
+    w.push_str("    return coef[(f - NS) * plane() + idx];\n}\n");
+    w.push_str("fn put(s: u32, v: real) {\n");
+    for s in 0..ns {
+        let _ = writeln!(
+            w,
+            "    if s == {s}u {{ if AVERAGE {{ dst{s}[cell] = real(0.5) * (dst{s}[cell] + v); }} else {{ dst{s}[cell] = v; }} }}"
+        );
+    }
+    w.push_str("}\n");
+    w
 }
 
 impl<T: Real, M: Model> GpuRd<T, M> {
@@ -162,6 +210,13 @@ impl<T: Real, M: Model> GpuRd<T, M> {
         if options.steps_per_submit == 0 {
             return Err(Error::invalid("steps_per_submit", 0, "must be >= 1"));
         }
+        if 2 * ns as u32 + 2 > lim.max_storage_buffers_per_shader_stage {
+            return Err(Error::Unsupported(format!(
+                "{ns} species need {} storage buffers per shader stage, over this device's {}; use fewer species or the CPU backend",
+                2 * ns + 2,
+                lim.max_storage_buffers_per_shader_stage
+            )));
+        }
         let (gx, gy) = (nx.div_ceil(tx as usize), ny.div_ceil(ty as usize));
         let maxg = lim.max_compute_workgroups_per_dimension as usize;
         if gx > maxg || gy > maxg {
@@ -192,8 +247,16 @@ impl<T: Real, M: Model> GpuRd<T, M> {
         if coef.is_empty() {
             coef.push(T::default());
         }
-        let a = GpuBuffer::from_slice(ctx, "rd state a", &init)?;
-        let b = GpuBuffer::from_slice(ctx, "rd state b", &init)?;
+        let a = init
+            .chunks(plane)
+            .enumerate()
+            .map(|(s, f)| GpuBuffer::from_slice(ctx, &format!("rd species {s} (a)"), f))
+            .collect::<Result<Vec<_>>>()?;
+        let b = init
+            .chunks(plane)
+            .enumerate()
+            .map(|(s, f)| GpuBuffer::from_slice(ctx, &format!("rd species {s} (b)"), f))
+            .collect::<Result<Vec<_>>>()?;
         let coef = GpuBuffer::from_slice(ctx, "rd coefficients", &coef)?;
         let params =
             GpuBuffer::from_slice(ctx, "rd params", &params_vec(&model, &grid, &stepping))?;
@@ -203,7 +266,14 @@ impl<T: Real, M: Model> GpuRd<T, M> {
             GpuKernel::Tiled => TILED_WGSL,
             GpuKernel::Global => GLOBAL_WGSL,
         };
-        let sources = [header.as_str(), COMMON_WGSL, model.wgsl(), body];
+        let bindings = bindings_wgsl(ns);
+        let sources = [
+            header.as_str(),
+            bindings.as_str(),
+            COMMON_WGSL,
+            model.wgsl(),
+            body,
+        ];
         let constants = |avg: f64| {
             [
                 ("NX", nx as f64),
@@ -229,32 +299,39 @@ impl<T: Real, M: Model> GpuRd<T, M> {
         };
         let stencil = make("rd stencil", 0.0)?;
         let stencil_avg = make("rd stencil (Heun average)", 1.0)?;
-        let ghosts = Kernel::new(
-            ctx,
-            &KernelDesc {
-                label: "rd ghosts",
-                sources: &[header.as_str(), DISPATCH_WGSL, GHOSTS_WGSL],
-                entry: "main",
-                workgroup_size: 64,
-                constants: &[("NX", nx as f64), ("NY", ny as f64), ("NS", ns as f64)],
-            },
-        )?;
-        let sb = |k: &Kernel, src: &GpuBuffer<T>, dst: &GpuBuffer<T>| {
-            k.bind(
-                ctx,
-                &[
-                    src.binding(),
-                    dst.binding(),
-                    coef.binding(),
-                    params.binding(),
-                ],
-            )
+        let ghosts = (0..ns)
+            .map(|s| {
+                Kernel::new(
+                    ctx,
+                    &KernelDesc {
+                        label: "rd ghosts",
+                        sources: &[header.as_str(), DISPATCH_WGSL, GHOSTS_WGSL],
+                        entry: "main",
+                        workgroup_size: 64,
+                        constants: &[("NX", nx as f64), ("NY", ny as f64), ("S", s as f64)],
+                    },
+                )
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let sb = |k: &Kernel, src: &[GpuBuffer<T>], dst: &[GpuBuffer<T>]| {
+            let mut entries: Vec<wgpu::BindingResource<'_>> =
+                src.iter().chain(dst).map(GpuBuffer::binding).collect();
+            entries.push(coef.binding());
+            entries.push(params.binding());
+            k.bind(ctx, &entries)
         };
         let bind_ab = sb(&stencil, &a, &b)?;
         let bind_ba = sb(&stencil, &b, &a)?;
         let bind_ba_avg = sb(&stencil_avg, &b, &a)?;
-        let ghosts_a = ghosts.bind(ctx, &[a.binding(), params.binding()])?;
-        let ghosts_b = ghosts.bind(ctx, &[b.binding(), params.binding()])?;
+        let gb = |bufs: &[GpuBuffer<T>]| {
+            ghosts
+                .iter()
+                .zip(bufs)
+                .map(|(k, buf)| k.bind(ctx, &[buf.binding(), params.binding()]))
+                .collect::<Result<Vec<_>>>()
+        };
+        let ghosts_a = gb(&a)?;
+        let ghosts_b = gb(&b)?;
         Ok(Self {
             ctx: ctx.clone(),
             model,
@@ -314,7 +391,7 @@ impl<T: Real, M: Model> GpuRd<T, M> {
     }
 
     fn record_step(&mut self, pass: &mut wgpu::ComputePass<'_>) -> Result<()> {
-        let ghost_items = (self.grid.species() * 2 * (self.grid.nx() + self.grid.ny())) as u64;
+        let ghost_items = (2 * (self.grid.nx() + self.grid.ny())) as u64;
         let (gx, gy) = (
             self.grid.nx().div_ceil(self.options.tile.0 as usize) as u32,
             self.grid.ny().div_ceil(self.options.tile.1 as usize) as u32,
@@ -327,25 +404,28 @@ impl<T: Real, M: Model> GpuRd<T, M> {
                     (&self.bind_ba, &self.ghosts_a)
                 };
                 self.stencil.dispatch_grid(pass, bind, gx, gy);
-                self.ghosts
-                    .dispatch_items(&self.ctx, pass, ghost, ghost_items)?;
+                for (k, g) in self.ghosts.iter().zip(ghost) {
+                    k.dispatch_items(&self.ctx, pass, g, ghost_items)?;
+                }
                 self.cur_is_a = !self.cur_is_a;
             }
             Integrator::Heun => {
                 // Heun keeps the state in `a`: a -> b (Euler stage), then a = (a + b + dt F(b)) / 2.
                 self.stencil.dispatch_grid(pass, &self.bind_ab, gx, gy);
-                self.ghosts
-                    .dispatch_items(&self.ctx, pass, &self.ghosts_b, ghost_items)?;
+                for (k, g) in self.ghosts.iter().zip(&self.ghosts_b) {
+                    k.dispatch_items(&self.ctx, pass, g, ghost_items)?;
+                }
                 self.stencil_avg
                     .dispatch_grid(pass, &self.bind_ba_avg, gx, gy);
-                self.ghosts
-                    .dispatch_items(&self.ctx, pass, &self.ghosts_a, ghost_items)?;
+                for (k, g) in self.ghosts.iter().zip(&self.ghosts_a) {
+                    k.dispatch_items(&self.ctx, pass, g, ghost_items)?;
+                }
             }
         }
         Ok(())
     }
 
-    fn current(&self) -> &GpuBuffer<T> {
+    fn current(&self) -> &[GpuBuffer<T>] {
         if self.cur_is_a { &self.a } else { &self.b }
     }
 
@@ -353,7 +433,9 @@ impl<T: Real, M: Model> GpuRd<T, M> {
     fn settle_in_a(&mut self) -> Result<()> {
         if !self.cur_is_a {
             let mut enc = self.ctx.encoder("rd copy b -> a");
-            enc.copy_buffer_to_buffer(self.b.raw(), 0, self.a.raw(), 0, self.a.raw().size());
+            for (b, a) in self.b.iter().zip(&self.a) {
+                enc.copy_buffer_to_buffer(b.raw(), 0, a.raw(), 0, a.raw().size());
+            }
             self.ctx.submit(enc);
             self.cur_is_a = true;
         }
@@ -397,7 +479,10 @@ impl<T: Real, M: Model> Simulation for GpuRd<T, M> {
 
     fn state(&mut self) -> Result<Grid<T>> {
         if !self.snapshot_fresh {
-            let data = self.current().download(&self.ctx)?;
+            let mut data = Vec::new();
+            for buf in self.current() {
+                data.extend(buf.download(&self.ctx)?);
+            }
             self.grid.set_from_padded(&data);
             self.snapshot_fresh = true;
         }

@@ -1,6 +1,7 @@
 //! The grid: species fields on a square 2D lattice with spacing `h` and edge conditions.
 
 use backend::{Error, Result, require_positive};
+use rayon::prelude::*;
 
 use crate::boundary::Boundaries;
 use crate::real::Real;
@@ -160,10 +161,10 @@ impl<T: Real> Grid<T> {
         let (nx, ny) = (self.nx, self.ny);
         let plane = (nx + 2) * (ny + 2);
         for (s, f) in self.fields.iter_mut().enumerate() {
-            for j in 0..ny {
+            f.par_chunks_mut(nx).enumerate().for_each(|(j, row)| {
                 let r = s * plane + (j + 1) * (nx + 2) + 1;
-                f[j * nx..(j + 1) * nx].copy_from_slice(&p[r..r + nx]);
-            }
+                row.copy_from_slice(&p[r..r + nx]);
+            });
         }
     }
 }

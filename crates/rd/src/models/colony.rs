@@ -2,6 +2,7 @@
 
 use backend::{Error, Result, require_non_negative};
 use multiversion::multiversion;
+use rayon::prelude::*;
 
 use crate::grid::Grid;
 use crate::model::{Model, RowIn, Stencil};
@@ -179,11 +180,12 @@ impl Model for Colony {
     }
     fn max_diffusivity<T: Real>(&self, grid: &Grid<T>) -> f64 {
         let (b, n) = (grid.field(0), grid.field(1));
+        // Re-checked before every `step` call: a parallel pass over the fields.
         let kappa = self.d[0]
-            .iter()
-            .zip(b.iter().zip(n))
+            .par_iter()
+            .zip(b.par_iter().zip(n.par_iter()))
             .map(|(d, (b, n))| d * b.to_f64() * n.to_f64())
-            .fold(0.0, f64::max);
+            .reduce(|| 0.0, f64::max);
         kappa.max(1.0)
     }
     fn field_dependent_diffusivity(&self) -> bool {

@@ -1,0 +1,39 @@
+#!/bin/sh
+# Runs LAMMPS (1 and 2 MPI ranks) on benches/peers/dem_gran3d.lmp and the simkit dem bench
+# on the same scene (CPU, 1 and 2 threads), and prints particle-steps/s and the ratios.
+# Usage (from the repository root): sh benches/peers/dem_vs_lammps.sh
+# Needs `lmp` (Debian package `lammps`) and `mpirun` on PATH for the LAMMPS half.
+set -e
+N=20000
+STEPS=2000
+deck=benches/peers/dem_gran3d.lmp
+lammps_rate() {
+  # $1 = number of MPI ranks; prints particle-steps/s from the "Loop time" line.
+  log=$(mktemp)
+  if [ "$1" -eq 1 ]; then
+    lmp -in "$deck" -log none -screen "$log" >/dev/null 2>&1
+  else
+    mpirun --allow-run-as-root --oversubscribe -np "$1" lmp -in "$deck" -log none -screen "$log" >/dev/null 2>&1
+  fi
+  awk -v n=$N -v s=$STEPS '/^Loop time/ {printf "%.4g\n", n * s / $4}' "$log"
+  rm -f "$log"
+}
+if command -v lmp >/dev/null 2>&1; then
+  L1=$(lammps_rate 1)
+  L2=$(lammps_rate 2)
+else
+  echo "lmp not found: using the figures measured on this machine (shared/peers/FIGURES.md)"
+  L1=1.48e7
+  L2=2.4e7
+fi
+out=$(mktemp)
+cargo bench --bench dem -- dem_box3d_20000/cpu 2>/dev/null | tee "$out" >/dev/null
+# criterion prints "thrpt: [low mid high]" in Melem/s (1 elem = 1 particle-step).
+rates=$(awk '/thrpt:/ {print $4 * 1e6}' "$out")
+D1=$(echo "$rates" | sed -n 1p)
+D2=$(echo "$rates" | sed -n 2p)
+rm -f "$out"
+echo "LAMMPS gran/hooke: 1 rank $L1, 2 ranks $L2 particle-steps/s"
+echo "simkit dem (f64): 1 thread $D1, 2 threads $D2 particle-steps/s"
+awk -v a="$D1" -v b="$L1" -v c="$D2" -v d="$L2" \
+  'BEGIN {printf "ratio dem/LAMMPS: 1 core %.2f, 2 cores %.2f (target >= 1.5 on 2 cores)\n", a / b, c / d}'
