@@ -59,83 +59,52 @@ pub(crate) trait Real:
     ) -> [Self; 3];
 }
 
-impl Real for f32 {
-    const ZERO: Self = 0.0;
-    const ONE: Self = 1.0;
-    const PAD: Self = 1.0e12;
-    #[inline(always)]
-    fn sqrt(self) -> Self {
-        f32::sqrt(self)
-    }
-    #[inline(always)]
-    fn mul_add(self, a: Self, b: Self) -> Self {
-        f32::mul_add(self, a, b)
-    }
-    #[inline(always)]
-    fn from_f64(x: f64) -> Self {
-        x as f32
-    }
-    #[inline(always)]
-    fn to_f64(self) -> f64 {
-        f64::from(self)
-    }
-    #[inline(always)]
-    fn block<L: Law>(
-        xi: Self,
-        yi: Self,
-        zi: Self,
-        s: &Sources<'_, Self>,
-        p: Self,
-        fast: bool,
-    ) -> [Self; 3] {
-        #[cfg(target_arch = "x86_64")]
-        if fast {
-            // SAFETY: `fast` is only set when avx512::available() returned true.
-            return unsafe { avx512::block_f32(L::KIND, xi, yi, zi, s, p) };
+/// Implements [`Real`] for a float type: its padding value and its AVX-512 block kernel.
+macro_rules! impl_real {
+    ($t:ty, $pad:expr, $simd:ident) => {
+        impl Real for $t {
+            const ZERO: Self = 0.0;
+            const ONE: Self = 1.0;
+            const PAD: Self = $pad;
+            #[inline(always)]
+            fn sqrt(self) -> Self {
+                <$t>::sqrt(self)
+            }
+            #[inline(always)]
+            fn mul_add(self, a: Self, b: Self) -> Self {
+                <$t>::mul_add(self, a, b)
+            }
+            #[inline(always)]
+            fn from_f64(x: f64) -> Self {
+                x as $t
+            }
+            #[inline(always)]
+            fn to_f64(self) -> f64 {
+                f64::from(self)
+            }
+            #[inline(always)]
+            fn block<L: Law>(
+                xi: Self,
+                yi: Self,
+                zi: Self,
+                s: &Sources<'_, Self>,
+                p: Self,
+                fast: bool,
+            ) -> [Self; 3] {
+                #[cfg(target_arch = "x86_64")]
+                if fast {
+                    // SAFETY: `fast` is only set when avx512::available() returned true.
+                    return unsafe { avx512::$simd(L::KIND, xi, yi, zi, s, p) };
+                }
+                let _ = fast;
+                block_field::<Self, L>(xi, yi, zi, s, p)
+            }
         }
-        let _ = fast;
-        block_field::<Self, L>(xi, yi, zi, s, p)
-    }
+    };
 }
 
-impl Real for f64 {
-    const ZERO: Self = 0.0;
-    const ONE: Self = 1.0;
-    const PAD: Self = 1.0e50;
-    #[inline(always)]
-    fn sqrt(self) -> Self {
-        f64::sqrt(self)
-    }
-    #[inline(always)]
-    fn mul_add(self, a: Self, b: Self) -> Self {
-        f64::mul_add(self, a, b)
-    }
-    #[inline(always)]
-    fn from_f64(x: f64) -> Self {
-        x
-    }
-    #[inline(always)]
-    fn to_f64(self) -> f64 {
-        self
-    }
-    #[inline(always)]
-    fn block<L: Law>(
-        xi: Self,
-        yi: Self,
-        zi: Self,
-        s: &Sources<'_, Self>,
-        p: Self,
-        fast: bool,
-    ) -> [Self; 3] {
-        #[cfg(target_arch = "x86_64")]
-        if fast {
-            // SAFETY: `fast` is only set when avx512::available() returned true.
-            return unsafe { avx512::block_f64(L::KIND, xi, yi, zi, s, p) };
-        }
-        let _ = fast;
-        block_field::<Self, L>(xi, yi, zi, s, p)
-    }
-}
+impl_real!(f32, 1.0e12, block_f32);
+impl_real!(f64, 1.0e50, block_f64);
 
 /// Which law a [`Law`] type is (a compile-time constant in the SIMD path).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
