@@ -1,6 +1,8 @@
 //! Site updates per second of the FHP lattice gas on periodic lattices of 1024^2 and 4096^2,
-//! for the lookup-table CPU, multi-spin CPU and both GPU layouts (bit-planes and bytes with
-//! the table in workgroup memory), FHP-I, d = 0.3.
+//! for the lookup-table CPU (AVX-512 VBMI where present, and the scalar loop), multi-spin CPU
+//! and both GPU layouts (bit-planes and bytes with the table in workgroup memory), FHP-I,
+//! d = 0.3; and the multi-spin backend with the full collision table (`multispin-full`; the
+//! table lookup costs the same for both rule sets).
 //!
 //! ```text
 //! cargo bench --bench lattice_gas
@@ -11,7 +13,7 @@ use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use simkit::backend::{GpuContext, Simulation};
-use simkit::lattice_gas::{GpuLattice, GpuLayout, Lattice, LutCpu, MultiSpinCpu, Params};
+use simkit::lattice_gas::{GpuLattice, GpuLayout, Lattice, LutCpu, MultiSpinCpu, Params, RuleSet};
 
 fn bench(c: &mut Criterion) {
     let gpu = GpuContext::new().ok();
@@ -23,6 +25,10 @@ fn bench(c: &mut Criterion) {
         let mut lattice = Lattice::new(n, n).expect("size");
         lattice.fill_random(0.3, 1).expect("density");
         let p = Params::default;
+        let full = || Params {
+            rules: RuleSet::Full,
+            ..Params::default()
+        };
         type Sim = Box<dyn Simulation<State = Lattice>>;
         let mut sims: Vec<(&str, Sim)> = vec![
             (
@@ -30,8 +36,20 @@ fn bench(c: &mut Criterion) {
                 Box::new(LutCpu::new(lattice.clone(), p()).expect("lut")),
             ),
             (
+                "lut-scalar",
+                Box::new(
+                    LutCpu::new(lattice.clone(), p())
+                        .expect("lut")
+                        .force_scalar(),
+                ),
+            ),
+            (
                 "multispin",
                 Box::new(MultiSpinCpu::new(lattice.clone(), p()).expect("multispin")),
+            ),
+            (
+                "multispin-full",
+                Box::new(MultiSpinCpu::new(lattice.clone(), full()).expect("multispin")),
             ),
         ];
         if let Some(ctx) = gpu.as_ref() {

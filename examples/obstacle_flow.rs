@@ -80,14 +80,14 @@ fn main() -> Result<()> {
             let field = avg.field().expect("at least one sample");
             let title = format!("FHP channel, step {done}, {block}x{block} blocks");
             field.write_velocity_png(out.join(format!("frame_{frame:03}.png")), &title)?;
-            let (ux, uy) = field.velocity();
+            let (ux, uy, cols, rows) = field.velocity_square_cells();
             let opts = VectorFieldOptions::new().background(
                 HeatmapOptions::new()
                     .upscale(8)
                     .range(0.0, 0.8)
                     .title(&title),
             );
-            let (img, _) = render_vector_field(&ux, &uy, field.nx, field.ny, &opts)?;
+            let (img, _) = render_vector_field(&ux, &uy, cols, rows, &opts)?;
             gif.push(&img)?;
             if done == steps {
                 field.write_vti(out.join("final.vti"))?;

@@ -6,18 +6,20 @@
 //! The acceleration is measured, not assumed: the same density and p in a periodic box
 //! without walls gives the momentum gained per particle per step at rest. The force acts only
 //! where a west-mover meets no east-mover, so it weakens where the flow is fast; the second
-//! fit uses the local acceleration of each row, `g(y) = 2 p <n_4 (1 - n_1)> / rho` from the
-//! row's mean occupations, and fits `u = G(y)/nu + b y + c` with `G'' = -g`.
+//! fit uses the local acceleration of each row, `g(y) = 2 p <sites with a west-mover and no
+//! east-mover> / <particles>` counted on the lattice, and fits `u = G(y)/nu + b y + c` with
+//! `G'' = -g`.
 //!
 //! ```text
-//! cargo run --release --example poiseuille [-- DENSITY P]
+//! cargo run --release --example poiseuille [-- DENSITY P HEIGHT]
 //! ```
-//! Defaults: d = 0.2, p = 0.0005, 4096 x 64 sites; writes out/poiseuille/profile.csv.
+//! Defaults: d = 0.2, p = 0.0005, 64 rows (4096 x 64 sites; other heights keep ~2^18
+//! sites); writes out/poiseuille/profile.csv.
 
 use simkit::backend::{Result, Simulation};
 use simkit::lattice_gas::observables::CX;
 use simkit::lattice_gas::viscosity::fhp1_viscosity;
-use simkit::lattice_gas::{Lattice, MultiSpinCpu, Params, ROW_SPACING};
+use simkit::lattice_gas::{EAST, Lattice, MultiSpinCpu, Params, ROW_SPACING, WALL, WEST};
 use simkit::output::csv::write_csv;
 
 fn row_px(sim: &MultiSpinCpu) -> Vec<(f64, f64)> {
@@ -37,7 +39,16 @@ fn main() -> Result<()> {
         .collect();
     let d = args.first().copied().unwrap_or(0.2);
     let p = args.get(1).copied().unwrap_or(0.0005);
-    let (w, h) = (4096usize, 64usize);
+    let h = args.get(2).map_or(64, |&x| x as usize);
+    if h < 8 || h % 2 == 1 {
+        return Err(simkit::backend::Error::invalid(
+            "HEIGHT",
+            h,
+            "use an even number of rows, at least 8",
+        ));
+    }
+    // About 2^18 sites, the width a multiple of 64.
+    let w = ((1usize << 18) / h).div_ceil(64) * 64;
     let seed = 9;
 
     // 1. The acceleration from the force: periodic box, momentum gain per particle per step.
@@ -68,36 +79,39 @@ fn main() -> Result<()> {
         ..params
     };
     let mut sim = MultiSpinCpu::new(lattice, channel)?;
-    let relax = 16_000;
-    let average = 16_000;
+    // The slowest mode relaxes in ~H^2 / (pi^2 nu) steps: 16000 steps at 64 rows, scaled.
+    let relax = (16_000 * h * h / (64 * 64)).max(4000) as u32;
+    let average = relax;
     let every = 20;
     let t = std::time::Instant::now();
     sim.step(relax)?;
     let mut sums = vec![(0.0, 0.0); h];
-    let mut occ = vec![[0.0f64; 6]; h];
+    // Sites per row where the force can act (a west-mover, no east-mover, not a wall),
+    // counted on the lattice after each sampled step.
+    let mut eligible = vec![0.0f64; h];
     for _ in 0..average / every {
         sim.step(every)?;
         for (s, r) in sums.iter_mut().zip(row_px(&sim)) {
             s.0 += r.0;
             s.1 += r.1;
         }
-        for (o, c) in occ.iter_mut().zip(sim.row_counts()) {
-            for k in 0..6 {
-                o[k] += c[k] as f64;
-            }
+        let state = sim.state()?;
+        for (e, row) in eligible.iter_mut().zip(state.cells().chunks(w)) {
+            *e += row
+                .iter()
+                .filter(|&&c| c & (WALL | EAST | WEST) == WEST)
+                .count() as f64;
         }
     }
-    // Local acceleration per row from the mean occupations (mean-field estimate).
-    let local_g: Vec<f64> = occ
+    // Local acceleration of each row: the force turns an eligible site's west-mover into an
+    // east-mover (momentum +2) with probability p; the sampled lattice is after the force, so
+    // a fraction p of the eligible sites has already been turned: divide by 1 - p.
+    let local_g: Vec<f64> = eligible
         .iter()
-        .map(|o| {
-            let n: Vec<f64> = o
-                .iter()
-                .map(|x| x / (w * (average / every) as usize) as f64)
-                .collect();
-            let rho: f64 = n.iter().sum();
-            if rho > 0.0 {
-                2.0 * p * n[3] * (1.0 - n[0]) / rho
+        .zip(&sums)
+        .map(|(&e, &(_, n))| {
+            if n > 0.0 {
+                2.0 * p / (1.0 - p) * e / n
             } else {
                 0.0
             }
@@ -120,8 +134,7 @@ fn main() -> Result<()> {
         big_g[i] = big_g[i - 1] + 0.5 * (slope + new_slope) * dy;
         slope = new_slope;
     }
-    let weighted: Vec<(f64, f64)> = profile.clone();
-    let inv_nu = fit_three(&weighted, |y| big_g[((y / dy).round() as usize) - 1]);
+    let inv_nu = fit_three(&profile, |y| big_g[((y / dy).round() as usize) - 1]);
     let nu_local = 1.0 / inv_nu;
     let theory = fhp1_viscosity(d);
     let umax = profile.iter().map(|&(_, u)| u).fold(f64::MIN, f64::max);

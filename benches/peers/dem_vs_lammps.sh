@@ -28,8 +28,10 @@ else
 fi
 out=$(mktemp)
 cargo bench --bench dem -- dem_box3d_20000/cpu 2>/dev/null | tee "$out" >/dev/null
-# criterion prints "thrpt: [low mid high]" in Melem/s (1 elem = 1 particle-step).
-rates=$(awk '/thrpt:/ {print $4 * 1e6}' "$out")
+# criterion prints "thrpt: [low unit mid unit high unit]" (1 elem = 1 particle-step); the
+# "change" block below it also has a "thrpt:" line, in percent, which is skipped.
+rates=$(awk '/thrpt:/ && /elem\/s/ {
+  m = ($5 ~ /^G/) ? 1e9 : ($5 ~ /^M/) ? 1e6 : ($5 ~ /^K/) ? 1e3 : 1; print $4 * m }' "$out")
 D1=$(echo "$rates" | sed -n 1p)
 D2=$(echo "$rates" | sed -n 2p)
 rm -f "$out"

@@ -1,6 +1,9 @@
 // Wraps every position, finds its cell and counts particles per cell.
 // status[0]: number of bad particles (NaN, or outside a closed face without clamping);
 // status[1]: the smallest bad particle index.
+// status[2]: number of cells holding more than MAX_PER_CELL particles (refused: the per-cell
+// loops were measured to go wrong beyond 65536 particles in one cell on lavapipe).
+override MAX_PER_CELL: u32 = 65536u;
 @group(0) @binding(0) var<uniform> grid: NbGrid;
 @group(0) @binding(1) var<storage, read> positions: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read_write> wrapped: array<vec4<f32>>;
@@ -33,7 +36,11 @@ fn nb_assign(
         atomicMin(&status[1], i);
     }
     let c = nb_cell_index(grid, nb_cell_coord(grid, t));
-    wrapped[i] = vec4<f32>(t, p.w);
+    // A rejected particle keeps its raw input, so the host can name the bad coordinate.
+    wrapped[i] = select(vec4<f32>(t, p.w), p, bad);
     cell_of[i] = c;
-    atomicAdd(&counts[c], 1u);
+    let before = atomicAdd(&counts[c], 1u);
+    if (before == MAX_PER_CELL) {
+        atomicAdd(&status[2], 1u);
+    }
 }

@@ -20,5 +20,6 @@ fn nb_clear(
     if (i == 0u) {
         status[0] = 0u;
         status[1] = 0xffffffffu;
+        status[2] = 0u;
     }
 }

@@ -8,8 +8,11 @@ override HALF: bool = false;
 @group(0) @binding(3) var<storage, read> sorted_pos: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read_write> offsets: array<u32>;
 @group(0) @binding(5) var<storage, read_write> neighbors: array<u32>;
+// Count pass only: the total number of entries as a 64-bit number [low, high] (cleared by
+// the host before the pass), so a total beyond u32 is detected instead of wrapping.
+@group(0) @binding(6) var<storage, read_write> total: array<atomic<u32>>;
 
-fn nb_list_particle(rank: u32, fill: bool) {
+fn nb_list_particle(rank: u32, fill: bool) -> u32 {
     let i = sorted_ids[rank];
     let ti = sorted_pos[rank].xyz;
     let c = nb_cell_coord(grid, ti);
@@ -46,6 +49,7 @@ fn nb_list_particle(rank: u32, fill: bool) {
     if (!fill) {
         offsets[i] = count;
     }
+    return count;
 }
 
 @compute @workgroup_size(64)
@@ -61,7 +65,13 @@ fn nb_list_count(
     if (rank >= grid.n_particles) {
         return;
     }
-    nb_list_particle(rank, false);
+    let count = nb_list_particle(rank, false);
+    if (count > 0u) {
+        let old = atomicAdd(&total[0], count);
+        if (old + count < old) {
+            atomicAdd(&total[1], 1u);
+        }
+    }
 }
 
 @compute @workgroup_size(64)
@@ -74,5 +84,5 @@ fn nb_list_fill(
     if (rank >= grid.n_particles) {
         return;
     }
-    nb_list_particle(rank, true);
+    _ = nb_list_particle(rank, true);
 }

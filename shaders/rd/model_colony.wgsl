@@ -15,3 +15,8 @@ fn model_update(dt: real, ih2: real) {
     put(0u, bc + ((real(0.5) * dt * ih2) * flux + dt * r));
     put(1u, nc + ((dt * ih2) * lap_n - dt * r));
 }
+
+// Effective diffusivity at the current cell: max(d b n, 1) (b's kappa; n diffuses with D = 1).
+fn model_diffusivity() -> real {
+    return max(ld(2u, 0, 0) * ld(0u, 0, 0) * ld(1u, 0, 0), real(1.0));
+}

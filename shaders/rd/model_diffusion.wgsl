@@ -6,3 +6,12 @@ fn model_update(dt: real, ih2: real) {
         put(s, c + (mp(s) * dt * ih2) * lap);
     }
 }
+
+// Effective diffusivity at the current cell: the largest D_s (constant).
+fn model_diffusivity() -> real {
+    var d = real(0.0);
+    for (var s = 0u; s < NS; s++) {
+        d = max(d, mp(s));
+    }
+    return d;
+}

@@ -8,3 +8,8 @@ fn model_update(dt: real, ih2: real) {
     put(0u, uc + ((mp(0u) * dt * ih2) * lu + dt * (mp(2u) * (real(1.0) - uc) - uvv)));
     put(1u, vc + ((mp(1u) * dt * ih2) * lv + dt * (uvv - mp(3u) * vc)));
 }
+
+// Effective diffusivity at the current cell: max(Du, Dv) (constant).
+fn model_diffusivity() -> real {
+    return max(mp(0u), mp(1u));
+}

@@ -1,14 +1,21 @@
-//! CPU backend: Verlet list (from `neighbor`'s sorted cells) with a rayon gather per particle.
+//! CPU backend: particles sorted by cell at every list rebuild, a half Verlet list (each
+//! pair evaluated once, Newton's third law) in fixed blocks of consecutive particles, rayon
+//! over the blocks (on the calling thread below [`PARALLEL_MIN`] particles).
 //!
-//! Every particle sums its own contact forces in a fixed neighbour order (a full list), so
-//! the result is bit-for-bit independent of the number of threads, with no atomics.
+//! Per velocity Verlet step two passes over the blocks: the force pass (each block sums the
+//! forces on its own particles and queues the reactions it owes to later blocks, per target
+//! block), then [`CpuEngine::finish`], which adds the queued reactions in block order, turns
+//! forces into accelerations, closes the step with the half kick and opens the next one
+//! (half kick, drift, wrap, rebuild check). Block boundaries depend only on the particle
+//! count, so the result is bit-for-bit independent of the number of threads, with no
+//! atomics and no locks.
 
+use multiversion::multiversion;
 use rayon::prelude::*;
-
-use neighbor::{CellGrid, ListKind, OutOfBox, VerletList};
 
 use backend::Result;
 
+use crate::pairs::{Block, CellBins, PARALLEL_MIN, block_size, make_blocks};
 use crate::prepared::Prepared;
 use crate::real::Real;
 use crate::{Integrator, State, pair_index};
@@ -43,14 +50,21 @@ struct WallT<T> {
     vibrating: bool,
 }
 
-/// Read-only particle data used by the force loop.
-struct Body<T> {
+/// Per-particle data in sorted order (permuted at every list rebuild).
+struct Particles<T, const D: usize> {
+    pos: Vec<[T; D]>,
+    vel: Vec<[T; D]>,
+    acc: Vec<[T; D]>,
+    /// Velocity Verlet: predicted velocity at the force time. Position Verlet: last displacement.
+    aux: Vec<[T; D]>,
     radius: Vec<T>,
     mass: Vec<T>,
+    inv_mass: Vec<T>,
     species: Vec<u32>,
-    n_species: usize,
-    coeff: Vec<Coeff<T>>,
-    walls: Vec<WallT<T>>,
+    /// Scene index of each sorted slot.
+    id: Vec<u32>,
+    /// Positions at the last list build.
+    reference: Vec<[T; D]>,
 }
 
 /// The CPU engine for dimension `D` and precision `T`.
@@ -58,15 +72,46 @@ pub(crate) struct CpuEngine<const D: usize, T: Real> {
     prep: Prepared,
     time: f64,
     started: bool,
-    pos: Vec<[T; D]>,
-    vel: Vec<[T; D]>,
-    acc: Vec<[T; D]>,
-    /// Velocity Verlet: predicted velocity at the force time. Position Verlet: last displacement.
-    aux: Vec<[T; D]>,
-    body: Body<T>,
-    list: VerletList<D>,
-    pos64: Vec<[f64; D]>,
+    p: Particles<T, D>,
+    n_species: usize,
+    coeff: Vec<Coeff<T>>,
+    walls: Vec<WallT<T>>,
+    bins: CellBins<D>,
+    blocks: Vec<Block<T, D>>,
+    block: usize,
+    /// Whether the passes run on the rayon pool ([`PARALLEL_MIN`] particles or more);
+    /// smaller systems run on the calling thread, with the same blocks and the same bits.
+    parallel: bool,
     gravity: [T; D],
+    /// Rebuild when a particle moved farther than this squared distance since the build.
+    rebuild_dist2: f64,
+    periodic: [bool; D],
+    len: [T; D],
+    half: [T; D],
+    /// Square of twice the largest radius, in `T` (no pair `r_i + r_j` exceeds it).
+    cut2: T,
+}
+
+/// Read-only inputs of the force pass.
+struct ForceInput<'a, T, const D: usize> {
+    pos: &'a [[T; D]],
+    vel: &'a [[T; D]],
+    radius: &'a [T],
+    mass: &'a [T],
+    species: &'a [u32],
+    n_species: usize,
+    coeff: &'a [Coeff<T>],
+    walls: &'a [WallT<T>],
+    gravity: [T; D],
+    zw: T,
+    vw: T,
+    vert: usize,
+    periodic: [bool; D],
+    len: [T; D],
+    half: [T; D],
+    /// Square of the largest contact distance (twice the largest radius).
+    cut2: T,
+    block: usize,
 }
 
 #[inline(always)]
@@ -98,305 +143,600 @@ fn tangential<T: Real, const D: usize, const FRICTION: bool>(
     }
 }
 
+/// Wall forces on particle `i` added to `f`.
+#[inline(always)]
+fn wall_forces<T: Real, const D: usize, const FRICTION: bool>(
+    inp: &ForceInput<'_, T, D>,
+    i: usize,
+    f: &mut [T; D],
+) {
+    let (pos, v, m, r) = (&inp.pos[i], &inp.vel[i], inp.mass[i], inp.radius[i]);
+    for w in inp.walls {
+        let mut n = [T::ZERO; D];
+        let delta;
+        let mut wv = [T::ZERO; D];
+        if w.cylinder {
+            let dx = pos[0] - w.center[0];
+            let dy = pos[1] - w.center[1];
+            let rho = (dx * dx + dy * dy).sqrt();
+            delta = rho + r - w.radius;
+            if delta <= T::ZERO || rho <= T::ZERO {
+                continue;
+            }
+            n[0] = -(dx / rho);
+            n[1] = -(dy / rho);
+        } else {
+            let mut h = -w.offset;
+            for d in 0..D {
+                n[d] = w.normal[d];
+                h += n[d] * pos[d];
+            }
+            if w.vibrating {
+                h = h - inp.zw * n[inp.vert];
+            }
+            delta = r - h;
+            if delta <= T::ZERO {
+                continue;
+            }
+        }
+        if w.vibrating {
+            wv[inp.vert] = inp.vw;
+        }
+        let mut vrel = [T::ZERO; D];
+        let mut vn = T::ZERO;
+        for d in 0..D {
+            vrel[d] = v[d] - wv[d];
+            vn += vrel[d] * n[d];
+        }
+        let fnorm = m * (w.coeff.kappa * delta - w.coeff.two_b * vn);
+        for d in 0..D {
+            f[d] += fnorm * n[d];
+        }
+        tangential::<T, D, FRICTION>(f, n, vn, vrel, fnorm, m, &w.coeff);
+    }
+}
+
+/// Forces on the particles of block `b` into `f` (its slice of the force array): gravity,
+/// walls and every pair of its half list; reactions on later blocks go to `b.ghosts`.
+fn block_forces<T: Real, const D: usize, const FRICTION: bool>(
+    inp: &ForceInput<'_, T, D>,
+    b: &mut Block<T, D>,
+    f: &mut [[T; D]],
+) {
+    for g in b.ghosts.iter_mut() {
+        g.clear();
+    }
+    f.fill([T::ZERO; D]);
+    let (pos, vel, radius, mass) = (inp.pos, inp.vel, inp.radius, inp.mass);
+    for k in 0..f.len() {
+        let i = b.start + k;
+        // Reactions already received from earlier particles of this block.
+        let mut fi = f[k];
+        let m = mass[i];
+        for (c, g) in fi.iter_mut().zip(inp.gravity) {
+            *c += g * m;
+        }
+        wall_forces::<T, D, FRICTION>(inp, i, &mut fi);
+        let (xi, vi, r) = (pos[i], vel[i], radius[i]);
+        for &j in &b.idx[b.offsets[k] as usize..b.offsets[k + 1] as usize] {
+            let j = j as usize;
+            // Minimum-image separation (positions are wrapped into the box).
+            let mut sep = [T::ZERO; D];
+            let mut r2 = T::ZERO;
+            for d in 0..D {
+                let mut s = xi[d] - pos[j][d];
+                if inp.periodic[d] {
+                    if s > inp.half[d] {
+                        s = s - inp.len[d];
+                    } else if s < -inp.half[d] {
+                        s += inp.len[d];
+                    }
+                }
+                sep[d] = s;
+                r2 += s * s;
+            }
+            // Most list entries are not in contact: test against the largest contact
+            // distance before loading the partner's radius.
+            if r2 >= inp.cut2 {
+                continue;
+            }
+            let rsum = r + radius[j];
+            if r2 >= rsum * rsum {
+                continue;
+            }
+            let dist = r2.sqrt();
+            let delta = rsum - dist;
+            let inv = T::of(1.0) / dist;
+            let mut n = [T::ZERO; D];
+            let mut vrel = [T::ZERO; D];
+            let mut vn = T::ZERO;
+            for d in 0..D {
+                n[d] = sep[d] * inv;
+                vrel[d] = vi[d] - vel[j][d];
+                vn += vrel[d] * n[d];
+            }
+            let mj = mass[j];
+            let mij = m * mj / (m + mj);
+            let c = &inp.coeff[pair_index(inp.species[i], inp.species[j], inp.n_species)];
+            let fnorm = mij * (c.kappa * delta - c.two_b * vn);
+            let mut fp = [T::ZERO; D];
+            for d in 0..D {
+                fp[d] = fnorm * n[d];
+            }
+            tangential::<T, D, FRICTION>(&mut fp, n, vn, vrel, fnorm, mij, c);
+            for d in 0..D {
+                fi[d] += fp[d];
+            }
+            if j < b.end {
+                let fj = &mut f[j - b.start];
+                for d in 0..D {
+                    fj[d] = fj[d] - fp[d];
+                }
+            } else {
+                b.ghosts[j / inp.block].push((j as u32, fp));
+            }
+        }
+        f[k] = fi;
+    }
+}
+
+/// One block's slices of accelerations, velocities, positions, `aux` and reference
+/// positions, as the drift passes receive them.
+type Chunks<'a, T, const D: usize> = (
+    (
+        ((&'a mut [[T; D]], &'a mut [[T; D]]), &'a mut [[T; D]]),
+        &'a mut [[T; D]],
+    ),
+    &'a [[T; D]],
+);
+
+/// Reorders `v` so that slot `k` holds the element at `order[k]`.
+fn permute<X: Copy + Send + Sync>(v: &mut Vec<X>, order: &[u32], parallel: bool) {
+    let sorted: Vec<X> = if parallel {
+        order.par_iter().map(|&o| v[o as usize]).collect()
+    } else {
+        order.iter().map(|&o| v[o as usize]).collect()
+    };
+    *v = sorted;
+}
+
 impl<const D: usize, T: Real> CpuEngine<D, T> {
     pub fn new(prep: Prepared) -> Result<Self> {
         let n = prep.n;
         let cv = |a: &[f64; 3]| -> [T; D] { std::array::from_fn(|d| T::of(a[d])) };
         let lo: [f64; D] = std::array::from_fn(|d| prep.lo[d]);
         let len: [f64; D] = std::array::from_fn(|d| prep.len[d]);
-        let per: [bool; D] = std::array::from_fn(|d| prep.periodic[d]);
-        let grid = CellGrid::new(lo, len, per, prep.cutoff)?.with_out_of_box(OutOfBox::Clamp);
-        let list = VerletList::new(&grid, prep.skin, ListKind::Full)?;
+        let periodic: [bool; D] = std::array::from_fn(|d| prep.periodic[d]);
+        let bins = CellBins::new(lo, len, periodic, prep.cutoff + prep.skin, n)?;
         let mut gravity = [T::ZERO; D];
         gravity[prep.vertical] = T::of(-prep.gravity);
-        let body = Body {
-            radius: prep.radius.iter().map(|&r| T::of(r)).collect(),
-            mass: prep.mass.iter().map(|&m| T::of(m)).collect(),
-            species: prep.species.clone(),
-            n_species: prep.n_species,
-            coeff: prep.coeff.iter().map(Coeff::of).collect(),
-            walls: prep
-                .walls
-                .iter()
-                .map(|w| WallT {
-                    cylinder: w.cylinder,
-                    normal: w.normal.map(T::of),
-                    offset: T::of(w.offset),
-                    center: w.center.map(T::of),
-                    radius: T::of(w.radius),
-                    coeff: Coeff::of(&w.coeff),
-                    vibrating: w.vibrating,
-                })
-                .collect(),
-        };
-        let mut e = Self {
+        let p = Particles {
             pos: prep.positions.iter().map(cv).collect(),
             vel: prep.velocities.iter().map(cv).collect(),
             acc: vec![[T::ZERO; D]; n],
             aux: vec![[T::ZERO; D]; n],
-            body,
-            list,
-            // Only the f32 engine needs an f64 copy of the positions for the list.
-            pos64: if std::any::TypeId::of::<T>() == std::any::TypeId::of::<f64>() {
-                Vec::new()
-            } else {
-                vec![[0.0; D]; n]
-            },
+            radius: prep.radius.iter().map(|&r| T::of(r)).collect(),
+            mass: prep.mass.iter().map(|&m| T::of(m)).collect(),
+            inv_mass: prep.mass.iter().map(|&m| T::of(1.0 / m)).collect(),
+            species: prep.species.clone(),
+            id: (0..n as u32).collect(),
+            reference: Vec::new(),
+        };
+        let r_max = p
+            .radius
+            .iter()
+            .fold(T::ZERO, |m, &r| if r > m { r } else { m });
+        let walls = prep
+            .walls
+            .iter()
+            .map(|w| WallT {
+                cylinder: w.cylinder,
+                normal: w.normal.map(T::of),
+                offset: T::of(w.offset),
+                center: w.center.map(T::of),
+                radius: T::of(w.radius),
+                coeff: Coeff::of(&w.coeff),
+                vibrating: w.vibrating,
+            })
+            .collect();
+        let mut e = Self {
+            p,
+            n_species: prep.n_species,
+            coeff: prep.coeff.iter().map(Coeff::of).collect(),
+            walls,
+            bins,
+            blocks: make_blocks(n),
+            block: block_size(n),
+            parallel: n >= PARALLEL_MIN,
             gravity,
+            rebuild_dist2: 0.25 * prep.skin * prep.skin,
+            periodic,
+            len: len.map(T::of),
+            half: len.map(|l| T::of(0.5 * l)),
+            cut2: (r_max + r_max) * (r_max + r_max),
             prep,
             time: 0.0,
             started: false,
         };
-        e.wrap();
-        e.refresh_list()?;
+        let per = e.periodic;
+        let (lo, len) = (lo.map(T::of), e.len);
+        e.p.pos.par_iter_mut().for_each(|x| wrap(x, per, lo, len));
+        e.rebuild();
         Ok(e)
     }
 
-    fn wrap(&mut self) {
-        let p = &self.prep;
-        let lo: [T; D] = std::array::from_fn(|d| T::of(p.lo[d]));
-        let len: [T; D] = std::array::from_fn(|d| T::of(p.len[d]));
-        let per: [bool; D] = std::array::from_fn(|d| p.periodic[d]);
-        if !per.iter().any(|&b| b) {
-            return;
-        }
-        self.pos.par_iter_mut().with_min_len(4096).for_each(|x| {
-            for d in 0..D {
-                if per[d] {
-                    if x[d] < lo[d] {
-                        x[d] += len[d];
-                    } else if x[d] >= lo[d] + len[d] {
-                        x[d] = x[d] - len[d];
-                    }
-                }
-            }
-        });
+    /// Sorts the particles by cell and rebuilds the half lists.
+    fn rebuild(&mut self) {
+        let order = self.bins.sort(&self.p.pos);
+        let p = &mut self.p;
+        let par = self.parallel;
+        permute(&mut p.pos, &order, par);
+        permute(&mut p.vel, &order, par);
+        permute(&mut p.acc, &order, par);
+        permute(&mut p.aux, &order, par);
+        permute(&mut p.radius, &order, par);
+        permute(&mut p.mass, &order, par);
+        permute(&mut p.inv_mass, &order, par);
+        permute(&mut p.species, &order, par);
+        permute(&mut p.id, &order, par);
+        p.reference.clone_from(&p.pos);
+        self.bins.build_lists(&p.pos, &mut self.blocks, par);
     }
 
-    fn refresh_list(&mut self) -> Result<()> {
-        // In f64 the list reads the positions directly; in f32 through an f64 copy.
-        let any: &dyn std::any::Any = &self.pos;
-        let pos64: &[[f64; D]] = match any.downcast_ref::<Vec<[f64; D]>>() {
-            Some(p) => p,
-            None => {
-                self.pos64
-                    .par_iter_mut()
-                    .zip(self.pos.par_iter())
-                    .with_min_len(4096)
-                    .for_each(|(a, b)| *a = std::array::from_fn(|d| b[d].to_f64()));
-                &self.pos64
-            }
-        };
-        // The force loop reads our own (wrapped) positions, so the list only needs a
-        // rebuild check, not its stored copy of the positions.
-        if self.list.needs_rebuild(pos64)? {
-            self.list.build(pos64)?;
-        }
-        Ok(())
-    }
-
-    /// Accelerations at time `t` from positions `self.pos` and velocities `v` into `self.acc`.
-    fn accelerations(&mut self, t: f64, use_aux: bool) -> Result<()> {
+    /// Forces at time `t` from the positions and `self.p.aux` (predicted velocities) or
+    /// `self.p.vel` into `self.p.acc` (per block; reactions owed to later blocks queued);
+    /// [`finish`](Self::finish) completes them.
+    fn forces(&mut self, t: f64, use_aux: bool) {
         if self.prep.friction {
-            self.accelerations_variant::<true>(t, use_aux)
+            self.forces_variant::<true>(t, use_aux);
         } else {
-            self.accelerations_variant::<false>(t, use_aux)
+            self.forces_variant::<false>(t, use_aux);
         }
     }
 
-    fn accelerations_variant<const FRICTION: bool>(&mut self, t: f64, use_aux: bool) -> Result<()> {
+    fn forces_variant<const FRICTION: bool>(&mut self, t: f64, use_aux: bool) {
         let (zw, vw) = self.prep.wall_motion(t);
-        let (zw, vw) = (T::of(zw), T::of(vw));
-        let vert = self.prep.vertical;
-        let body = &self.body;
-        let pos = &self.pos;
-        let v: &[[T; D]] = if use_aux { &self.aux } else { &self.vel };
-        let g = self.gravity;
-        let list = &self.list;
-        let per: [bool; D] = std::array::from_fn(|d| self.prep.periodic[d]);
-        let len: [T; D] = std::array::from_fn(|d| T::of(self.prep.len[d]));
-        let half: [T; D] = std::array::from_fn(|d| T::of(0.5 * self.prep.len[d]));
-        // One pass per particle: gravity, walls, then the contact forces gathered over its
-        // full neighbour list in a fixed order (each particle writes only its own
-        // acceleration: no atomics, results independent of the thread count).
-        self.acc
-            .par_iter_mut()
-            .enumerate()
-            .with_min_len(256)
-            .for_each(|(i, f)| {
-                let m = body.mass[i];
-                for d in 0..D {
-                    f[d] = g[d] * m;
-                }
-                let r = body.radius[i];
-                for w in &body.walls {
-                    let mut n = [T::ZERO; D];
-                    let delta;
-                    let mut wv = [T::ZERO; D];
-                    if w.cylinder {
-                        let dx = pos[i][0] - w.center[0];
-                        let dy = pos[i][1] - w.center[1];
-                        let rho = (dx * dx + dy * dy).sqrt();
-                        delta = rho + r - w.radius;
-                        if delta <= T::ZERO || rho <= T::ZERO {
-                            continue;
-                        }
-                        n[0] = -(dx / rho);
-                        n[1] = -(dy / rho);
-                    } else {
-                        let mut h = -w.offset;
-                        for d in 0..D {
-                            n[d] = w.normal[d];
-                            h += n[d] * pos[i][d];
-                        }
-                        if w.vibrating {
-                            h = h - zw * n[vert];
-                        }
-                        delta = r - h;
-                        if delta <= T::ZERO {
-                            continue;
-                        }
-                    }
-                    if w.vibrating {
-                        wv[vert] = vw;
-                    }
-                    let mut vrel = [T::ZERO; D];
-                    let mut vn = T::ZERO;
-                    for d in 0..D {
-                        vrel[d] = v[i][d] - wv[d];
-                        vn += vrel[d] * n[d];
-                    }
-                    let fnorm = m * (w.coeff.kappa * delta - w.coeff.two_b * vn);
-                    for d in 0..D {
-                        f[d] += fnorm * n[d];
-                    }
-                    tangential::<T, D, FRICTION>(f, n, vn, vrel, fnorm, m, &w.coeff);
-                }
-                for &j in list.list_of(i) {
-                    let j = j as usize;
-                    let rsum = r + body.radius[j];
-                    // Minimum-image separation (positions are wrapped into the box).
-                    let mut sep = [T::ZERO; D];
-                    let mut r2 = T::ZERO;
-                    for d in 0..D {
-                        let mut s = pos[i][d] - pos[j][d];
-                        if per[d] {
-                            if s > half[d] {
-                                s = s - len[d];
-                            } else if s < -half[d] {
-                                s += len[d];
-                            }
-                        }
-                        sep[d] = s;
-                        r2 += s * s;
-                    }
-                    if r2 >= rsum * rsum {
-                        continue;
-                    }
-                    let dist = r2.sqrt();
-                    let delta = rsum - dist;
-                    let inv = T::of(1.0) / dist;
-                    let mut n = [T::ZERO; D];
-                    let mut vrel = [T::ZERO; D];
-                    let mut vn = T::ZERO;
-                    for d in 0..D {
-                        n[d] = sep[d] * inv;
-                        vrel[d] = v[i][d] - v[j][d];
-                        vn += vrel[d] * n[d];
-                    }
-                    let mj = body.mass[j];
-                    let mij = m * mj / (m + mj);
-                    let c =
-                        &body.coeff[pair_index(body.species[i], body.species[j], body.n_species)];
-                    let fnorm = mij * (c.kappa * delta - c.two_b * vn);
-                    for d in 0..D {
-                        f[d] += fnorm * n[d];
-                    }
-                    tangential::<T, D, FRICTION>(f, n, vn, vrel, fnorm, mij, c);
-                }
-                let inv = T::of(1.0) / m;
-                for c in f.iter_mut() {
-                    *c = *c * inv;
-                }
-            });
-        Ok(())
+        let p = &mut self.p;
+        let bs = self.block;
+        let inp = ForceInput {
+            pos: &p.pos,
+            vel: if use_aux { &p.aux } else { &p.vel },
+            radius: &p.radius,
+            mass: &p.mass,
+            species: &p.species,
+            n_species: self.n_species,
+            coeff: &self.coeff,
+            walls: &self.walls,
+            gravity: self.gravity,
+            zw: T::of(zw),
+            vw: T::of(vw),
+            vert: self.prep.vertical,
+            periodic: self.periodic,
+            len: self.len,
+            half: self.half,
+            cut2: self.cut2,
+            block: bs,
+        };
+        let force = |(b, f): (&mut Block<T, D>, &mut [[T; D]])| {
+            block_forces::<T, D, FRICTION>(&inp, b, f);
+        };
+        if self.parallel {
+            self.blocks
+                .par_iter_mut()
+                .zip(p.acc.par_chunks_mut(bs))
+                .for_each(force);
+        } else {
+            self.blocks
+                .iter_mut()
+                .zip(p.acc.chunks_mut(bs))
+                .for_each(force);
+        }
     }
 
-    fn step_velocity_verlet(&mut self) -> Result<()> {
-        if !self.started {
-            self.aux.clone_from(&self.vel);
-            self.accelerations(self.time, true)?;
-            self.started = true;
-        }
+    /// Completes the force pass per block: adds the reactions owed by earlier blocks (in
+    /// block order), turns forces into accelerations, and with `kick` applies the closing
+    /// half kick `v += a dt / 2`. With `drift` it goes straight on with the next velocity
+    /// Verlet step's opening half kick, drift and wrap (the same arithmetic as
+    /// [`drift_velocity_verlet`], so the same bits) and returns the largest squared
+    /// displacement since the list build; otherwise 0.
+    fn finish(&mut self, kick: bool, drift: bool) -> f64 {
+        let bs = self.block;
         let dt = T::of(self.prep.dt);
         let h = T::of(0.5 * self.prep.dt);
-        self.pos
-            .par_iter_mut()
-            .zip(self.vel.par_iter_mut())
-            .zip(self.aux.par_iter_mut())
-            .zip(self.acc.par_iter())
-            .with_min_len(4096)
-            .for_each(|(((x, v), vp), a)| {
-                for d in 0..D {
-                    let vh = v[d] + a[d] * h;
-                    x[d] += vh * dt;
-                    v[d] = vh;
-                    vp[d] = vh + a[d] * h;
+        let (per, len, half) = (self.periodic, self.len, self.half);
+        let lo: [T; D] = std::array::from_fn(|d| T::of(self.prep.lo[d]));
+        let blocks = &self.blocks;
+        let p = &mut self.p;
+        let inv_mass = &p.inv_mass;
+        let body = |(t, ((((f, v), x), vp), r)): (usize, Chunks<'_, T, D>)| -> f64 {
+            let s = t * bs;
+            for b in &blocks[..t] {
+                for &(j, fp) in &b.ghosts[t] {
+                    let fj = &mut f[j as usize - s];
+                    for d in 0..D {
+                        fj[d] = fj[d] - fp[d];
+                    }
                 }
-            });
-        self.wrap();
-        self.time += self.prep.dt;
-        self.refresh_list()?;
-        self.accelerations(self.time, true)?;
-        self.vel
-            .par_iter_mut()
-            .zip(self.acc.par_iter())
-            .with_min_len(4096)
-            .for_each(|(v, a)| {
-                for d in 0..D {
-                    v[d] += a[d] * h;
+            }
+            for (k, (a, v)) in f.iter_mut().zip(v.iter_mut()).enumerate() {
+                let im = inv_mass[s + k];
+                for c in a.iter_mut() {
+                    *c = *c * im;
                 }
-            });
-        Ok(())
+                if kick {
+                    for d in 0..D {
+                        v[d] += a[d] * h;
+                    }
+                }
+            }
+            if drift {
+                drift_velocity_verlet(
+                    x.as_flattened_mut(),
+                    v.as_flattened_mut(),
+                    vp.as_flattened_mut(),
+                    f.as_flattened(),
+                    h,
+                    dt,
+                );
+                wrap_and_measure(x, r, per, lo, len, half).to_f64()
+            } else {
+                0.0
+            }
+        };
+        if self.parallel {
+            p.acc
+                .par_chunks_mut(bs)
+                .zip(p.vel.par_chunks_mut(bs))
+                .zip(p.pos.par_chunks_mut(bs))
+                .zip(p.aux.par_chunks_mut(bs))
+                .zip(p.reference.par_chunks(bs))
+                .enumerate()
+                .map(body)
+                .reduce(|| 0.0, f64::max)
+        } else {
+            p.acc
+                .chunks_mut(bs)
+                .zip(p.vel.chunks_mut(bs))
+                .zip(p.pos.chunks_mut(bs))
+                .zip(p.aux.chunks_mut(bs))
+                .zip(p.reference.chunks(bs))
+                .enumerate()
+                .map(body)
+                .fold(0.0, f64::max)
+        }
     }
 
-    fn step_position_verlet(&mut self) -> Result<()> {
-        self.accelerations(self.time, false)?;
+    /// Rebuilds the lists when the largest displacement `max2` (squared) exceeds skin / 2.
+    fn after_drift(&mut self, max2: f64) {
+        if max2 > self.rebuild_dist2 {
+            self.rebuild();
+        }
+    }
+
+    /// The opening half kick, drift and wrap of a velocity Verlet step on its own (the
+    /// first step of a call; later ones are fused into [`finish`](Self::finish)); returns
+    /// the largest squared displacement since the list build.
+    fn drift_velocity_verlet(&mut self) -> f64 {
+        let dt = T::of(self.prep.dt);
+        let h = T::of(0.5 * self.prep.dt);
+        let (per, len, half) = (self.periodic, self.len, self.half);
+        let lo: [T; D] = std::array::from_fn(|d| T::of(self.prep.lo[d]));
+        let bs = self.block;
+        let p = &mut self.p;
+        let drift = |((((a, v), x), vp), r): Chunks<'_, T, D>| {
+            drift_velocity_verlet(
+                x.as_flattened_mut(),
+                v.as_flattened_mut(),
+                vp.as_flattened_mut(),
+                a.as_flattened(),
+                h,
+                dt,
+            );
+            wrap_and_measure(x, r, per, lo, len, half).to_f64()
+        };
+        if self.parallel {
+            p.acc
+                .par_chunks_mut(bs)
+                .zip(p.vel.par_chunks_mut(bs))
+                .zip(p.pos.par_chunks_mut(bs))
+                .zip(p.aux.par_chunks_mut(bs))
+                .zip(p.reference.par_chunks(bs))
+                .map(drift)
+                .reduce(|| 0.0, f64::max)
+        } else {
+            p.acc
+                .chunks_mut(bs)
+                .zip(p.vel.chunks_mut(bs))
+                .zip(p.pos.chunks_mut(bs))
+                .zip(p.aux.chunks_mut(bs))
+                .zip(p.reference.chunks(bs))
+                .map(drift)
+                .fold(0.0, f64::max)
+        }
+    }
+
+    /// `steps` velocity Verlet steps: per step one force pass and one pass that finishes
+    /// the forces, closes this step and (except after the last) opens the next.
+    fn advance_velocity_verlet(&mut self, steps: u32) {
+        if steps == 0 {
+            return;
+        }
+        if !self.started {
+            self.p.aux.clone_from(&self.p.vel);
+            self.forces(self.time, true);
+            self.finish(false, false);
+            self.started = true;
+        }
+        let mut max2 = self.drift_velocity_verlet();
+        for s in 0..steps {
+            self.time += self.prep.dt;
+            self.after_drift(max2);
+            self.forces(self.time, true);
+            max2 = self.finish(true, s + 1 < steps);
+        }
+    }
+
+    fn step_position_verlet(&mut self) {
+        self.forces(self.time, false);
+        self.finish(false, false);
         let dt = T::of(self.prep.dt);
         let h = T::of(0.5 * self.prep.dt);
         let inv_dt = T::of(1.0 / self.prep.dt);
         let first = !self.started;
-        self.pos
-            .par_iter_mut()
-            .zip(self.vel.par_iter_mut())
-            .zip(self.aux.par_iter_mut())
-            .zip(self.acc.par_iter())
-            .with_min_len(4096)
-            .for_each(|(((x, v), dx), a)| {
-                for d in 0..D {
-                    let step = if first {
-                        v[d] * dt + a[d] * h * dt
-                    } else {
-                        dx[d] + a[d] * dt * dt
-                    };
-                    dx[d] = step;
-                    x[d] += step;
-                    v[d] = step * inv_dt + a[d] * h;
-                }
-            });
+        let (per, len, half) = (self.periodic, self.len, self.half);
+        let lo: [T; D] = std::array::from_fn(|d| T::of(self.prep.lo[d]));
+        let bs = self.block;
+        let p = &mut self.p;
+        let drift = |((((a, v), x), dx), r): Chunks<'_, T, D>| {
+            drift_position_verlet(
+                x.as_flattened_mut(),
+                v.as_flattened_mut(),
+                dx.as_flattened_mut(),
+                a.as_flattened(),
+                [h, dt, inv_dt],
+                first,
+            );
+            wrap_and_measure(x, r, per, lo, len, half).to_f64()
+        };
+        let max2 = if self.parallel {
+            p.acc
+                .par_chunks_mut(bs)
+                .zip(p.vel.par_chunks_mut(bs))
+                .zip(p.pos.par_chunks_mut(bs))
+                .zip(p.aux.par_chunks_mut(bs))
+                .zip(p.reference.par_chunks(bs))
+                .map(drift)
+                .reduce(|| 0.0, f64::max)
+        } else {
+            p.acc
+                .chunks_mut(bs)
+                .zip(p.vel.chunks_mut(bs))
+                .zip(p.pos.chunks_mut(bs))
+                .zip(p.aux.chunks_mut(bs))
+                .zip(p.reference.chunks(bs))
+                .map(drift)
+                .fold(0.0, f64::max)
+        };
         self.started = true;
-        self.wrap();
         self.time += self.prep.dt;
-        self.refresh_list()
+        self.after_drift(max2);
+    }
+}
+
+/// Velocity Verlet drift (flat component arrays): half kick, drift, and the predicted
+/// velocity `vp` at the end of the step for the damping term.
+#[multiversion(
+    targets("x86_64+avx512f+avx512vl+avx2+fma", "x86_64+avx2+fma"),
+    dispatcher = "direct"
+)]
+fn drift_velocity_verlet<T: Real>(x: &mut [T], v: &mut [T], vp: &mut [T], a: &[T], h: T, dt: T) {
+    let n = x.len().min(v.len()).min(vp.len()).min(a.len());
+    let (x, v, vp, a) = (&mut x[..n], &mut v[..n], &mut vp[..n], &a[..n]);
+    for k in 0..n {
+        let vh = v[k] + a[k] * h;
+        x[k] += vh * dt;
+        v[k] = vh;
+        vp[k] = vh + a[k] * h;
+    }
+}
+
+/// Position Verlet drift (flat component arrays): `dx` is the last displacement; `c` holds
+/// `[dt / 2, dt, 1 / dt]`.
+#[multiversion(
+    targets("x86_64+avx512f+avx512vl+avx2+fma", "x86_64+avx2+fma"),
+    dispatcher = "direct"
+)]
+fn drift_position_verlet<T: Real>(
+    x: &mut [T],
+    v: &mut [T],
+    dx: &mut [T],
+    a: &[T],
+    c: [T; 3],
+    first: bool,
+) {
+    let [h, dt, inv_dt] = c;
+    let n = x.len().min(v.len()).min(dx.len()).min(a.len());
+    let (x, v, dx, a) = (&mut x[..n], &mut v[..n], &mut dx[..n], &a[..n]);
+    for k in 0..n {
+        let step = if first {
+            v[k] * dt + a[k] * h * dt
+        } else {
+            dx[k] + a[k] * dt * dt
+        };
+        dx[k] = step;
+        x[k] += step;
+        v[k] = step * inv_dt + a[k] * h;
+    }
+}
+
+/// Wraps the periodic coordinates of `x` into `[lo, lo + len)` and returns the largest
+/// squared displacement (minimum image) from the reference positions `r`.
+#[multiversion(
+    targets("x86_64+avx512f+avx512vl+avx2+fma", "x86_64+avx2+fma"),
+    dispatcher = "direct"
+)]
+fn wrap_and_measure<T: Real, const D: usize>(
+    x: &mut [[T; D]],
+    r: &[[T; D]],
+    per: [bool; D],
+    lo: [T; D],
+    len: [T; D],
+    half: [T; D],
+) -> T {
+    let mut m2 = T::ZERO;
+    for (x, r) in x.iter_mut().zip(r) {
+        let mut s2 = T::ZERO;
+        for d in 0..D {
+            let mut c = x[d];
+            let mut s = c - r[d];
+            if per[d] {
+                c = if c < lo[d] {
+                    c + len[d]
+                } else if c >= lo[d] + len[d] {
+                    c - len[d]
+                } else {
+                    c
+                };
+                x[d] = c;
+                s = c - r[d];
+                s = if s > half[d] {
+                    s - len[d]
+                } else if s < -half[d] {
+                    s + len[d]
+                } else {
+                    s
+                };
+            }
+            s2 += s * s;
+        }
+        if s2 > m2 {
+            m2 = s2;
+        }
+    }
+    m2
+}
+
+/// Wraps the periodic coordinates of `x` into `[lo, lo + len)`.
+fn wrap<T: Real, const D: usize>(x: &mut [T; D], per: [bool; D], lo: [T; D], len: [T; D]) {
+    for d in 0..D {
+        if per[d] {
+            if x[d] < lo[d] {
+                x[d] += len[d];
+            } else if x[d] >= lo[d] + len[d] {
+                x[d] = x[d] - len[d];
+            }
+        }
     }
 }
 
 impl<const D: usize, T: Real> crate::engine::Engine for CpuEngine<D, T> {
     fn advance(&mut self, steps: u32) -> Result<()> {
-        for _ in 0..steps {
-            match self.prep.integrator {
-                Integrator::VelocityVerlet => self.step_velocity_verlet()?,
-                Integrator::PositionVerlet => self.step_position_verlet()?,
+        match self.prep.integrator {
+            Integrator::VelocityVerlet => self.advance_velocity_verlet(steps),
+            Integrator::PositionVerlet => {
+                for _ in 0..steps {
+                    self.step_position_verlet();
+                }
             }
         }
         Ok(())
@@ -410,10 +750,17 @@ impl<const D: usize, T: Real> crate::engine::Engine for CpuEngine<D, T> {
             }
             o
         };
+        let n = self.p.pos.len();
+        let mut positions = vec![[0.0; 3]; n];
+        let mut velocities = vec![[0.0; 3]; n];
+        for (k, &id) in self.p.id.iter().enumerate() {
+            positions[id as usize] = c(&self.p.pos[k]);
+            velocities[id as usize] = c(&self.p.vel[k]);
+        }
         Ok(State {
             time: self.time,
-            positions: self.pos.iter().map(c).collect(),
-            velocities: self.vel.iter().map(c).collect(),
+            positions,
+            velocities,
         })
     }
 

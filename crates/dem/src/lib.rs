@@ -34,6 +34,7 @@ mod cpu;
 mod diagnostics;
 mod engine;
 mod gpu;
+mod pairs;
 mod prepared;
 mod real;
 mod scene;

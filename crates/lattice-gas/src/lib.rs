@@ -6,7 +6,8 @@
 //! - [`RuleSet`]: FHP-I or the full conservation-law table ([`CollisionTable`] generates both).
 //! - [`Params`]: seed, periodic axes, inflow/outflow columns, body force.
 //! - Backends implementing [`backend::Simulation`] with `State = Lattice`, bit-identical for
-//!   the same seed and scene: [`LutCpu`] (one byte per site, table lookup), [`MultiSpinCpu`]
+//!   the same seed and scene: [`LutCpu`] (one byte per site, table lookup; 64 sites per
+//!   `vpermi2b` where the CPU has AVX-512 VBMI), [`MultiSpinCpu`]
 //!   (64-site bit-planes, boolean collisions, AVX-512/AVX2 dispatch) and [`GpuLattice`]
 //!   (WGSL, [`GpuLayout::BitPlanes`] or [`GpuLayout::Bytes`]); [`simulation`] picks one from
 //!   an [`Engine`].
@@ -31,6 +32,8 @@
 pub mod gpu;
 pub mod lattice;
 pub mod lut;
+#[cfg(target_arch = "x86_64")]
+mod lut_vbmi;
 pub mod multispin;
 pub mod observables;
 pub mod random;
@@ -66,10 +69,13 @@ pub enum Engine<'a> {
 }
 
 impl<'a> Engine<'a> {
-    /// The engine for a common [`Backend`]: CPU becomes multi-spin when `width` is a
-    /// multiple of 64, else the lookup table.
+    /// The engine for a common [`Backend`]. CPU: the lookup table where the CPU has
+    /// AVX-512 VBMI ([`lut::has_vbmi`]: as fast as multi-spin per step, and its
+    /// [`Simulation::state`] is a plain copy), else multi-spin when `width` is a multiple of
+    /// 64, else the lookup table.
     pub fn for_backend(backend: Backend<'a>, width: usize) -> Self {
         match backend {
+            Backend::Cpu if lut::has_vbmi() => Engine::Lut,
             Backend::Cpu if width.is_multiple_of(64) => Engine::MultiSpin,
             Backend::Cpu => Engine::Lut,
             Backend::Gpu(ctx) => Engine::Gpu(ctx),

@@ -274,6 +274,18 @@ impl Ctx<'_> {
     }
 }
 
+/// The instruction set of the multi-spin word loops on this CPU (`"avx512"`, `"avx2"` or
+/// `"baseline"`), chosen at run time by the same dispatch as the loops. The AVX-512 version
+/// needs the Ice Lake / Zen 4 feature set (`multiversion` skips it on CPUs with slow AVX-512).
+#[multiversion(targets("x86_64+avx512f+avx512bw+avx512vl", "x86_64+avx2+fma"))]
+pub fn simd_target() -> &'static str {
+    multiversion::target::match_target! {
+        "x86_64+avx512f" => "avx512",
+        "x86_64+avx2" => "avx2",
+        _ => "baseline",
+    }
+}
+
 /// Chirality words: bits of hashes `first, first + 1, ...` packed two per u64.
 #[multiversion(targets("x86_64+avx512f+avx512bw+avx512vl", "x86_64+avx2+fma"))]
 fn random_words(dst: &mut [u64], first: u32, key: u32) {
@@ -391,7 +403,7 @@ impl Simulation for MultiSpinCpu {
     }
 
     fn backend_name(&self) -> String {
-        "cpu-multispin".into()
+        format!("cpu-multispin ({})", simd_target())
     }
 }
 
@@ -430,6 +442,18 @@ mod tests {
             }
         }
         assert!(sim.block_field(0).is_err());
+    }
+
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn dispatch_follows_the_cpu_features() {
+        let t = simd_target();
+        println!("multi-spin word loops: {t}");
+        let avx2 = is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma");
+        assert_eq!(t != "baseline", avx2, "{t}");
+        if t == "avx512" {
+            assert!(is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512bw"));
+        }
     }
 
     #[test]

@@ -108,13 +108,31 @@ impl BlockField {
         )
     }
 
-    /// Writes the velocity field as a PNG: magnitude colour map with arrows.
-    pub fn write_velocity_png(&self, path: impl AsRef<Path>, title: &str) -> Result<()> {
+    /// The velocity on a grid of physically square cells, for images: a block is `b` sites
+    /// wide but only `b sqrt(3)/2` high, so columns are repeated (nearest neighbour) to
+    /// `round(nx / (sqrt(3)/2))` columns. Returns `(u_x, u_y, columns, rows)`, row-major.
+    pub fn velocity_square_cells(&self) -> (Vec<f64>, Vec<f64>, usize, usize) {
         let (ux, uy) = self.velocity();
-        let scale = (768 / self.nx.max(self.ny)).clamp(1, 32) as u32;
+        let cols = ((self.nx as f64 / ROW_SPACING).round() as usize).max(1);
+        let src: Vec<usize> = (0..cols)
+            .map(|c| (((c as f64 + 0.5) * ROW_SPACING) as usize).min(self.nx - 1))
+            .collect();
+        let resample = |u: &[f64]| -> Vec<f64> {
+            (0..self.ny)
+                .flat_map(|r| src.iter().map(move |&c| u[r * self.nx + c]))
+                .collect()
+        };
+        (resample(&ux), resample(&uy), cols, self.ny)
+    }
+
+    /// Writes the velocity field as a PNG: magnitude colour map with arrows, on physically
+    /// square cells ([`BlockField::velocity_square_cells`]).
+    pub fn write_velocity_png(&self, path: impl AsRef<Path>, title: &str) -> Result<()> {
+        let (ux, uy, cols, rows) = self.velocity_square_cells();
+        let scale = (768 / cols.max(rows)).clamp(1, 32) as u32;
         let opts =
             VectorFieldOptions::new().background(HeatmapOptions::new().upscale(scale).title(title));
-        write_vector_field(path, &ux, &uy, self.nx, self.ny, &opts)?;
+        write_vector_field(path, &ux, &uy, cols, rows, &opts)?;
         Ok(())
     }
 
@@ -230,5 +248,32 @@ mod tests {
         assert_eq!(avg.field().unwrap().velocity(), f.velocity());
         assert!(avg.add(&BlockField::from_lattice(&l, 4).unwrap()).is_err());
         assert!(BlockField::from_lattice(&l, 0).is_err());
+    }
+
+    #[test]
+    fn velocity_png_and_vti_are_written() {
+        let mut l = Lattice::new(128, 64).unwrap();
+        l.add_wall_rows();
+        l.fill_with(4, |_, _, k| if k == 0 { 0.5 } else { 0.2 })
+            .unwrap();
+        let f = BlockField::from_lattice(&l, 8).unwrap();
+        let (ux, _) = f.velocity();
+        assert!(ux.iter().sum::<f64>() > 0.0, "east-movers dominate");
+        let dir = std::env::temp_dir().join(format!("lattice_gas_obs_{}", std::process::id()));
+        let (png, vti) = (dir.join("u.png"), dir.join("u.vti"));
+        f.write_velocity_png(&png, "test").unwrap();
+        f.write_vti(&vti).unwrap();
+        let img = image::open(&png).unwrap();
+        assert!(img.width() >= 16 * 8 && img.height() >= 8 * 8);
+        // 16 x 8 blocks of 8 x 8 sites: 18 columns of physically square cells.
+        let (sx, sy, cols, rows) = f.velocity_square_cells();
+        assert_eq!((cols, rows, sx.len(), sy.len()), (18, 8, 144, 144));
+        let (ux, uy) = f.velocity();
+        assert_eq!((sx[0], sx[17], sy[17 + 18]), (ux[0], ux[15], uy[15 + 16]));
+        let text = std::fs::read_to_string(&vti).unwrap();
+        assert!(
+            text.contains("ImageData") && text.contains("velocity") && text.contains("density")
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -26,6 +26,12 @@ const LIST_WGSL: &str = include_str!("../../../shaders/neighbor/list.wgsl");
 /// assignment could exceed the cell margin ([`crate::CELL_MARGIN`]).
 pub const GPU_MAX_CELLS_PER_AXIS: usize = 4096;
 
+/// The most particles one cell of a [`GpuCellList`] may hold. A denser cell is reported by
+/// [`GpuCellList::check`] as an error (on lavapipe the per-cell loops were measured to drop
+/// particles beyond 65 536 in one cell; with cells at least the cutoff wide such a cell
+/// means a cutoff far too large for the density).
+pub const GPU_MAX_PER_CELL: usize = 65_536;
+
 static NEXT_ID: AtomicU64 = AtomicU64::new(1);
 
 /// Grid parameters as the WGSL struct `NbGrid` of [`CELLS_WGSL`] sees them (112 bytes).
@@ -139,12 +145,12 @@ pub fn positions_to_f32<const D: usize>(positions: &[[f64; D]]) -> Vec<[f32; 4]>
 /// | getter | WGSL type | content |
 /// |---|---|---|
 /// | [`GpuCellList::params`] | `var<uniform> grid: NbGrid` | grid parameters ([`GpuGridParams`]) |
-/// | [`GpuCellList::wrapped`] | `array<vec4<f32>>` | wrapped position by particle id (`w` copied from the input) |
+/// | [`GpuCellList::wrapped`] | `array<vec4<f32>>` | wrapped position by particle id (`w` copied from the input; a rejected particle keeps its raw input) |
 /// | [`GpuCellList::cell_of`] | `array<u32>` | linear cell index by particle id |
 /// | [`GpuCellList::cell_start`] | `array<u32>` | `n_cells + 1` offsets into the sorted arrays |
 /// | [`GpuCellList::sorted_ids`] | `array<u32>` | particle ids in cell order (ascending inside a cell) |
 /// | [`GpuCellList::sorted_pos`] | `array<vec4<f32>>` | wrapped positions in cell order |
-/// | [`GpuCellList::status`] | `array<u32>` | `[bad particle count, smallest bad index]` |
+/// | [`GpuCellList::status`] | `array<u32>` | `[bad particle count, smallest bad index, cells over GPU_MAX_PER_CELL]` |
 ///
 /// Prepend [`CELLS_WGSL`] to a kernel's source for `NbGrid` and the cell/shell/minimum-image
 /// helpers (its header shows the full-shell loop).
@@ -217,7 +223,7 @@ impl<const D: usize> GpuCellList<D> {
         let sorted_ids = GpuBuffer::zeroed(ctx, "neighbor sorted_ids", m)?;
         let scattered = GpuBuffer::zeroed(ctx, "neighbor scattered ids", m)?;
         let sorted_pos = GpuBuffer::zeroed(ctx, "neighbor sorted_pos", m)?;
-        let status = GpuBuffer::zeroed(ctx, "neighbor status", 2)?;
+        let status = GpuBuffer::zeroed(ctx, "neighbor status", 3)?;
         let k = kernel(ctx, CLEAR_WGSL, "nb_clear", 256, &[])?;
         let b = k.bind(
             ctx,
@@ -229,7 +235,13 @@ impl<const D: usize> GpuCellList<D> {
             ],
         )?;
         let clear = (k, b);
-        let k = kernel(ctx, ASSIGN_WGSL, "nb_assign", 256, &[])?;
+        let k = kernel(
+            ctx,
+            ASSIGN_WGSL,
+            "nb_assign",
+            256,
+            &[("MAX_PER_CELL", GPU_MAX_PER_CELL as f64)],
+        )?;
         let b = k.bind(
             ctx,
             &[
@@ -319,22 +331,50 @@ impl<const D: usize> GpuCellList<D> {
         self.check(ctx)
     }
 
-    /// Downloads the status words of the last build: an error names the first particle with
+    /// Downloads the status words of the last build: an error for a cell holding more than
+    /// [`GPU_MAX_PER_CELL`] particles, or one that names the first particle with
     /// a NaN/infinite coordinate or (without [`OutOfBox::Clamp`]) outside a closed face.
     pub fn check(&self, ctx: &GpuContext) -> Result<()> {
         let s = self.status.download(ctx)?;
-        if s[0] > 0 {
-            return Err(Error::invalid(
-                format!("position[{}]", s[1]),
-                "a non-finite coordinate or one outside a non-periodic face",
-                format!(
-                    "{} particle(s) rejected by the GPU cell list; fix the positions or opt in \
-                     to OutOfBox::Clamp for closed faces",
-                    s[0]
-                ),
-            ));
+        if s[2] > 0 {
+            return Err(Error::Unsupported(format!(
+                "{} cell(s) of the GPU cell list hold more than {GPU_MAX_PER_CELL} particles; \
+                 use a smaller cutoff (cells are at least the cutoff wide) or the CPU \
+                 SortedCells",
+                s[2]
+            )));
         }
-        Ok(())
+        if s[0] == 0 {
+            return Ok(());
+        }
+        // The assign kernel stores a rejected particle's raw input position in `wrapped`.
+        let index = s[1] as usize;
+        let raw = self.wrapped.download(ctx)?.get(index).copied();
+        let p = &self.params_value;
+        let axis = raw.and_then(|q| {
+            (0..D).find(|&d| {
+                let t = q[d] - p.origin[d];
+                !q[d].is_finite()
+                    || (p.periodic[d] == 0 && p.clamp_out == 0 && !(0.0..=p.length[d]).contains(&t))
+            })
+        });
+        let more = format!(
+            "{} particle(s) rejected by the GPU cell list (NaN/infinite, or outside a \
+             non-periodic face); fix the positions or opt in to OutOfBox::Clamp for closed faces",
+            s[0]
+        );
+        Err(match (raw, axis) {
+            (Some(q), Some(d)) => Error::invalid(
+                format!("position[{index}].{}", ["x", "y", "z"][d]),
+                q[d],
+                format!(
+                    "must be finite and (non-periodic axis) within [{}, {}]; {more}",
+                    p.origin[d],
+                    p.origin[d] + p.length[d]
+                ),
+            ),
+            _ => Error::invalid(format!("position[{index}]"), "rejected", more),
+        })
     }
 
     /// The grid.
@@ -387,7 +427,8 @@ impl<const D: usize> GpuCellList<D> {
         &self.sorted_pos
     }
 
-    /// `[bad particle count, smallest bad index]` of the last build.
+    /// `[bad particle count, smallest bad index, cells over GPU_MAX_PER_CELL]` of the last
+    /// build.
     pub fn status(&self) -> &GpuBuffer<u32> {
         &self.status
     }
@@ -406,6 +447,8 @@ pub struct GpuNeighborList {
     entries: usize,
     offsets: GpuBuffer<u32>,
     neighbors: GpuBuffer<u32>,
+    // [low, high] words of the entry total, accumulated by the count pass.
+    total: GpuBuffer<u32>,
     count: (Kernel, wgpu::BindGroup),
     fill: (Kernel, wgpu::BindGroup),
     scan: GpuScan,
@@ -425,21 +468,19 @@ impl GpuNeighborList {
         let fill_k = kernel(ctx, LIST_WGSL, "nb_list_fill", 64, &consts)?;
         let offsets = GpuBuffer::zeroed(ctx, "neighbor list offsets", cells.len() + 1)?;
         let neighbors = GpuBuffer::zeroed(ctx, "neighbor list entries", 1)?;
-        let bind = |k: &Kernel, nb: &GpuBuffer<u32>| {
-            k.bind(
-                ctx,
-                &[
-                    cells.params().binding(),
-                    cells.cell_start().binding(),
-                    cells.sorted_ids().binding(),
-                    cells.sorted_pos().binding(),
-                    offsets.binding(),
-                    nb.binding(),
-                ],
-            )
-        };
-        let count_b = bind(&count_k, &neighbors)?;
-        let fill_b = bind(&fill_k, &neighbors)?;
+        let total = GpuBuffer::zeroed(ctx, "neighbor list total", 2)?;
+        let base = [
+            cells.params().binding(),
+            cells.cell_start().binding(),
+            cells.sorted_ids().binding(),
+            cells.sorted_pos().binding(),
+            offsets.binding(),
+            neighbors.binding(),
+        ];
+        let fill_b = fill_k.bind(ctx, &base)?;
+        let mut with_total = base.to_vec();
+        with_total.push(total.binding());
+        let count_b = count_k.bind(ctx, &with_total)?;
         let scan = GpuScan::new(ctx)?;
         let plan = scan.plan(ctx, &offsets)?;
         Ok(Self {
@@ -449,6 +490,7 @@ impl GpuNeighborList {
             entries: 0,
             offsets,
             neighbors,
+            total,
             count: (count_k, count_b),
             fill: (fill_k, fill_b),
             scan,
@@ -459,6 +501,10 @@ impl GpuNeighborList {
     /// Counts, scans, reads the total back (one small download), grows the entry buffer if
     /// needed and fills it. The cell list must have been built. Returns the number of
     /// entries.
+    ///
+    /// Errors: another cell list than the one of [`new`](Self::new), a total of 2^32 or more
+    /// entries (counted in 64 bits on the device, never wrapped), or an entry buffer beyond
+    /// the device's storage-binding limit.
     pub fn build<const D: usize>(
         &mut self,
         ctx: &GpuContext,
@@ -472,6 +518,7 @@ impl GpuNeighborList {
             ));
         }
         let n = self.n as u64;
+        self.total.upload(ctx, &[0, 0])?;
         run_pass(ctx, "neighbor list count", |pass| {
             self.count
                 .0
@@ -480,7 +527,16 @@ impl GpuNeighborList {
         run_pass(ctx, "neighbor list scan", |pass| {
             self.scan.encode(ctx, pass, &self.plan)
         })?;
-        let total = self.plan.total().map_or(Ok(vec![0]), |t| t.download(ctx))?[0] as usize;
+        let words = self.total.download(ctx)?;
+        if words[1] != 0 {
+            return Err(Error::invalid(
+                "GPU neighbour list entries",
+                format!("{} or more", u64::from(words[1]) << 32),
+                "exceed the u32 offsets of the GPU list (2^32 - 1 entries); use a smaller \
+                 cutoff or skin, fewer particles, or the CPU VerletList",
+            ));
+        }
+        let total = words[0] as usize;
         if total > self.neighbors.len() {
             // Headroom for later builds, within the device's binding limit (the exact total
             // must fit, else GpuBuffer::zeroed reports BufferTooLarge).

@@ -9,19 +9,25 @@ use proptest::prelude::*;
 
 use common::{check_cpu, check_gpu};
 
-/// A coordinate along one axis: uniform, or one of the edge values.
-fn coord(origin: f64, l: f64, periodic: bool, kind: u8, u: f64, cluster: Option<f64>) -> f64 {
-    if let Some(c) = cluster {
-        return (c + u * 0.3).min(origin + l);
-    }
+/// A coordinate along one axis: uniform, or one of the edge values (exactly the lower face,
+/// exactly the upper face `origin + L`, one ulp below it, and on periodic axes values below
+/// the origin, one ulp below it, and beyond the upper face).
+fn coord(origin: f64, l: f64, periodic: bool, kind: u8, u: f64) -> f64 {
     match kind {
         0 => origin,
         1 => origin + l,
-        2 => origin + l.next_down(),
+        2 => (origin + l).next_down(),
         3 if periodic => origin - u * 2.5 * l,
         4 if periodic => origin + l + u * 1.5 * l,
+        5 if periodic => origin.next_down(),
         _ => origin + u * l,
     }
+}
+
+/// A coordinate strictly inside cell `cell` of `cells` along an axis of length `l`.
+fn in_cell(origin: f64, l: f64, cells: usize, cell: usize, u: f64) -> f64 {
+    let size = l / cells as f64;
+    origin + (cell as f64 + 0.01 + 0.98 * u) * size
 }
 
 #[derive(Debug, Clone)]
@@ -61,21 +67,26 @@ fn case<const D: usize>(max_n: usize) -> impl Strategy<Value = Case<D>> {
             let origin: [f64; D] = std::array::from_fn(|d| o[d]);
             let lengths: [f64; D] = std::array::from_fn(|d| f64::from(l8[d]) / 8.0);
             let periodic: [bool; D] = std::array::from_fn(|d| per[d]);
-            // layout 0: uniform; 1: uniform with edge values; 2: all in one spot; 3: mixed.
-            let cluster: [f64; D] =
-                std::array::from_fn(|d| origin[d] + rng.random::<f64>() * lengths[d]);
+            // layout 0: uniform; 1: uniform with edge values; 2: all in one cell; 3: half
+            // in one cell, half uniform with edge values.
+            let cells = CellGrid::new(origin, lengths, periodic, cutoff)
+                .expect("valid grid")
+                .cells_per_axis();
+            let cluster: [usize; D] = std::array::from_fn(|d| rng.random_range(0..cells[d]));
             let positions = (0..n)
                 .map(|_| {
                     let clustered = layout == 2 || (layout == 3 && rng.random::<f64>() < 0.5);
                     std::array::from_fn(|d| {
+                        let u = rng.random::<f64>();
+                        if clustered {
+                            return in_cell(origin[d], lengths[d], cells[d], cluster[d], u);
+                        }
                         let kind = if layout == 1 || layout == 3 {
                             rng.random_range(0u8..12)
                         } else {
-                            9
+                            11
                         };
-                        let u = rng.random::<f64>();
-                        let cl = clustered.then_some(cluster[d]);
-                        coord(origin[d], lengths[d], periodic[d], kind, u, cl)
+                        coord(origin[d], lengths[d], periodic[d], kind, u)
                     })
                 })
                 .collect();
@@ -205,7 +216,23 @@ fn errors_name_the_particle() {
         .unwrap();
         let cells = neighbor::GpuCellList::new(&ctx, &grid, &buf).unwrap();
         let e = cells.build(&ctx).unwrap_err().to_string();
-        assert!(e.contains("position[1]"), "{e}");
+        assert!(e.contains("position[1].y") && e.contains('9'), "{e}");
+        let buf = backend::GpuBuffer::from_slice(
+            &ctx,
+            "p",
+            &[
+                [1.0f32, 1.0, 0.0, 0.0],
+                [f32::NAN, 1.0, 0.0, 0.0],
+                [1.0, f32::NAN, 0.0, 0.0],
+            ],
+        )
+        .unwrap();
+        let cells = neighbor::GpuCellList::new(&ctx, &grid, &buf).unwrap();
+        let e = cells.build(&ctx).unwrap_err().to_string();
+        assert!(
+            e.contains("position[1].x") && e.contains("2 particle(s)"),
+            "{e}"
+        );
     }
 }
 
@@ -310,4 +337,36 @@ fn reorder_and_restore_are_inverse_permutations() {
     assert_eq!(s.restore(&sorted).unwrap(), data);
     assert!(s.reorder(&data[..3]).is_err());
     assert!(s.restore(&data[..3]).is_err());
+}
+
+/// About 6 s on lavapipe (the per-cell rank sort is quadratic in the cell population).
+#[test]
+fn gpu_cell_over_the_per_cell_limit_is_an_error() {
+    use neighbor::{GPU_MAX_PER_CELL, GpuCellList};
+    // One more particle than a GPU cell may hold, all in one cell: measured on lavapipe to
+    // lose particles in the cell order if not refused. The build must report it.
+    let Some(ctx) = gpu_or_skip("gpu_cell_over_limit") else {
+        return;
+    };
+    let grid = CellGrid::new([0.0; 3], [10.0; 3], [false; 3], 2.5).unwrap();
+    for (n, ok) in [(GPU_MAX_PER_CELL, true), (GPU_MAX_PER_CELL + 1, false)] {
+        let p: Vec<[f32; 4]> = (0..n)
+            .map(|i| {
+                let u = i as f32 / n as f32;
+                [1.0 + 0.1 * u, 1.1 - 0.1 * u, 1.0, 0.0]
+            })
+            .collect();
+        let buf = backend::GpuBuffer::from_slice(&ctx, "p", &p).unwrap();
+        let cells = GpuCellList::new(&ctx, &grid, &buf).unwrap();
+        let r = cells.build(&ctx);
+        if ok {
+            r.unwrap();
+            let mut ids = cells.sorted_ids().download(&ctx).unwrap();
+            ids.sort_unstable();
+            assert!(ids.iter().enumerate().all(|(k, &i)| i as usize == k));
+        } else {
+            let e = r.unwrap_err().to_string();
+            assert!(e.contains("65536"), "{e}");
+        }
+    }
 }

@@ -126,15 +126,21 @@ impl Boundaries {
     }
 }
 
+/// The ghost value of species `s` outside an edge with condition `b`, from the adjacent
+/// interior cell and the interior cell on the opposite edge.
+#[inline]
+pub(crate) fn ghost_value<T: Real>(b: &Boundary, s: usize, inner: T, opposite: T) -> T {
+    match b {
+        Boundary::NoFlux => inner,
+        Boundary::Periodic => opposite,
+        Boundary::Dirichlet(v) => T::from_f64(2.0) * T::from_f64(v[s]) - inner,
+    }
+}
+
 /// Fills the ghost layer of species field `s` stored padded (`(nx + 2) x (ny + 2)`, row-major).
 pub(crate) fn fill_ghosts<T: Real>(f: &mut [T], nx: usize, ny: usize, s: usize, bc: &Boundaries) {
     let w = nx + 2;
-    let two = T::from_f64(2.0);
-    let ghost = |b: &Boundary, inner: T, opposite: T| match b {
-        Boundary::NoFlux => inner,
-        Boundary::Periodic => opposite,
-        Boundary::Dirichlet(v) => two * T::from_f64(v[s]) - inner,
-    };
+    let ghost = |b: &Boundary, inner: T, opposite: T| ghost_value(b, s, inner, opposite);
     for j in 1..=ny {
         let r = j * w;
         f[r] = ghost(&bc.west, f[r + 1], f[r + nx]);

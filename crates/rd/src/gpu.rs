@@ -13,12 +13,13 @@ use crate::boundary::{Boundary, fill_ghosts};
 use crate::grid::{Grid, pad};
 use crate::model::Model;
 use crate::real::Real;
-use crate::stepper::{Integrator, Stepping, check_dt, check_model, stable_dt};
+use crate::stepper::{Integrator, Stepping, check_dt, check_dt_with, check_model};
 
 const COMMON_WGSL: &str = include_str!("../../../shaders/rd/stencil_common.wgsl");
 const TILED_WGSL: &str = include_str!("../../../shaders/rd/stencil_tiled.wgsl");
 const GLOBAL_WGSL: &str = include_str!("../../../shaders/rd/stencil_global.wgsl");
 const GHOSTS_WGSL: &str = include_str!("../../../shaders/rd/ghosts.wgsl");
+const DIFFUSIVITY_WGSL: &str = include_str!("../../../shaders/rd/diffusivity.wgsl");
 /// Index of the first model parameter in the params buffer (see `stencil_common.wgsl`).
 const MODEL_PARAMS_AT: usize = 22;
 /// Species the params layout has room for (Dirichlet values per edge).
@@ -58,9 +59,10 @@ impl Default for GpuOptions {
 /// Reaction–diffusion on the GPU. The fields stay on the device between `step` calls;
 /// `state()` downloads them.
 ///
-/// The stability bound is checked at construction and, for models whose diffusivity depends
-/// on the fields, again before each `step` call from the fields of the last `state()`
-/// download (the GPU does not read them back on its own).
+/// The stability bound is checked at construction, at `set_stepping` and, for models whose
+/// diffusivity depends on the fields, again before each `step` call from the current fields:
+/// a reduction kernel finds the largest effective diffusivity on the device (in f32) and only
+/// that one number is read back.
 pub struct GpuRd<T: Real, M: Model> {
     ctx: GpuContext,
     model: M,
@@ -78,6 +80,7 @@ pub struct GpuRd<T: Real, M: Model> {
     ghosts_b: Vec<wgpu::BindGroup>,
     stencil_avg: Kernel,
     cur_is_a: bool,
+    reduce: Option<Reduce>,
     steps: u64,
     snapshot_fresh: bool,
     // Kept alive for the bind groups.
@@ -113,47 +116,57 @@ fn params_vec<T: Real, M: Model>(model: &M, grid: &Grid<T>, s: &Stepping) -> Vec
     p.into_iter().map(T::from_f64).collect()
 }
 
-/// WGSL bindings for `ns` species (`src<s>`, `dst<s>`, then `coef`, `params`) and the
-/// accessors the stencil bodies use: `load_global(f, idx)` and `put(s, v)`.
-fn bindings_wgsl(ns: usize) -> String {
+/// WGSL bindings for `ns` species and the accessors the kernel bodies use:
+/// `load_global(f, idx)` and `put(s, v)`. Stencil kernels (`reduce == false`): `src<s>`,
+/// `dst<s>`, then `coef`, `params`. The diffusivity reduction (`reduce == true`): `src<s>`,
+/// `coef`, `params`, then the atomic `dmax`, and `put` does nothing.
+fn bindings_wgsl(ns: usize, reduce: bool) -> String {
     let mut w = String::new();
+    let mut at = 0;
+    let mut bind = |w: &mut String, decl: String| {
+        let _ = writeln!(w, "@group(0) @binding({at}) {decl};");
+        at += 1;
+    };
     for s in 0..ns {
-        let _ = writeln!(
-            w,
-            "@group(0) @binding({s}) var<storage, read> src{s}: array<real>;"
-        );
+        bind(&mut w, format!("var<storage, read> src{s}: array<real>"));
     }
-    for s in 0..ns {
-        let _ = writeln!(
-            w,
-            "@group(0) @binding({}) var<storage, read_write> dst{s}: array<real>;",
-            ns + s
-        );
+    if !reduce {
+        for s in 0..ns {
+            bind(
+                &mut w,
+                format!("var<storage, read_write> dst{s}: array<real>"),
+            );
+        }
     }
-    let _ = writeln!(
-        w,
-        "@group(0) @binding({}) var<storage, read> coef: array<real>;",
-        2 * ns
-    );
-    let _ = writeln!(
-        w,
-        "@group(0) @binding({}) var<storage, read> params: array<real>;",
-        2 * ns + 1
-    );
+    bind(&mut w, "var<storage, read> coef: array<real>".into());
+    bind(&mut w, "var<storage, read> params: array<real>".into());
+    if reduce {
+        bind(&mut w, "var<storage, read_write> dmax: atomic<u32>".into());
+    }
     w.push_str("fn load_global(f: u32, idx: u32) -> real {\n");
     for s in 0..ns {
         let _ = writeln!(w, "    if f == {s}u {{ return src{s}[idx]; }}");
     }
     w.push_str("    return coef[(f - NS) * plane() + idx];\n}\n");
     w.push_str("fn put(s: u32, v: real) {\n");
-    for s in 0..ns {
-        let _ = writeln!(
-            w,
-            "    if s == {s}u {{ if AVERAGE {{ dst{s}[cell] = real(0.5) * (dst{s}[cell] + v); }} else {{ dst{s}[cell] = v; }} }}"
-        );
+    if !reduce {
+        for s in 0..ns {
+            let _ = writeln!(
+                w,
+                "    if s == {s}u {{ if AVERAGE {{ dst{s}[cell] = real(0.5) * (dst{s}[cell] + v); }} else {{ dst{s}[cell] = v; }} }}"
+            );
+        }
     }
     w.push_str("}\n");
     w
+}
+
+/// The on-device reduction of the model's effective diffusivity (field-dependent models).
+struct Reduce {
+    kernel: Kernel,
+    bind_a: wgpu::BindGroup,
+    bind_b: wgpu::BindGroup,
+    dmax: GpuBuffer<u32>,
 }
 
 impl<T: Real, M: Model> GpuRd<T, M> {
@@ -266,7 +279,7 @@ impl<T: Real, M: Model> GpuRd<T, M> {
             GpuKernel::Tiled => TILED_WGSL,
             GpuKernel::Global => GLOBAL_WGSL,
         };
-        let bindings = bindings_wgsl(ns);
+        let bindings = bindings_wgsl(ns, false);
         let sources = [
             header.as_str(),
             bindings.as_str(),
@@ -332,6 +345,41 @@ impl<T: Real, M: Model> GpuRd<T, M> {
         };
         let ghosts_a = gb(&a)?;
         let ghosts_b = gb(&b)?;
+        let reduce = if model.field_dependent_diffusivity() {
+            let rb = bindings_wgsl(ns, true);
+            let kernel = Kernel::new(
+                ctx,
+                &KernelDesc {
+                    label: "rd max diffusivity",
+                    sources: &[
+                        header.as_str(),
+                        rb.as_str(),
+                        COMMON_WGSL,
+                        model.wgsl(),
+                        DIFFUSIVITY_WGSL,
+                    ],
+                    entry: "main",
+                    workgroup_size: tx * ty,
+                    constants: &constants(0.0),
+                },
+            )?;
+            let dmax = GpuBuffer::<u32>::zeroed(ctx, "rd max diffusivity", 1)?;
+            let rbind = |bufs: &[GpuBuffer<T>]| {
+                let mut entries: Vec<wgpu::BindingResource<'_>> =
+                    bufs.iter().map(GpuBuffer::binding).collect();
+                entries.extend([coef.binding(), params.binding(), dmax.binding()]);
+                kernel.bind(ctx, &entries)
+            };
+            let (bind_a, bind_b) = (rbind(&a)?, rbind(&b)?);
+            Some(Reduce {
+                kernel,
+                bind_a,
+                bind_b,
+                dmax,
+            })
+        } else {
+            None
+        };
         Ok(Self {
             ctx: ctx.clone(),
             model,
@@ -349,6 +397,7 @@ impl<T: Real, M: Model> GpuRd<T, M> {
             ghosts_b,
             stencil_avg,
             cur_is_a: true,
+            reduce,
             steps: 0,
             snapshot_fresh: true,
             b,
@@ -371,18 +420,51 @@ impl<T: Real, M: Model> GpuRd<T, M> {
         self.stepping
     }
 
-    /// Changes the time step (checked against the bound from the last known fields).
+    /// Changes the time step (checked against the bound from the current fields).
     pub fn set_stepping(&mut self, stepping: Stepping) -> Result<()> {
-        check_dt(&self.model, &self.grid, &stepping)?;
+        check_dt_with(
+            self.model.name(),
+            self.max_diffusivity()?,
+            self.grid.h(),
+            &stepping,
+        )?;
         self.params
             .upload(&self.ctx, &params_vec(&self.model, &self.grid, &stepping))?;
         self.stepping = stepping;
         Ok(())
     }
 
-    /// Largest stable `dt` for the last known fields.
-    pub fn stable_dt(&self) -> f64 {
-        stable_dt(&self.model, &self.grid)
+    /// Largest stable `dt` for the current fields: for models whose diffusivity depends on
+    /// the fields, reduced on the device (in f32) and read back.
+    pub fn stable_dt(&self) -> Result<f64> {
+        let d = self.max_diffusivity()?;
+        let h = self.grid.h();
+        Ok(if d > 0.0 {
+            h * h / (4.0 * d)
+        } else {
+            f64::INFINITY
+        })
+    }
+
+    /// The model's largest effective diffusivity for the current fields (on the device for
+    /// field-dependent models; the maximum is taken in f32).
+    fn max_diffusivity(&self) -> Result<f64> {
+        let Some(r) = &self.reduce else {
+            return Ok(self.model.max_diffusivity(&self.grid));
+        };
+        r.dmax.upload(&self.ctx, &[0])?;
+        let (tx, ty) = self.options.tile;
+        let (gx, gy) = (
+            self.grid.nx().div_ceil(tx as usize) as u32,
+            self.grid.ny().div_ceil(ty as usize) as u32,
+        );
+        let bind = if self.cur_is_a { &r.bind_a } else { &r.bind_b };
+        backend::gpu::run_pass(&self.ctx, "rd max diffusivity", |pass| {
+            r.kernel.dispatch_grid(pass, bind, gx, gy);
+            Ok(())
+        })?;
+        let bits = r.dmax.download(&self.ctx)?;
+        Ok(f64::from(f32::from_bits(bits[0])))
     }
 
     /// Simulated time, `steps_done * dt` (for a constant `dt`).
@@ -448,7 +530,12 @@ impl<T: Real, M: Model> Simulation for GpuRd<T, M> {
 
     fn step(&mut self, steps: u32) -> Result<()> {
         if self.model.field_dependent_diffusivity() {
-            check_dt(&self.model, &self.grid, &self.stepping)?;
+            check_dt_with(
+                self.model.name(),
+                self.max_diffusivity()?,
+                self.grid.h(),
+                &self.stepping,
+            )?;
         }
         if self.stepping.integrator == Integrator::Heun {
             self.settle_in_a()?;

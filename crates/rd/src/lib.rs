@@ -9,7 +9,7 @@
 //!   above [`stable_dt`] (`h^2 / (4 D_max)` from the current fields) is refused with
 //!   [`backend::Error::Unstable`] unless overridden.
 //! - Backends: [`CpuRd`] (cache-blocked tiles in parallel, vectorised with run-time CPU
-//!   feature dispatch) and [`GpuRd`] (WGSL; tile + halo in workgroup memory, or a plain
+//!   feature dispatch, several Euler steps fused per sweep over the grid) and [`GpuRd`] (WGSL; tile + halo in workgroup memory, or a plain
 //!   global-memory kernel; many steps per submission), both behind
 //!   [`backend::Simulation`]; [`Rd`] picks one from a [`backend::Backend`] value.
 //!
@@ -40,9 +40,10 @@ mod models;
 mod real;
 pub mod scenes;
 mod stepper;
+mod sweep;
 
 pub use boundary::{Boundaries, Boundary};
-pub use cpu::CpuRd;
+pub use cpu::{CpuRd, DEFAULT_STEPS_PER_SWEEP};
 pub use gpu::{GpuKernel, GpuOptions, GpuRd};
 pub use grid::Grid;
 pub use model::{Model, RowIn, Stencil};

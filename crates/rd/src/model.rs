@@ -9,21 +9,28 @@ use crate::real::Real;
 
 /// One row segment of the padded input fields, handed to [`Model::update_row`].
 ///
-/// Storage is padded with one ghost layer: plane `p` of `buffer` holds `(nx + 2) * (ny + 2)`
-/// values, row-major with row width `width = nx + 2`. The segment covers padded columns
-/// `i0..i1` of padded row `row` (interior rows and columns start at 1).
+/// Storage is padded with one ghost layer: every plane is row-major with row width
+/// `width = nx + 2`, interior rows and columns start at 1. The species planes may be a band of
+/// rows (the CPU backend's temporal blocking keeps intermediate steps in a small buffer), so
+/// species and coefficient planes carry their own plane length and row index. The segment
+/// covers padded columns `i0..i1`.
 #[derive(Clone, Copy, Debug)]
 pub struct RowIn<'a, T: Real> {
-    /// Species planes (the state being advanced).
+    /// Species planes (the state being advanced), `species_plane` values each.
     pub species: &'a [T],
-    /// Coefficient planes (static fields such as the colony model's `d`), possibly empty.
+    /// Values per species plane.
+    pub species_plane: usize,
+    /// Row of the segment in the species planes (rows `species_row +- 1` are read too).
+    pub species_row: usize,
+    /// Coefficient planes (static fields such as the colony model's `d`), possibly empty;
+    /// `(nx + 2) * (ny + 2)` values each.
     pub coefficients: &'a [T],
-    /// Values per plane, `(nx + 2) * (ny + 2)`.
-    pub plane: usize,
+    /// Values per coefficient plane, `(nx + 2) * (ny + 2)`.
+    pub coefficient_plane: usize,
+    /// Padded grid row of the segment (1..=ny): its row in the coefficient planes.
+    pub row: usize,
     /// Row width, `nx + 2`.
     pub width: usize,
-    /// Padded row index (1..=ny).
-    pub row: usize,
     /// First padded column of the segment (>= 1).
     pub i0: usize,
     /// One past the last padded column (<= nx + 1).
@@ -47,9 +54,8 @@ pub struct Stencil<'a, T> {
 }
 
 impl<'a, T: Real> RowIn<'a, T> {
-    fn slices(&self, buf: &'a [T], p: usize) -> Stencil<'a, T> {
-        let base = p * self.plane + self.row * self.width;
-        let (a, b) = (base + self.i0, base + self.i1);
+    fn slices(&self, buf: &'a [T], start: usize) -> Stencil<'a, T> {
+        let (a, b) = (start + self.i0, start + self.i1);
         Stencil {
             c: &buf[a..b],
             w: &buf[a - 1..b - 1],
@@ -60,11 +66,17 @@ impl<'a, T: Real> RowIn<'a, T> {
     }
     /// Stencil slices of species `s`.
     pub fn species_stencil(&self, s: usize) -> Stencil<'a, T> {
-        self.slices(self.species, s)
+        self.slices(
+            self.species,
+            s * self.species_plane + self.species_row * self.width,
+        )
     }
     /// Stencil slices of coefficient field `k`.
     pub fn coefficient_stencil(&self, k: usize) -> Stencil<'a, T> {
-        self.slices(self.coefficients, k)
+        self.slices(
+            self.coefficients,
+            k * self.coefficient_plane + self.row * self.width,
+        )
     }
 }
 
@@ -92,6 +104,14 @@ pub trait Model: Clone + Debug + Send + Sync {
     fn field_dependent_diffusivity(&self) -> bool {
         false
     }
+    /// Largest effective diffusivity over a run of cells: `species[s]` and `coefficients[k]`
+    /// hold the values of species `s` and coefficient field `k` of the same cells (equal
+    /// lengths). Over all cells of the grid it must equal [`Model::max_diffusivity`] (up to
+    /// the rounding of coefficient fields to the fields' precision). The CPU backend uses it
+    /// for its re-check before each `step` call: on rows just written by the last sweep of the
+    /// previous call (still in cache), or in place. Models with a constant diffusivity return
+    /// the constant.
+    fn max_cell_diffusivity<T: Real>(&self, species: &[&[T]], coefficients: &[&[T]]) -> f64;
     /// Writes `u + dt * F(u)` over the segment into `out` (one slice per species, each of
     /// length `i1 - i0`); with `average`, writes `(out + u + dt * F(u)) / 2` instead (the second
     /// stage of Heun's method). `inv_h2 = 1 / h^2`.
@@ -105,7 +125,9 @@ pub trait Model: Clone + Debug + Send + Sync {
     );
     /// WGSL defining `fn model_update(dt: real, ih2: real)`, which reads the stencil with
     /// `ld(field, dx, dy)` (species first, then coefficient fields), the model parameters with
-    /// `mp(k)` and writes species `s` with `put(s, value)`.
+    /// `mp(k)` and writes species `s` with `put(s, value)`; and `fn model_diffusivity() -> real`,
+    /// the effective diffusivity at the current cell (the GPU re-check reduces it over the grid
+    /// for models with a field-dependent diffusivity).
     fn wgsl(&self) -> &'static str;
     /// Parameter values read by `mp(k)` in [`Model::wgsl`].
     fn gpu_params(&self) -> Vec<f64>;

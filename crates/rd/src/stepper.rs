@@ -87,17 +87,23 @@ pub fn stable_dt<T: Real, M: Model>(model: &M, grid: &Grid<T>) -> f64 {
 
 /// Checks `dt` against [`stable_dt`] unless the guard is overridden.
 pub(crate) fn check_dt<T: Real, M: Model>(model: &M, grid: &Grid<T>, s: &Stepping) -> Result<()> {
+    check_dt_with(model.name(), model.max_diffusivity(grid), grid.h(), s)
+}
+
+/// Checks `dt` against `h^2 / (4 d_max)` unless the guard is overridden.
+pub(crate) fn check_dt_with(model: &str, d_max: f64, h: f64, s: &Stepping) -> Result<()> {
     require_positive("dt", s.dt)?;
-    let bound = stable_dt(model, grid);
+    let bound = if d_max > 0.0 {
+        h * h / (4.0 * d_max)
+    } else {
+        f64::INFINITY
+    };
     if s.guard == Guard::Enforce && s.dt > bound {
         return Err(Error::Unstable {
             dt: s.dt,
             bound,
             reason: format!(
-                "{} model, 5-point Laplacian: D_max dt / h^2 <= 1/4 with D_max = {:e}, h = {:e}",
-                model.name(),
-                model.max_diffusivity(grid),
-                grid.h()
+                "{model} model, 5-point Laplacian: D_max dt / h^2 <= 1/4 with D_max = {d_max:e}, h = {h:e}"
             ),
         });
     }

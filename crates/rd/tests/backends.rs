@@ -20,7 +20,8 @@ fn max_rel(a: &Grid<f32>, b: &Grid<f32>) -> f64 {
 }
 
 /// The colony scene on 72 x 60 (not a multiple of the tile), 1000 steps, f32: the CPU
-/// and every GPU kernel variant agree within 1e-5 relative.
+/// and every GPU kernel variant agree within 1e-5 relative, with each other and with the f64
+/// CPU reference.
 #[test]
 fn cpu_and_gpu_agree_after_1000_steps() {
     let Some(ctx) = gpu_or_skip("cpu_and_gpu_agree_after_1000_steps") else {
@@ -38,6 +39,14 @@ fn cpu_and_gpu_agree_after_1000_steps() {
         let reference = cpu.state().unwrap();
         let moved = max_rel(&grid, &reference);
         assert!(moved > 1e-2, "the scene must evolve ({moved})");
+        // f64 CPU is the reference for both f32 backends.
+        let (grid64, model64) = colony_scene::<f64>(72, 60, 7).unwrap();
+        let mut cpu64 = CpuRd::new(grid64, model64, stepping).unwrap();
+        cpu64.step(1000).unwrap();
+        let reference64 = cpu64.state().unwrap().convert::<f32>();
+        let err64 = max_rel(&reference, &reference64);
+        println!("{integrator:?} CPU f32 vs CPU f64: max rel diff {err64:e}");
+        assert!(err64 < 1e-5, "{integrator:?} CPU f32 vs f64: {err64:e}");
         for (kernel, tile) in [
             (GpuKernel::Tiled, (16, 16)),
             (GpuKernel::Tiled, (32, 8)),
@@ -53,8 +62,15 @@ fn cpu_and_gpu_agree_after_1000_steps() {
             gpu.step(600).unwrap();
             let g = gpu.state().unwrap();
             let err = max_rel(&g, &reference);
-            println!("{integrator:?} {kernel:?} {tile:?}: max rel diff {err:e}");
+            let err64 = max_rel(&g, &reference64);
+            println!(
+                "{integrator:?} {kernel:?} {tile:?}: max rel diff {err:e} (CPU f32), {err64:e} (CPU f64)"
+            );
             assert!(err < 1e-5, "{integrator:?} {kernel:?} {tile:?}: {err:e}");
+            assert!(
+                err64 < 1e-5,
+                "{integrator:?} {kernel:?} {tile:?} vs f64: {err64:e}"
+            );
         }
     }
 }

@@ -218,6 +218,77 @@ fn colony_guard_follows_fields() {
     assert!(matches!(err, Error::Unstable { .. }), "{err}");
 }
 
+/// The re-check before each `step` call reads the current fields: the in-place bound equals
+/// `stable_dt` of the downloaded state exactly (f64), and once the reaction has grown `b`
+/// enough that `d n b` passes the bound for the running `dt`, the next `step` is refused with
+/// exactly that bound. Calls of 5 steps end with a plain pass (bound found in place), calls of
+/// 8 with a fused sweep (bound found from the rows as they are written).
+#[test]
+fn colony_step_rechecks_current_fields() {
+    let (mut grid, model) = colony_scene::<f64>(24, 20, 4).unwrap();
+    // Uniform b = 0.5, n = 3: nothing diffuses, the reaction turns n into b, and b n (hence
+    // max d n b, from 1.6) grows until b = n. dt just under the initial bound runs at first.
+    grid.field_mut(0).fill(0.5);
+    grid.field_mut(1).fill(3.0);
+    let dt = 0.98 * stable_dt(&model, &grid);
+    for per_call in [5, 8] {
+        let mut sim = CpuRd::new(grid.clone(), model.clone(), Stepping::euler(dt)).unwrap();
+        let mut refused = None;
+        for call in 0..200 {
+            let state = sim.state().unwrap();
+            assert_eq!(sim.stable_dt(), stable_dt(&model, &state));
+            match sim.step(per_call) {
+                Ok(()) => {}
+                Err(Error::Unstable { bound, .. }) => {
+                    assert!(bound < dt);
+                    assert_eq!(bound, stable_dt(&model, &state));
+                    refused = Some(call);
+                    break;
+                }
+                Err(e) => panic!("{e}"),
+            }
+        }
+        let call = refused.expect("b grows through the reaction, so dt must be refused");
+        println!(
+            "{per_call} steps per call: refused at call {call} (after {} steps)",
+            sim.steps_done()
+        );
+        assert!(call > 0, "the first call must run");
+    }
+}
+
+/// The GPU re-checks from the fields on the device (reduction in f32): same refusal point as
+/// the CPU for the same scene, with a bound within f32 rounding of the CPU's.
+#[test]
+fn gpu_colony_step_rechecks_device_fields() {
+    let Some(ctx) = gpu_or_skip("gpu_colony_step_rechecks_device_fields") else {
+        return;
+    };
+    let (mut grid, model) = colony_scene::<f32>(24, 20, 4).unwrap();
+    grid.field_mut(0).fill(0.5);
+    grid.field_mut(1).fill(3.0);
+    let dt = 0.98 * stable_dt(&model, &grid);
+    let run = |backend| {
+        let mut sim = Rd::new(backend, grid.clone(), model.clone(), Stepping::euler(dt)).unwrap();
+        for call in 0..200 {
+            match sim.step(5) {
+                Ok(()) => {}
+                Err(Error::Unstable { bound, .. }) => return (call, bound),
+                Err(e) => panic!("{e}"),
+            }
+        }
+        panic!("{}: never refused", sim.backend_name());
+    };
+    let (cpu_call, cpu_bound) = run(Backend::Cpu);
+    let (gpu_call, gpu_bound) = run(Backend::Gpu(&ctx));
+    println!(
+        "refused at call {cpu_call} (CPU, bound {cpu_bound}) / {gpu_call} (GPU, bound {gpu_bound})"
+    );
+    assert!(cpu_call > 0);
+    assert_eq!(cpu_call, gpu_call);
+    assert!((cpu_bound - gpu_bound).abs() < 1e-6 * cpu_bound);
+}
+
 /// Dirichlet 0 (west) and 1 (east) with no-flux north/south relax to the linear profile,
 /// which the scheme represents exactly: on both backends.
 #[test]

@@ -5,8 +5,8 @@
 use std::collections::BTreeMap;
 
 use neighbor::{
-    BruteForce, CellGrid, GpuNeighborSearch, LinkedCells, ListKind, NeighborSearch, SortedCells,
-    VerletList,
+    BruteForce, CellGrid, GpuNeighborList, GpuNeighborSearch, LinkedCells, ListKind, NeighborLists,
+    NeighborSearch, SortedCells, VerletList,
 };
 
 /// Unordered pair -> (separation oriented from the smaller index, r2).
@@ -122,6 +122,17 @@ pub fn check_gpu<const D: usize>(
 ) {
     let mut gpu = GpuNeighborSearch::new(ctx, grid).unwrap();
     let got = pairs_of(&mut gpu, p);
+    // The device-side full list holds every half-list pair from both ends, nothing else.
+    let cells = gpu.cells().expect("built");
+    let mut full = GpuNeighborList::new(ctx, cells, ListKind::Full).unwrap();
+    let entries = full.build(ctx, cells).unwrap();
+    assert_eq!(entries, 2 * got.len(), "GPU full list size");
+    let half_pairs: Vec<(u32, u32)> = got.keys().map(|&(i, j)| (i as u32, j as u32)).collect();
+    assert_eq!(
+        full.download(ctx).unwrap(),
+        NeighborLists::from_pairs(p.len(), &half_pairs),
+        "GPU full list differs from the GPU half list"
+    );
     let rc2 = grid.cutoff() * grid.cutoff();
     let borderline = |r2: f64| (r2 - rc2).abs() <= 1e-4 * rc2;
     for (k, (_, r2)) in reference {

@@ -87,6 +87,9 @@ impl Model for Diffusion {
     fn max_diffusivity<T: Real>(&self, _grid: &Grid<T>) -> f64 {
         self.diffusivity.iter().copied().fold(0.0, f64::max)
     }
+    fn max_cell_diffusivity<T: Real>(&self, _species: &[&[T]], _coefficients: &[&[T]]) -> f64 {
+        self.diffusivity.iter().copied().fold(0.0, f64::max)
+    }
     fn update_row<T: Real>(
         &self,
         input: &RowIn<'_, T>,

@@ -139,6 +139,9 @@ impl Model for GrayScott {
     fn max_diffusivity<T: Real>(&self, _grid: &Grid<T>) -> f64 {
         self.du.max(self.dv)
     }
+    fn max_cell_diffusivity<T: Real>(&self, _species: &[&[T]], _coefficients: &[&[T]]) -> f64 {
+        self.du.max(self.dv)
+    }
     fn update_row<T: Real>(
         &self,
         input: &RowIn<'_, T>,

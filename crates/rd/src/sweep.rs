@@ -1,0 +1,259 @@
+//! Temporal blocking for the CPU backend: several explicit Euler steps in one sweep.
+//!
+//! The interior rows are cut into bands. For `k` fused steps, a band of rows `r0..r1` is
+//! computed from the source fields through `k - 1` intermediate levels kept in a small
+//! per-thread buffer: level `l` covers rows `r0 - (k - l) .. r1 + (k - l)` (the halo shrinks
+//! by one row per level), and the last level writes rows `r0..r1` of the destination. The rows
+//! are visited as a wavefront (level `l` trails level `l - 1` by one row), so the intermediate
+//! rows a level reads were written a moment before and are still in cache: main memory sees
+//! one read of the fields and one write per `k` steps instead of per step.
+//!
+//! Every cell value is computed by the same row kernel from the same inputs as in the plain
+//! pass, and the ghost cells of every intermediate level are filled with the same formula
+//! (`boundary::ghost_value`), so the result is bit-identical to `k` plain passes. Periodic
+//! edges along y would need rows of other bands, so the CPU backend uses plain passes there.
+
+use std::sync::Mutex;
+
+use rayon::prelude::*;
+
+use crate::boundary::{Boundaries, Boundary, ghost_value};
+use crate::model::{Model, RowIn};
+use crate::real::Real;
+
+/// Scratch buffers kept between sweeps, one per parallel job at most.
+#[derive(Debug, Default)]
+pub(crate) struct ScratchPool<T>(Mutex<Vec<Vec<T>>>);
+
+/// A scratch buffer on loan from a [`ScratchPool`]; returned when dropped.
+pub(crate) struct Lease<'a, T> {
+    buf: Vec<T>,
+    pool: &'a ScratchPool<T>,
+}
+
+impl<T: Real> ScratchPool<T> {
+    /// A buffer of at least `len` values.
+    fn lease(&self, len: usize) -> Lease<'_, T> {
+        let mut buf = self
+            .0
+            .lock()
+            .map(|mut v| v.pop().unwrap_or_default())
+            .unwrap_or_default();
+        if buf.len() < len {
+            buf.resize(len, T::default());
+        }
+        Lease { buf, pool: self }
+    }
+}
+
+impl<T> Drop for Lease<'_, T> {
+    fn drop(&mut self) {
+        if let Ok(mut v) = self.pool.0.lock() {
+            v.push(std::mem::take(&mut self.buf));
+        }
+    }
+}
+
+/// What one sweep needs besides the fields.
+pub(crate) struct Sweep<'a, T: Real, M: Model> {
+    pub model: &'a M,
+    pub nx: usize,
+    pub ny: usize,
+    pub boundaries: &'a Boundaries,
+    /// Padded coefficient planes.
+    pub coef: &'a [T],
+    pub dt: f64,
+    pub inv_h2: f64,
+    /// Columns per row segment handed to the row kernel.
+    pub block_cols: usize,
+}
+
+/// Whether steps can be fused for these edges (not with periodic south/north edges).
+pub(crate) fn can_fuse(b: &Boundaries) -> bool {
+    b.south != Boundary::Periodic && b.north != Boundary::Periodic
+}
+
+impl<T: Real, M: Model> Sweep<'_, T, M> {
+    fn width(&self) -> usize {
+        self.nx + 2
+    }
+
+    /// Scratch values one thread needs for `k` fused steps over bands of `band` rows.
+    pub(crate) fn scratch_len(&self, k: usize, band: usize) -> usize {
+        (k - 1) * self.model.species() * (band + 2 * (k - 1)) * self.width()
+    }
+
+    /// Advances `src` by `k >= 1` Euler steps into the interior of `dst` (ghosts not filled).
+    /// Bands are scheduled dynamically (rayon work stealing); each parallel job leases a
+    /// scratch buffer from `pool` and gives it back, so buffers are allocated once.
+    pub(crate) fn run(
+        &self,
+        k: usize,
+        band: usize,
+        src: &[T],
+        dst: &mut [T],
+        pool: &ScratchPool<T>,
+        want_max: bool,
+    ) -> Option<f64> {
+        let (ny, w) = (self.ny, self.width());
+        let plane = w * (ny + 2);
+        let mut per_plane: Vec<_> = dst
+            .chunks_mut(plane)
+            .map(|p| p[w..(ny + 1) * w].chunks_mut(band * w))
+            .collect();
+        let bands: Vec<Vec<&mut [T]>> = (0..ny.div_ceil(band))
+            .map(|_| per_plane.iter_mut().filter_map(|it| it.next()).collect())
+            .collect();
+        let need = self.scratch_len(k, band);
+        let d = bands
+            .into_par_iter()
+            .enumerate()
+            .map_init(
+                || pool.lease(need),
+                |lease, (b, mut out)| {
+                    let r0 = 1 + b * band;
+                    let r1 = (r0 + band).min(ny + 1);
+                    self.band(k, r0, r1, src, &mut out, r0, &mut lease.buf, want_max)
+                },
+            )
+            .reduce(|| 0.0, f64::max);
+        want_max.then_some(d)
+    }
+
+    /// `k` steps for padded rows `r0..r1`; `out` holds the destination rows from `out_row0`.
+    /// With `want_max`, returns the model's largest effective diffusivity over the rows
+    /// written (each taken right after the row is written, while it is in cache); else 0.
+    #[allow(clippy::too_many_arguments)]
+    fn band(
+        &self,
+        k: usize,
+        r0: usize,
+        r1: usize,
+        src: &[T],
+        out: &mut [&mut [T]],
+        out_row0: usize,
+        buf: &mut [T],
+        want_max: bool,
+    ) -> f64 {
+        let (nx, ny, w) = (self.nx, self.ny, self.width());
+        let ns = self.model.species();
+        let plane = w * (ny + 2);
+        let halo = k - 1;
+        let rows = r1 - r0 + 2 * halo;
+        // Level l (1..k) lives in buf[(l - 1) * lsize..], species s at s * lplane, and grid
+        // row g at buffer row g - base.
+        let lplane = rows * w;
+        let lsize = ns * lplane;
+        let base = r0 as isize - halo as isize;
+        let buf = &mut buf[..halo * lsize];
+        let mut dmax = 0.0f64;
+        for tau in 0..rows {
+            for l in 1..=k {
+                let g = base + tau as isize - (l as isize - 1);
+                let lo = (r0 as isize - (k - l) as isize).max(0);
+                let hi = ((r1 + k - l) as isize).min(ny as isize + 2);
+                if g < lo || g >= hi {
+                    continue;
+                }
+                let g = g as usize;
+                let r = (g as isize - base) as usize;
+                // Ghost rows of intermediate levels (l < k, as r0 >= 1 and r1 <= ny + 1):
+                // row 0 is set right after row 1, row ny + 1 from row ny (done a step earlier).
+                if g == 0 {
+                    continue;
+                }
+                let (below, level) = buf.split_at_mut((l - 1) * lsize);
+                if g == ny + 1 {
+                    self.ghost_row(
+                        &mut level[..lsize],
+                        lplane,
+                        r,
+                        r - 1,
+                        &self.boundaries.north,
+                    );
+                    continue;
+                }
+                let input = if l == 1 {
+                    RowIn {
+                        species: src,
+                        species_plane: plane,
+                        species_row: g,
+                        coefficients: self.coef,
+                        coefficient_plane: plane,
+                        row: g,
+                        width: w,
+                        i0: 1,
+                        i1: nx + 1,
+                    }
+                } else {
+                    RowIn {
+                        species: &below[(l - 2) * lsize..],
+                        species_plane: lplane,
+                        species_row: r,
+                        coefficients: self.coef,
+                        coefficient_plane: plane,
+                        row: g,
+                        width: w,
+                        i0: 1,
+                        i1: nx + 1,
+                    }
+                };
+                if l == k {
+                    let at = (g - out_row0) * w;
+                    self.update(input, at, out);
+                    if want_max {
+                        let species: Vec<&[T]> =
+                            out.iter().map(|o| &o[at + 1..at + 1 + nx]).collect();
+                        let coef: Vec<&[T]> = self
+                            .coef
+                            .chunks(plane)
+                            .map(|p| &p[g * w + 1..g * w + 1 + nx])
+                            .collect();
+                        dmax = dmax.max(self.model.max_cell_diffusivity(&species, &coef));
+                    }
+                } else {
+                    let level = &mut level[..lsize];
+                    let mut planes: Vec<&mut [T]> = level.chunks_mut(lplane).collect();
+                    let at = r * w;
+                    self.update(input, at, &mut planes);
+                    for (s, p) in planes.iter_mut().enumerate() {
+                        let row = &mut p[at..at + w];
+                        row[0] = ghost_value(&self.boundaries.west, s, row[1], row[nx]);
+                        row[nx + 1] = ghost_value(&self.boundaries.east, s, row[nx], row[1]);
+                    }
+                    if g == 1 && lo == 0 {
+                        self.ghost_row(level, lplane, r - 1, r, &self.boundaries.south);
+                    }
+                }
+            }
+        }
+        dmax
+    }
+
+    /// Runs the row kernel over the row in column blocks, writing each species' output at
+    /// `offset + i0..offset + i1` of its `dst` slice.
+    fn update(&self, input: RowIn<'_, T>, offset: usize, dst: &mut [&mut [T]]) {
+        for i0 in (1..=self.nx).step_by(self.block_cols) {
+            let i1 = (i0 + self.block_cols).min(self.nx + 1);
+            let seg = RowIn { i0, i1, ..input };
+            let mut outs: Vec<&mut [T]> = dst
+                .iter_mut()
+                .map(|d| &mut d[offset + i0..offset + i1])
+                .collect();
+            self.model
+                .update_row(&seg, self.dt, self.inv_h2, &mut outs, false);
+        }
+    }
+
+    /// Sets buffer row `target` of every species plane from row `inner` for a south or north
+    /// edge condition (never periodic here).
+    fn ghost_row(&self, level: &mut [T], lplane: usize, target: usize, inner: usize, b: &Boundary) {
+        let w = self.width();
+        for (s, p) in level.chunks_mut(lplane).enumerate() {
+            for i in 1..=self.nx {
+                let v = p[inner * w + i];
+                p[target * w + i] = ghost_value(b, s, v, v);
+            }
+        }
+    }
+}
