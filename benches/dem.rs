@@ -8,6 +8,11 @@
 //!   periodic x and y; k_n = 2e5, gamma_n = 50, mu = 0.5, dt = 1e-4, skin 0.1), the scene
 //!   of the LAMMPS `gran/hooke` comparison.
 //!
+//! Every iteration starts a fresh simulation from the initial state (construction not
+//! timed) and runs the same steps, so each sample times the same physical window: the box
+//! runs the 2000 steps of `benches/peers/dem_gran3d.lmp` on the CPU (the GPU rows time the
+//! first 200 steps only, since lavapipe is slow).
+//!
 //! Each on the CPU backend (f64) with 1 and 2 rayon threads, and on the GPU backend (f32)
 //! when an adapter exists (here: lavapipe, a CPU Vulkan driver, so GPU figures are lavapipe
 //! figures). Run: `cargo bench --bench dem` (or `-- --quick`).
@@ -15,7 +20,7 @@
 use std::hint::black_box;
 use std::time::Duration;
 
-use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use criterion::{BatchSize, BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use simkit::backend::{Backend, GpuContext, Simulation};
 use simkit::dem::scenes::{BedParams, granular_box, vibrating_bed};
 use simkit::dem::{Config, Dem, Scene};
@@ -46,22 +51,31 @@ fn bench_scene(
             .num_threads(threads)
             .build()
             .expect("thread pool");
-        let mut sim = Dem::new(scene, config, Backend::Cpu).expect("cpu sim");
         g.bench_function(BenchmarkId::new("cpu_f64_threads", threads), |b| {
-            b.iter(|| {
-                pool.install(|| sim.step(steps)).expect("step");
-                black_box(sim.steps_done())
-            })
+            b.iter_batched(
+                || Dem::new(scene, config, Backend::Cpu).expect("cpu sim"),
+                |mut sim| {
+                    pool.install(|| sim.step(steps)).expect("step");
+                    black_box(sim.steps_done())
+                },
+                BatchSize::PerIteration,
+            )
         });
     }
     if let Some(ctx) = gpu {
-        let mut sim = Dem::new(scene, config, Backend::Gpu(ctx)).expect("gpu sim");
+        // lavapipe manages ~1e6 particle-steps/s: the GPU rows time the first 200 steps.
+        let steps = steps.min(200);
+        g.throughput(Throughput::Elements(n * u64::from(steps)));
         g.bench_function(BenchmarkId::new("gpu_f32", &ctx.adapter_info().name), |b| {
-            b.iter(|| {
-                sim.step(steps).expect("step");
-                ctx.wait().expect("gpu wait");
-                black_box(sim.steps_done())
-            })
+            b.iter_batched(
+                || Dem::new(scene, config, Backend::Gpu(ctx)).expect("gpu sim"),
+                |mut sim| {
+                    sim.step(steps).expect("step");
+                    ctx.wait().expect("gpu wait");
+                    black_box(sim.steps_done())
+                },
+                BatchSize::PerIteration,
+            )
         });
     }
     g.finish();
@@ -85,7 +99,7 @@ fn benches(c: &mut Criterion) {
         "dem_box3d_20000",
         &gran_box(),
         &Config::default().with_dt(1e-4),
-        20,
+        2000,
         gpu.as_ref(),
     );
 }
