@@ -290,6 +290,49 @@ type Chunks<'a, T, const D: usize> = (
     &'a [[T; D]],
 );
 
+/// The per-particle arrays a drift pass walks: accelerations, velocities, positions, `aux`
+/// and reference positions.
+type Arrays<'a, T, const D: usize> = (
+    &'a mut [[T; D]],
+    &'a mut [[T; D]],
+    &'a mut [[T; D]],
+    &'a mut [[T; D]],
+    &'a [[T; D]],
+);
+
+/// Runs `body` on every block's slices of `arrays` (block index and [`Chunks`]), on the
+/// rayon pool when `parallel`, and returns the largest value it returned (0 if none).
+fn max_over_blocks<T: Real, const D: usize, F>(
+    bs: usize,
+    parallel: bool,
+    arrays: Arrays<'_, T, D>,
+    body: F,
+) -> f64
+where
+    F: Fn((usize, Chunks<'_, T, D>)) -> f64 + Sync + Send,
+{
+    let (acc, vel, pos, aux, reference) = arrays;
+    if parallel {
+        acc.par_chunks_mut(bs)
+            .zip(vel.par_chunks_mut(bs))
+            .zip(pos.par_chunks_mut(bs))
+            .zip(aux.par_chunks_mut(bs))
+            .zip(reference.par_chunks(bs))
+            .enumerate()
+            .map(body)
+            .reduce(|| 0.0, f64::max)
+    } else {
+        acc.chunks_mut(bs)
+            .zip(vel.chunks_mut(bs))
+            .zip(pos.chunks_mut(bs))
+            .zip(aux.chunks_mut(bs))
+            .zip(reference.chunks(bs))
+            .enumerate()
+            .map(body)
+            .fold(0.0, f64::max)
+    }
+}
+
 /// Reorders `v` so that slot `k` holds the element at `order[k]`.
 fn permute<X: Copy + Send + Sync>(v: &mut Vec<X>, order: &[u32], parallel: bool) {
     let sorted: Vec<X> = if parallel {
@@ -483,27 +526,8 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
                 0.0
             }
         };
-        if self.parallel {
-            p.acc
-                .par_chunks_mut(bs)
-                .zip(p.vel.par_chunks_mut(bs))
-                .zip(p.pos.par_chunks_mut(bs))
-                .zip(p.aux.par_chunks_mut(bs))
-                .zip(p.reference.par_chunks(bs))
-                .enumerate()
-                .map(body)
-                .reduce(|| 0.0, f64::max)
-        } else {
-            p.acc
-                .chunks_mut(bs)
-                .zip(p.vel.chunks_mut(bs))
-                .zip(p.pos.chunks_mut(bs))
-                .zip(p.aux.chunks_mut(bs))
-                .zip(p.reference.chunks(bs))
-                .enumerate()
-                .map(body)
-                .fold(0.0, f64::max)
-        }
+        let (acc, vel, pos, aux) = (&mut p.acc, &mut p.vel, &mut p.pos, &mut p.aux);
+        max_over_blocks(bs, self.parallel, (acc, vel, pos, aux, &p.reference), body)
     }
 
     /// Rebuilds the lists when the largest displacement `max2` (squared) exceeds skin / 2.
@@ -534,25 +558,13 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
             );
             wrap_and_measure(x, r, per, lo, len, half).to_f64()
         };
-        if self.parallel {
-            p.acc
-                .par_chunks_mut(bs)
-                .zip(p.vel.par_chunks_mut(bs))
-                .zip(p.pos.par_chunks_mut(bs))
-                .zip(p.aux.par_chunks_mut(bs))
-                .zip(p.reference.par_chunks(bs))
-                .map(drift)
-                .reduce(|| 0.0, f64::max)
-        } else {
-            p.acc
-                .chunks_mut(bs)
-                .zip(p.vel.chunks_mut(bs))
-                .zip(p.pos.chunks_mut(bs))
-                .zip(p.aux.chunks_mut(bs))
-                .zip(p.reference.chunks(bs))
-                .map(drift)
-                .fold(0.0, f64::max)
-        }
+        let (acc, vel, pos, aux) = (&mut p.acc, &mut p.vel, &mut p.pos, &mut p.aux);
+        max_over_blocks(
+            bs,
+            self.parallel,
+            (acc, vel, pos, aux, &p.reference),
+            |(_, c)| drift(c),
+        )
     }
 
     /// `steps` velocity Verlet steps: per step one force pass and one pass that finishes
@@ -598,25 +610,13 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
             );
             wrap_and_measure(x, r, per, lo, len, half).to_f64()
         };
-        let max2 = if self.parallel {
-            p.acc
-                .par_chunks_mut(bs)
-                .zip(p.vel.par_chunks_mut(bs))
-                .zip(p.pos.par_chunks_mut(bs))
-                .zip(p.aux.par_chunks_mut(bs))
-                .zip(p.reference.par_chunks(bs))
-                .map(drift)
-                .reduce(|| 0.0, f64::max)
-        } else {
-            p.acc
-                .chunks_mut(bs)
-                .zip(p.vel.chunks_mut(bs))
-                .zip(p.pos.chunks_mut(bs))
-                .zip(p.aux.chunks_mut(bs))
-                .zip(p.reference.chunks(bs))
-                .map(drift)
-                .fold(0.0, f64::max)
-        };
+        let (acc, vel, pos, aux) = (&mut p.acc, &mut p.vel, &mut p.pos, &mut p.aux);
+        let max2 = max_over_blocks(
+            bs,
+            self.parallel,
+            (acc, vel, pos, aux, &p.reference),
+            |(_, c)| drift(c),
+        );
         self.started = true;
         self.time += self.prep.dt;
         self.after_drift(max2);
