@@ -769,14 +769,18 @@ impl<const D: usize, T: Real> crate::engine::Engine for CpuEngine<D, T> {
     }
 
     fn name(&self) -> String {
-        format!(
-            "cpu {} ({} threads)",
-            if std::mem::size_of::<T>() == 4 {
-                "f32"
-            } else {
-                "f64"
-            },
+        let precision = if std::mem::size_of::<T>() == 4 {
+            "f32"
+        } else {
+            "f64"
+        };
+        // Below PARALLEL_MIN particles the passes run on the calling thread.
+        let threads = if self.parallel {
             rayon::current_num_threads()
-        )
+        } else {
+            1
+        };
+        let plural = if threads == 1 { "" } else { "s" };
+        format!("cpu {precision} ({threads} thread{plural})")
     }
 }
