@@ -12,22 +12,11 @@
 
 use std::time::Instant;
 
-use simkit::backend::{Backend, Error, GpuContext, Result, Simulation};
+use simkit::backend::{Backend, GpuContext, Result, Simulation};
+use simkit::cli::arg;
 use simkit::output::progress::Progress;
 use simkit::pp_coulomb::units::PhysicalInputs;
 use simkit::pp_coulomb::{Config, Integrator, PpCoulomb, Precision, scenes};
-
-fn arg<T: std::str::FromStr>(name: &str, default: T) -> Result<T> {
-    let args: Vec<String> = std::env::args().collect();
-    match args.iter().position(|a| a == name) {
-        None => Ok(default),
-        Some(i) => {
-            let v = args.get(i + 1).map(String::as_str).unwrap_or("");
-            v.parse()
-                .map_err(|_| Error::invalid(name, v, "expected a non-negative integer"))
-        }
-    }
-}
 
 fn main() -> Result<()> {
     let flag = |f: &str| std::env::args().any(|a| a == f);

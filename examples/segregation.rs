@@ -16,24 +16,13 @@ use std::path::Path;
 use std::time::Instant;
 
 use simkit::backend::{Backend, Error, GpuContext, Result, Simulation};
+use simkit::cli::arg;
 use simkit::dem::scenes::{MonolayerParams, like_neighbor_fraction, segregation_monolayer};
 use simkit::dem::{Config, Dem, Scene, State};
 use simkit::output::csv::CsvWriter;
 use simkit::output::png::write_png;
 use simkit::output::raster::{fill_disc, fill_rect};
 use simkit::output::{RgbImage, plot};
-
-fn arg<T: std::str::FromStr>(name: &str, default: T) -> Result<T> {
-    let args: Vec<String> = std::env::args().collect();
-    match args.iter().position(|a| a == name) {
-        None => Ok(default),
-        Some(i) => {
-            let v = args.get(i + 1).map(String::as_str).unwrap_or("");
-            v.parse()
-                .map_err(|_| Error::invalid(name, v, "could not parse the value"))
-        }
-    }
-}
 
 /// Top view (x-y) of the cylinder: species 0 orange, species 1 blue.
 fn top_view(scene: &Scene, s: &State, radius: f64) -> RgbImage {

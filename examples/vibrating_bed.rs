@@ -14,6 +14,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use simkit::backend::{Backend, Error, GpuContext, Result, Simulation};
+use simkit::cli::arg;
 use simkit::dem::scenes::{BedParams, vibrating_bed};
 use simkit::dem::{Config, Dem, Scene, State};
 use simkit::output::gif::GifWriter;
@@ -21,18 +22,6 @@ use simkit::output::png::write_png;
 use simkit::output::raster::{fill_disc, fill_rect};
 use simkit::output::vtk::{Particles, write_pvd};
 use simkit::output::{Colormap, RgbImage};
-
-fn arg<T: std::str::FromStr>(name: &str, default: T) -> Result<T> {
-    let args: Vec<String> = std::env::args().collect();
-    match args.iter().position(|a| a == name) {
-        None => Ok(default),
-        Some(i) => {
-            let v = args.get(i + 1).map(String::as_str).unwrap_or("");
-            v.parse()
-                .map_err(|_| Error::invalid(name, v, "could not parse the value"))
-        }
-    }
-}
 
 /// Discs coloured by speed, the vibrating plates in grey; `zw` is the plate displacement.
 fn draw(scene: &Scene, s: &State, zw: f64, vmax: f64) -> RgbImage {

@@ -21,3 +21,5 @@ pub use neighbor;
 pub use output;
 pub use pp_coulomb;
 pub use rd;
+
+pub mod cli;
