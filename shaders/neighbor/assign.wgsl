@@ -1,9 +1,10 @@
 // Wraps every position, finds its cell and counts particles per cell.
 // status[0]: number of bad particles (NaN, or outside a closed face without clamping);
 // status[1]: the smallest bad particle index.
-// status[2]: number of cells holding more than MAX_PER_CELL particles (refused: the per-cell
-// loops were measured to go wrong beyond 65536 particles in one cell on lavapipe).
-override MAX_PER_CELL: u32 = 65536u;
+// status[2]: number of cells holding more than MAX_PER_CELL particles (refused: the host sets
+// it from GpuCellList::max_per_cell, which keeps every shell walk within the adapter's shader
+// loop limit, and the per-cell sort's quadratic cost bounded).
+override MAX_PER_CELL: u32;
 @group(0) @binding(0) var<uniform> grid: NbGrid;
 @group(0) @binding(1) var<storage, read> positions: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read_write> wrapped: array<vec4<f32>>;

@@ -151,6 +151,83 @@ fn dispatch_and_download_beyond_the_workgroup_grid_limit() {
     .unwrap();
 }
 
+const LOOPS_WGSL: &str = r#"
+@group(0) @binding(0) var<storage, read> trips: array<u32>;
+@group(0) @binding(1) var<storage, read_write> out: array<u32>;
+@compute @workgroup_size(1)
+fn main() {
+    // Two loops one after the other, then a nested pair: the counts show how far each ran.
+    var a = 0u;
+    for (var m = 0u; m < trips[0]; m++) { a += 1u; }
+    var b = 0u;
+    for (var m = 0u; m < trips[1]; m++) { b += 1u; }
+    var c = 0u;
+    for (var i = 0u; i < trips[2]; i++) {
+        for (var j = 0u; j < trips[3]; j++) { c += 1u; }
+    }
+    out[0] = a;
+    out[1] = b;
+    out[2] = c;
+}
+"#;
+
+/// Runs the three loops of `LOOPS_WGSL` once with the given trip counts.
+fn run_loops(ctx: &backend::GpuContext, trips: [u32; 4]) -> Vec<u32> {
+    let kernel = Kernel::new(
+        ctx,
+        &KernelDesc {
+            label: "loops",
+            sources: &[LOOPS_WGSL],
+            entry: "main",
+            workgroup_size: 1,
+            constants: &[],
+        },
+    )
+    .unwrap();
+    let t = GpuBuffer::from_slice(ctx, "trips", &trips).unwrap();
+    let out = GpuBuffer::<u32>::zeroed(ctx, "out", 3).unwrap();
+    let bind = kernel.bind(ctx, &[t.binding(), out.binding()]).unwrap();
+    run_pass(ctx, "loops", |pass| {
+        kernel.dispatch_workgroups(ctx, pass, &bind, 1)
+    })
+    .unwrap();
+    out.download(ctx).unwrap()
+}
+
+#[test]
+fn shader_loop_limit_is_what_the_adapter_does() {
+    let Some(ctx) = gpu_or_skip("shader_loop_limit_is_what_the_adapter_does") else {
+        return;
+    };
+    // Within any limit: every loop runs to the end.
+    assert_eq!(
+        run_loops(&ctx, [30_000, 30_000, 40, 100]),
+        vec![30_000, 30_000, 4_000]
+    );
+    let long = run_loops(&ctx, [40_000, 40_000, 300, 300]);
+    match ctx.shader_loop_limit() {
+        None => assert_eq!(long, vec![40_000, 40_000, 90_000], "{}", ctx.summary()),
+        Some(limit) => {
+            // One counter for the whole invocation: the second loop gets what the first
+            // left (less the exit test each loop spends), and nested loops count their
+            // outer passes too. A driver that allowed more, or counted per loop, fails here.
+            let limit = limit as u32;
+            assert_eq!(long[0], 40_000);
+            let both = long[0] + long[1];
+            assert!(
+                (limit - 4..=limit).contains(&both),
+                "{long:?}, limit {limit}"
+            );
+            assert!(long[2] <= 300, "{long:?}");
+            let nested = run_loops(&ctx, [0, 0, 300, 300])[2];
+            assert!(
+                (limit - 2 * 302..=limit).contains(&nested),
+                "{nested}, limit {limit}"
+            );
+        }
+    }
+}
+
 #[test]
 fn oversize_buffer_is_refused_with_the_limit_named() {
     let Some(ctx) = gpu_or_skip("oversize_buffer_is_refused_with_the_limit_named") else {

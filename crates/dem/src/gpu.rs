@@ -9,7 +9,7 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use neighbor::{CELLS_WGSL, CellGrid, GpuCellList, OutOfBox};
+use neighbor::{CELLS_WGSL, CellGrid, GPU_LOOP_RESERVE, GpuCellList, OutOfBox};
 
 use backend::gpu::{DISPATCH_WGSL, Uniform};
 use backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Result};
@@ -180,6 +180,19 @@ impl GpuEngine {
                 n,
                 "too large for the GPU backend",
             ));
+        }
+        // The force kernel's wall loop runs beside its shell walk; the cell list leaves
+        // GPU_LOOP_RESERVE iterations for such loops on adapters that end shader loops early.
+        let max_walls = GPU_LOOP_RESERVE as usize / 2;
+        if ctx.shader_loop_limit().is_some() && prep.walls.len() > max_walls {
+            return Err(Error::Unsupported(format!(
+                "{} walls on adapter '{}', which ends shader loops after {} iterations per \
+                 invocation: at most {max_walls} walls fit beside the neighbour walk; use the \
+                 CPU backend",
+                prep.walls.len(),
+                ctx.adapter_info().name,
+                ctx.shader_loop_limit().unwrap_or(0)
+            )));
         }
         let origin = prep.lo;
         let pos_h: Vec<[f32; 4]> = (0..n)

@@ -161,6 +161,42 @@ fn gpu_refuses_position_verlet() {
 }
 
 #[test]
+fn gpu_wall_count_within_the_adapter_loop_limit() {
+    // On an adapter that ends shader loops early (llvmpipe), the force kernel's wall loop
+    // shares the budget with the neighbour walk: too many walls is an error, not a kernel
+    // that silently skips some. Elsewhere any count is taken.
+    let Some(ctx) = gpu_or_skip("gpu_wall_count_within_the_adapter_loop_limit") else {
+        return;
+    };
+    let mut scene = dilute_gas();
+    let floor = Material::new(0.7, 0.05);
+    while scene.walls().len() < 513 {
+        // Parallel floors under the box floor: never touched, only looped over.
+        let k = scene.walls().len() as f64;
+        scene
+            .add_wall(dem::Wall::plane(
+                [0.0, 0.0, 1.0],
+                [0.0, 0.0, -1.0 - k],
+                floor,
+            ))
+            .unwrap();
+    }
+    let r = Dem::new(&scene, &Config::default(), Backend::Gpu(&ctx));
+    match ctx.shader_loop_limit() {
+        Some(_) => {
+            let Err(e) = r else {
+                panic!("513 walls accepted on {}", ctx.summary())
+            };
+            let e = e.to_string();
+            assert!(e.contains("513 walls") && e.contains("at most 512"), "{e}");
+        }
+        None => {
+            r.unwrap();
+        }
+    }
+}
+
+#[test]
 fn cylinder_monolayer_agrees_after_50_steps() {
     // Species table, vibrating floor, lid and cylinder wall, box origin off zero.
     let Some(ctx) = gpu_or_skip("cylinder_monolayer_agrees_after_50_steps") else {

@@ -26,11 +26,16 @@ const LIST_WGSL: &str = include_str!("../../../shaders/neighbor/list.wgsl");
 /// assignment could exceed the cell margin ([`crate::CELL_MARGIN`]).
 pub const GPU_MAX_CELLS_PER_AXIS: usize = 4096;
 
-/// The most particles one cell of a [`GpuCellList`] may hold. A denser cell is reported by
-/// [`GpuCellList::check`] as an error (on lavapipe the per-cell loops were measured to drop
-/// particles beyond 65 536 in one cell; with cells at least the cutoff wide such a cell
-/// means a cutoff far too large for the density).
+/// The most particles one cell of a [`GpuCellList`] may hold on any adapter: the per-cell
+/// sort that fixes the order inside a cell is quadratic in the cell population, and with
+/// cells at least the cutoff wide such a cell means a cutoff far too large for the density.
+/// Adapters with a shader loop limit allow fewer ([`GpuCellList::max_per_cell`]).
 pub const GPU_MAX_PER_CELL: usize = 65_536;
+
+/// Loop iterations per invocation that [`GpuCellList::max_per_cell`] leaves, on an adapter
+/// with a shader loop limit ([`GpuContext::shader_loop_limit`]), to a kernel's own loops
+/// beside one full-shell walk over the cells (wall loops, small fixed loops).
+pub const GPU_LOOP_RESERVE: u64 = 1024;
 
 static NEXT_ID: AtomicU64 = AtomicU64::new(1);
 
@@ -150,7 +155,7 @@ pub fn positions_to_f32<const D: usize>(positions: &[[f64; D]]) -> Vec<[f32; 4]>
 /// | [`GpuCellList::cell_start`] | `array<u32>` | `n_cells + 1` offsets into the sorted arrays |
 /// | [`GpuCellList::sorted_ids`] | `array<u32>` | particle ids in cell order (ascending inside a cell) |
 /// | [`GpuCellList::sorted_pos`] | `array<vec4<f32>>` | wrapped positions in cell order |
-/// | [`GpuCellList::status`] | `array<u32>` | `[bad particle count, smallest bad index, cells over GPU_MAX_PER_CELL]` |
+/// | [`GpuCellList::status`] | `array<u32>` | `[bad particle count, smallest bad index, cells over max_per_cell]` |
 ///
 /// Prepend [`CELLS_WGSL`] to a kernel's source for `NbGrid` and the cell/shell/minimum-image
 /// helpers (its header shows the full-shell loop).
@@ -158,6 +163,7 @@ pub struct GpuCellList<const D: usize> {
     id: u64,
     grid: CellGrid<D>,
     n: usize,
+    max_per_cell: usize,
     params_value: GpuGridParams,
     params: Uniform<GpuGridParams>,
     wrapped: GpuBuffer<[f32; 4]>,
@@ -213,6 +219,7 @@ impl<const D: usize> GpuCellList<D> {
             ));
         }
         let params_value = GpuGridParams::new(grid, n as u32)?;
+        let max_per_cell = Self::max_per_cell(ctx);
         let params = Uniform::new(ctx, "neighbor grid", &params_value);
         let m = n.max(1);
         let nc = grid.n_cells();
@@ -240,7 +247,7 @@ impl<const D: usize> GpuCellList<D> {
             ASSIGN_WGSL,
             "nb_assign",
             256,
-            &[("MAX_PER_CELL", GPU_MAX_PER_CELL as f64)],
+            &[("MAX_PER_CELL", max_per_cell as f64)],
         )?;
         let b = k.bind(
             ctx,
@@ -286,6 +293,7 @@ impl<const D: usize> GpuCellList<D> {
             id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
             grid: grid.clone(),
             n,
+            max_per_cell,
             params_value,
             params,
             wrapped,
@@ -331,17 +339,42 @@ impl<const D: usize> GpuCellList<D> {
         self.check(ctx)
     }
 
+    /// The most particles one cell may hold on `ctx`'s adapter: [`GPU_MAX_PER_CELL`], or on
+    /// an adapter with a shader loop limit (llvmpipe: 65,535 iterations per invocation,
+    /// all loops together) the population at which a full-shell walk over 3^D cells, each
+    /// costing its population plus one exit test, stays within the limit with
+    /// [`GPU_LOOP_RESERVE`] iterations to spare: 2,388 in 3D and 7,166 in 2D on llvmpipe.
+    /// Kernels that walk the shell with [`CELLS_WGSL`] are then safe from truncation.
+    pub fn max_per_cell(ctx: &GpuContext) -> usize {
+        let shell = 3usize.pow(D as u32);
+        match ctx.shader_loop_limit() {
+            Some(limit) => {
+                let walk = limit.saturating_sub(GPU_LOOP_RESERVE) as usize;
+                (walk / shell).saturating_sub(1).min(GPU_MAX_PER_CELL)
+            }
+            None => GPU_MAX_PER_CELL,
+        }
+    }
+
     /// Downloads the status words of the last build: an error for a cell holding more than
-    /// [`GPU_MAX_PER_CELL`] particles, or one that names the first particle with
-    /// a NaN/infinite coordinate or (without [`OutOfBox::Clamp`]) outside a closed face.
+    /// [`max_per_cell`](Self::max_per_cell) particles, or one that names the first particle
+    /// with a NaN/infinite coordinate or (without [`OutOfBox::Clamp`]) outside a closed face.
     pub fn check(&self, ctx: &GpuContext) -> Result<()> {
         let s = self.status.download(ctx)?;
         if s[2] > 0 {
+            let why = match ctx.shader_loop_limit() {
+                Some(limit) => format!(
+                    "adapter '{}' ends shader loops after {limit} iterations per invocation \
+                     and a full-shell walk must stay below that",
+                    ctx.adapter_info().name
+                ),
+                None => "the per-cell sort is quadratic in the cell population".to_string(),
+            };
             return Err(Error::Unsupported(format!(
-                "{} cell(s) of the GPU cell list hold more than {GPU_MAX_PER_CELL} particles; \
-                 use a smaller cutoff (cells are at least the cutoff wide) or the CPU \
+                "{} cell(s) of the GPU cell list hold more than {} particles (the limit here: \
+                 {why}); use a smaller cutoff (cells are at least the cutoff wide) or the CPU \
                  SortedCells",
-                s[2]
+                s[2], self.max_per_cell
             )));
         }
         if s[0] == 0 {
@@ -427,7 +460,7 @@ impl<const D: usize> GpuCellList<D> {
         &self.sorted_pos
     }
 
-    /// `[bad particle count, smallest bad index, cells over GPU_MAX_PER_CELL]` of the last
+    /// `[bad particle count, smallest bad index, cells over max_per_cell]` of the last
     /// build.
     pub fn status(&self) -> &GpuBuffer<u32> {
         &self.status

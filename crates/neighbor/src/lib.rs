@@ -57,8 +57,8 @@ mod verlet;
 
 pub use brute::BruteForce;
 pub use gpu::{
-    CELLS_WGSL, GPU_MAX_CELLS_PER_AXIS, GPU_MAX_PER_CELL, GpuCellList, GpuGridParams,
-    GpuNeighborList, GpuNeighborSearch, positions_to_f32,
+    CELLS_WGSL, GPU_LOOP_RESERVE, GPU_MAX_CELLS_PER_AXIS, GPU_MAX_PER_CELL, GpuCellList,
+    GpuGridParams, GpuNeighborList, GpuNeighborSearch, positions_to_f32,
 };
 pub use grid::{CELL_MARGIN, CellGrid, MAX_CELLS, OutOfBox};
 pub use linked::{EMPTY, LinkedCells};

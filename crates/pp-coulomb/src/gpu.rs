@@ -23,8 +23,31 @@ const PRELUDE_F32: &str =
 const PRELUDE_F64: &str =
     "alias REAL = f64;\nfn rsqrt_real(x: REAL) -> REAL { return 1.0 / sqrt(x); }\n";
 
+/// The most particles the GPU backend takes on `ctx`'s adapter: unlimited (`usize::MAX`)
+/// except where the driver ends shader loops early ([`GpuContext::shader_loop_limit`]):
+/// every invocation walks all source tiles, `WG + 2` loop iterations per tile of `WG`
+/// particles, so llvmpipe (65,535 iterations) takes at most 64,512 particles.
+pub fn gpu_max_particles(ctx: &GpuContext) -> usize {
+    match ctx.shader_loop_limit() {
+        Some(limit) => (limit.saturating_sub(1) as usize / (WG + 2)) * WG,
+        None => usize::MAX,
+    }
+}
+
 /// Builds the engine for the configured precision (f64 needs `SHADER_F64`).
 pub(crate) fn engine(ctx: &GpuContext, p: &Particles, c: &Config) -> Result<Box<dyn Engine>> {
+    let max = gpu_max_particles(ctx);
+    if p.len() > max {
+        return Err(Error::Unsupported(format!(
+            "{} particles on adapter '{}': it ends a shader's loops after {} iterations per \
+             invocation, which allows at most {max} particles in the all-pairs kernel; use the \
+             CPU backend (faster than this software driver on the same processor) or a \
+             hardware GPU",
+            p.len(),
+            ctx.adapter_info().name,
+            ctx.shader_loop_limit().unwrap_or(0),
+        )));
+    }
     Ok(match c.precision {
         Precision::F32 => Box::new(GpuEngine::<f32>::new(ctx, p, c, PRELUDE_F32)?),
         Precision::F64 => {

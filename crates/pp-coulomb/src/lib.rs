@@ -48,5 +48,6 @@ pub mod units;
 pub use backend::{Backend, Simulation};
 pub use config::{Config, ForceLaw, Integrator, Precision};
 pub use diagnostics::{Diagnostics, diagnostics, potential_energy, reference_accelerations};
+pub use gpu::gpu_max_particles;
 pub use particles::{Particles, Region, Species, Velocities};
 pub use sim::PpCoulomb;

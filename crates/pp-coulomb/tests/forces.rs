@@ -230,3 +230,29 @@ fn coincident_particles_in_exact_mode_name_the_pair() {
         assert!(acc.iter().flatten().all(|c| c.is_finite()));
     }
 }
+
+#[test]
+fn gpu_refuses_more_particles_than_the_adapter_loops_allow() {
+    let Some(ctx) = gpu_or_skip("gpu_refuses_more_particles_than_the_adapter_loops_allow") else {
+        return;
+    };
+    let max = pp_coulomb::gpu_max_particles(&ctx);
+    let Some(limit) = ctx.shader_loop_limit() else {
+        assert_eq!(max, usize::MAX);
+        println!("{}: no shader loop limit, no particle limit", ctx.summary());
+        return;
+    };
+    // llvmpipe: 504 tiles of 128 particles, 130 loop iterations each, fit in 65,535.
+    assert_eq!(limit, backend::gpu::LLVMPIPE_LOOP_LIMIT);
+    assert_eq!(max, 64_512);
+    let config = Config::new(0.01, ForceLaw::Plummer { epsilon: 0.1 });
+    // Construction only: one force evaluation at this size takes seconds on llvmpipe.
+    PpCoulomb::new(plasma(max, 5), config, Backend::Gpu(&ctx)).unwrap();
+    let e = PpCoulomb::new(plasma(max + 1, 5), config, Backend::Gpu(&ctx))
+        .expect_err("one particle over the limit")
+        .to_string();
+    assert!(
+        e.contains("64513 particles") && e.contains("at most 64512"),
+        "{e}"
+    );
+}

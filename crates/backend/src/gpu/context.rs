@@ -8,6 +8,10 @@ use crate::{Error, Result};
 /// (e.g. `SIMKIT_ADAPTER=llvmpipe` or `SIMKIT_ADAPTER=nvidia`).
 pub const ADAPTER_ENV: &str = "SIMKIT_ADAPTER";
 
+/// Loop iterations per shader invocation after which llvmpipe ends all loops (see
+/// [`GpuContext::shader_loop_limit`]).
+pub const LLVMPIPE_LOOP_LIMIT: u64 = 65_535;
+
 /// A description of one adapter, as found by [`GpuContext::list_adapters`].
 #[derive(Clone, Debug)]
 pub struct AdapterSummary {
@@ -232,6 +236,24 @@ impl GpuContext {
     /// Whether this adapter is a CPU implementation (lavapipe, SwiftShader, WARP).
     pub fn is_cpu_adapter(&self) -> bool {
         self.inner.info.device_type == wgpu::DeviceType::Cpu
+    }
+
+    /// The most loop iterations one shader invocation may run on this adapter, counted over
+    /// all loops of the shader together, or `None` where the driver imposes no such limit.
+    ///
+    /// Mesa's llvmpipe (the driver under lavapipe) stops a shader's loops once 65,535
+    /// iterations have run in one invocation: one counter, shared by every loop of the
+    /// shader, nested ones included (gallivm's `LP_MAX_TGSI_LOOP_ITERATIONS`). The shader
+    /// then goes on with wrong data and no error. Kernels whose loops could run longer
+    /// (per-cell scans over dense cells, all-pairs sums over many particles) check their
+    /// worst case against this and refuse the work with an error on such an adapter; the
+    /// backend's tests measure the limit.
+    pub fn shader_loop_limit(&self) -> Option<u64> {
+        let info = &self.inner.info;
+        let llvmpipe = [&info.name, &info.driver]
+            .iter()
+            .any(|s| s.to_ascii_lowercase().contains("llvmpipe"));
+        llvmpipe.then_some(LLVMPIPE_LOOP_LIMIT)
     }
 
     /// Largest storage buffer, in bytes, a single binding may cover.
