@@ -5,7 +5,7 @@ use rayon::prelude::*;
 use backend::{Error, Result};
 
 use crate::CellGrid;
-use crate::traverse::{Scratch, View, visit_cells, visit_particle};
+use crate::traverse::{COORD_PAD, Scratch, View, visit_cells, visit_particle};
 
 /// Cells handed to one rayon task in parallel traversals.
 const CELLS_PER_TASK: usize = 64;
@@ -144,7 +144,8 @@ impl<const D: usize> SortedCells<D> {
         self.order.resize(n, 0);
         self.rank.resize(n, 0);
         for col in &mut self.coords {
-            col.resize(n, 0.0);
+            // The padding is read by the distance pass (and masked off), never reported.
+            col.resize(n + COORD_PAD, 0.0);
         }
         let order = SharedSlice::new(&mut self.order);
         let coords: [SharedSlice<f64>; D] =

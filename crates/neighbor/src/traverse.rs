@@ -12,11 +12,19 @@ use multiversion::multiversion;
 use crate::CellGrid;
 use crate::stencil::Shell;
 
+/// Lanes the distance pass always computes together (one AVX-512 vector of `f64`).
+const LANES: usize = 8;
+
+/// Coordinates stored after the last particle so that the distance pass may read a whole
+/// vector past the end of any run.
+pub(crate) const COORD_PAD: usize = LANES - 1;
+
 /// Borrowed sorted-cell data: what a traversal reads.
 pub(crate) struct View<'a, const D: usize> {
     pub grid: &'a CellGrid<D>,
     pub cell_start: &'a [u32],
     pub order: &'a [u32],
+    /// Sorted coordinates, each followed by [`COORD_PAD`] padding values.
     pub coords: [&'a [f64]; D],
 }
 
@@ -70,16 +78,20 @@ fn particle_runs<const D: usize, const MI: bool, F: FnMut(usize, usize, [f64; D]
             continue;
         }
         let n = j1 - j0;
-        if r2buf.len() < n {
-            r2buf.resize(n, 0.0);
+        // Whole vectors: the distance pass runs on past the run into the next particles (or
+        // the padding after the last one, `COORD_PAD`); the hit masks drop those lanes.
+        let nv = n.next_multiple_of(LANES);
+        let jv = j0 + nv;
+        if r2buf.len() < nv {
+            r2buf.resize(nv, 0.0);
         }
-        let buf = &mut r2buf[..n];
+        let buf = &mut r2buf[..nv];
         if !MI && D == 3 {
             // One fused pass (same operation order as the generic loop below).
             let (xs, ys, zs) = (
-                &v.coords[0][j0..j1],
-                &v.coords[1][j0..j1],
-                &v.coords[2][j0..j1],
+                &v.coords[0][j0..jv],
+                &v.coords[1][j0..jv],
+                &v.coords[2][j0..jv],
             );
             let (px, py, pz) = (pi[0], pi[1], pi[2]);
             let (sx, sy, sz) = (run.shift[0], run.shift[1], run.shift[2]);
@@ -90,7 +102,7 @@ fn particle_runs<const D: usize, const MI: bool, F: FnMut(usize, usize, [f64; D]
                 *b = dx * dx + dy * dy + dz * dz;
             }
         } else if !MI && D == 2 {
-            let (xs, ys) = (&v.coords[0][j0..j1], &v.coords[1][j0..j1]);
+            let (xs, ys) = (&v.coords[0][j0..jv], &v.coords[1][j0..jv]);
             let (px, py) = (pi[0], pi[1]);
             let (sx, sy) = (run.shift[0], run.shift[1]);
             for ((b, &x), &y) in buf.iter_mut().zip(xs).zip(ys) {
@@ -101,7 +113,7 @@ fn particle_runs<const D: usize, const MI: bool, F: FnMut(usize, usize, [f64; D]
         } else {
             buf.fill(0.0);
             for d in 0..D {
-                let xs = &v.coords[d][j0..j1];
+                let xs = &v.coords[d][j0..jv];
                 let (p, s, h, l) = (pi[d], run.shift[d], half_len[d], lengths[d]);
                 if MI && periodic[d] {
                     for (b, &x) in buf.iter_mut().zip(xs) {
@@ -129,6 +141,10 @@ fn particle_runs<const D: usize, const MI: bool, F: FnMut(usize, usize, [f64; D]
             let mut mask = 0u64;
             for (k, &r2) in chunk.iter().enumerate() {
                 mask |= u64::from(r2 <= rc2) << k;
+            }
+            let left = n - chunk_no * 64;
+            if left < 64 {
+                mask &= (1u64 << left) - 1;
             }
             while mask != 0 {
                 let jj = chunk_no * 64 + mask.trailing_zeros() as usize;
