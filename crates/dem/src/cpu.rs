@@ -6,9 +6,10 @@
 //! forces on its own particles and queues the reactions it owes to later blocks, per target
 //! block), then [`CpuEngine::finish`], which adds the queued reactions in block order, turns
 //! forces into accelerations, closes the step with the half kick and opens the next one
-//! (half kick, drift, wrap, rebuild check). Block boundaries depend only on the particle
-//! count, so the result is bit-for-bit independent of the number of threads, with no
-//! atomics and no locks.
+//! (half kick, drift, rebuild check). Periodic coordinates are wrapped at list rebuilds
+//! only, and each listed pair keeps the periodic image it had then, so the force loop has
+//! no minimum-image test. Block boundaries depend only on the particle count, so the result
+//! is bit-for-bit independent of the number of threads, with no atomics and no locks.
 
 use multiversion::multiversion;
 use rayon::prelude::*;
@@ -48,6 +49,9 @@ struct WallT<T> {
     radius: T,
     coeff: Coeff<T>,
     vibrating: bool,
+    /// Whether the wall depends on a periodic coordinate (then the particle position is
+    /// wrapped before the wall test: positions are wrapped only at list builds).
+    wrap: bool,
 }
 
 /// Per-particle data in sorted order (permuted at every list rebuild).
@@ -86,10 +90,14 @@ pub(crate) struct CpuEngine<const D: usize, T: Real> {
     /// Rebuild when a particle moved farther than this squared distance since the build.
     rebuild_dist2: f64,
     periodic: [bool; D],
+    /// Lower corner and lengths of the box: periodic coordinates are wrapped into
+    /// `[lo, lo + len)` at every list build (and only then).
+    lo: [T; D],
     len: [T; D],
-    half: [T; D],
     /// Square of twice the largest radius, in `T` (no pair `r_i + r_j` exceeds it).
     cut2: T,
+    /// Gap below which a wall is listed for a particle at a list build (the skin).
+    wall_margin: f64,
 }
 
 /// Read-only inputs of the force pass.
@@ -107,8 +115,8 @@ struct ForceInput<'a, T, const D: usize> {
     vw: T,
     vert: usize,
     periodic: [bool; D],
+    lo: [T; D],
     len: [T; D],
-    half: [T; D],
     /// Square of the largest contact distance (twice the largest radius).
     cut2: T,
     block: usize,
@@ -143,56 +151,122 @@ fn tangential<T: Real, const D: usize, const FRICTION: bool>(
     }
 }
 
-/// Wall forces on particle `i` added to `f`.
+/// The force of wall `w` on particle `i` (if they touch) added to `f`.
 #[inline(always)]
-fn wall_forces<T: Real, const D: usize, const FRICTION: bool>(
+fn wall_force<T: Real, const D: usize, const FRICTION: bool>(
     inp: &ForceInput<'_, T, D>,
+    w: &WallT<T>,
     i: usize,
     f: &mut [T; D],
 ) {
-    let (pos, v, m, r) = (&inp.pos[i], &inp.vel[i], inp.mass[i], inp.radius[i]);
-    for w in inp.walls {
-        let mut n = [T::ZERO; D];
-        let delta;
-        let mut wv = [T::ZERO; D];
-        if w.cylinder {
-            let dx = pos[0] - w.center[0];
-            let dy = pos[1] - w.center[1];
-            let rho = (dx * dx + dy * dy).sqrt();
-            delta = rho + r - w.radius;
-            if delta <= T::ZERO || rho <= T::ZERO {
-                continue;
-            }
-            n[0] = -(dx / rho);
-            n[1] = -(dy / rho);
-        } else {
-            let mut h = -w.offset;
-            for d in 0..D {
-                n[d] = w.normal[d];
-                h += n[d] * pos[d];
-            }
-            if w.vibrating {
-                h = h - inp.zw * n[inp.vert];
-            }
-            delta = r - h;
-            if delta <= T::ZERO {
-                continue;
-            }
+    let (v, m, r) = (&inp.vel[i], inp.mass[i], inp.radius[i]);
+    let mut pos = inp.pos[i];
+    if w.wrap {
+        wrap(&mut pos, inp.periodic, inp.lo, inp.len);
+    }
+    let mut n = [T::ZERO; D];
+    let delta;
+    let mut wv = [T::ZERO; D];
+    if w.cylinder {
+        let dx = pos[0] - w.center[0];
+        let dy = pos[1] - w.center[1];
+        let rho = (dx * dx + dy * dy).sqrt();
+        delta = rho + r - w.radius;
+        if delta <= T::ZERO || rho <= T::ZERO {
+            return;
+        }
+        n[0] = -(dx / rho);
+        n[1] = -(dy / rho);
+    } else {
+        let mut h = -w.offset;
+        for d in 0..D {
+            n[d] = w.normal[d];
+            h += n[d] * pos[d];
         }
         if w.vibrating {
-            wv[inp.vert] = inp.vw;
+            h = h - inp.zw * n[inp.vert];
         }
-        let mut vrel = [T::ZERO; D];
-        let mut vn = T::ZERO;
+        delta = r - h;
+        if delta <= T::ZERO {
+            return;
+        }
+    }
+    if w.vibrating {
+        wv[inp.vert] = inp.vw;
+    }
+    let mut vrel = [T::ZERO; D];
+    let mut vn = T::ZERO;
+    for d in 0..D {
+        vrel[d] = v[d] - wv[d];
+        vn += vrel[d] * n[d];
+    }
+    let fnorm = m * (w.coeff.kappa * delta - w.coeff.two_b * vn);
+    for d in 0..D {
+        f[d] += fnorm * n[d];
+    }
+    tangential::<T, D, FRICTION>(f, n, vn, vrel, fnorm, m, &w.coeff);
+}
+
+/// The force of the contact of particles `i` and `j` at separation `sep = x_i - x_j`: added
+/// to `fi`, its reaction to `j` (in `f` when `j` is in block `b`, else queued in `b.ghosts`).
+/// Pairs farther apart than their radii do nothing.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn pair_contact<T: Real, const D: usize, const FRICTION: bool>(
+    inp: &ForceInput<'_, T, D>,
+    i: usize,
+    j: usize,
+    sep: [T; D],
+    fi: &mut [T; D],
+    b_start: usize,
+    b_end: usize,
+    f: &mut [[T; D]],
+    ghosts: &mut [Vec<(u32, [T; D])>],
+) {
+    let mut r2 = T::ZERO;
+    for s in sep {
+        r2 += s * s;
+    }
+    // Most list entries are not in contact: test against the largest contact distance
+    // before loading the partner's radius.
+    if r2 >= inp.cut2 {
+        return;
+    }
+    let rsum = inp.radius[i] + inp.radius[j];
+    if r2 >= rsum * rsum {
+        return;
+    }
+    let dist = r2.sqrt();
+    let delta = rsum - dist;
+    let inv = T::of(1.0) / dist;
+    let (vi, vj) = (&inp.vel[i], &inp.vel[j]);
+    let mut n = [T::ZERO; D];
+    let mut vrel = [T::ZERO; D];
+    let mut vn = T::ZERO;
+    for d in 0..D {
+        n[d] = sep[d] * inv;
+        vrel[d] = vi[d] - vj[d];
+        vn += vrel[d] * n[d];
+    }
+    let (m, mj) = (inp.mass[i], inp.mass[j]);
+    let mij = m * mj / (m + mj);
+    let c = &inp.coeff[pair_index(inp.species[i], inp.species[j], inp.n_species)];
+    let fnorm = mij * (c.kappa * delta - c.two_b * vn);
+    let mut fp = [T::ZERO; D];
+    for d in 0..D {
+        fp[d] = fnorm * n[d];
+    }
+    tangential::<T, D, FRICTION>(&mut fp, n, vn, vrel, fnorm, mij, c);
+    for d in 0..D {
+        fi[d] += fp[d];
+    }
+    if j < b_end {
+        let fj = &mut f[j - b_start];
         for d in 0..D {
-            vrel[d] = v[d] - wv[d];
-            vn += vrel[d] * n[d];
+            fj[d] = fj[d] - fp[d];
         }
-        let fnorm = m * (w.coeff.kappa * delta - w.coeff.two_b * vn);
-        for d in 0..D {
-            f[d] += fnorm * n[d];
-        }
-        tangential::<T, D, FRICTION>(f, n, vn, vrel, fnorm, m, &w.coeff);
+    } else {
+        ghosts[j / inp.block].push((j as u32, fp));
     }
 }
 
@@ -207,74 +281,35 @@ fn block_forces<T: Real, const D: usize, const FRICTION: bool>(
         g.clear();
     }
     f.fill([T::ZERO; D]);
-    let (pos, vel, radius, mass) = (inp.pos, inp.vel, inp.radius, inp.mass);
+    let pos = inp.pos;
+    let (start, end) = (b.start, b.end);
+    let mut next_wall = 0;
     for k in 0..f.len() {
-        let i = b.start + k;
+        let i = start + k;
         // Reactions already received from earlier particles of this block.
         let mut fi = f[k];
-        let m = mass[i];
+        let m = inp.mass[i];
         for (c, g) in fi.iter_mut().zip(inp.gravity) {
             *c += g * m;
         }
-        wall_forces::<T, D, FRICTION>(inp, i, &mut fi);
-        let (xi, vi, r) = (pos[i], vel[i], radius[i]);
+        while let Some(&(wk, w)) = b.walls.get(next_wall) {
+            if wk as usize != k {
+                break;
+            }
+            wall_force::<T, D, FRICTION>(inp, &inp.walls[w as usize], i, &mut fi);
+            next_wall += 1;
+        }
+        let xi = pos[i];
+        // Same image: no periodic test per pair (positions are not wrapped between builds).
         for &j in &b.idx[b.offsets[k] as usize..b.offsets[k + 1] as usize] {
             let j = j as usize;
-            // Minimum-image separation (positions are wrapped into the box).
-            let mut sep = [T::ZERO; D];
-            let mut r2 = T::ZERO;
-            for d in 0..D {
-                let mut s = xi[d] - pos[j][d];
-                if inp.periodic[d] {
-                    if s > inp.half[d] {
-                        s = s - inp.len[d];
-                    } else if s < -inp.half[d] {
-                        s += inp.len[d];
-                    }
-                }
-                sep[d] = s;
-                r2 += s * s;
-            }
-            // Most list entries are not in contact: test against the largest contact
-            // distance before loading the partner's radius.
-            if r2 >= inp.cut2 {
-                continue;
-            }
-            let rsum = r + radius[j];
-            if r2 >= rsum * rsum {
-                continue;
-            }
-            let dist = r2.sqrt();
-            let delta = rsum - dist;
-            let inv = T::of(1.0) / dist;
-            let mut n = [T::ZERO; D];
-            let mut vrel = [T::ZERO; D];
-            let mut vn = T::ZERO;
-            for d in 0..D {
-                n[d] = sep[d] * inv;
-                vrel[d] = vi[d] - vel[j][d];
-                vn += vrel[d] * n[d];
-            }
-            let mj = mass[j];
-            let mij = m * mj / (m + mj);
-            let c = &inp.coeff[pair_index(inp.species[i], inp.species[j], inp.n_species)];
-            let fnorm = mij * (c.kappa * delta - c.two_b * vn);
-            let mut fp = [T::ZERO; D];
-            for d in 0..D {
-                fp[d] = fnorm * n[d];
-            }
-            tangential::<T, D, FRICTION>(&mut fp, n, vn, vrel, fnorm, mij, c);
-            for d in 0..D {
-                fi[d] += fp[d];
-            }
-            if j < b.end {
-                let fj = &mut f[j - b.start];
-                for d in 0..D {
-                    fj[d] = fj[d] - fp[d];
-                }
-            } else {
-                b.ghosts[j / inp.block].push((j as u32, fp));
-            }
+            let sep: [T; D] = std::array::from_fn(|d| xi[d] - pos[j][d]);
+            pair_contact::<T, D, FRICTION>(inp, i, j, sep, &mut fi, start, end, f, &mut b.ghosts);
+        }
+        for &(j, shift) in &b.img[b.img_offsets[k] as usize..b.img_offsets[k + 1] as usize] {
+            let j = j as usize;
+            let sep: [T; D] = std::array::from_fn(|d| (xi[d] - pos[j][d]) - shift[d]);
+            pair_contact::<T, D, FRICTION>(inp, i, j, sep, &mut fi, start, end, f, &mut b.ghosts);
         }
         f[k] = fi;
     }
@@ -380,6 +415,11 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
                 radius: T::of(w.radius),
                 coeff: Coeff::of(&w.coeff),
                 vibrating: w.vibrating,
+                wrap: if w.cylinder {
+                    (0..D.min(2)).any(|d| periodic[d])
+                } else {
+                    (0..D).any(|d| periodic[d] && w.normal[d] != 0.0)
+                },
             })
             .collect();
         let mut e = Self {
@@ -394,22 +434,31 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
             gravity,
             rebuild_dist2: 0.25 * prep.skin * prep.skin,
             periodic,
+            lo: lo.map(T::of),
             len: len.map(T::of),
-            half: len.map(|l| T::of(0.5 * l)),
             cut2: (r_max + r_max) * (r_max + r_max),
+            wall_margin: prep.skin,
             prep,
             time: 0.0,
             started: false,
         };
-        let per = e.periodic;
-        let (lo, len) = (lo.map(T::of), e.len);
-        e.p.pos.par_iter_mut().for_each(|x| wrap(x, per, lo, len));
         e.rebuild();
         Ok(e)
     }
 
-    /// Sorts the particles by cell and rebuilds the half lists.
+    /// Wraps the periodic coordinates into the box, sorts the particles by cell and
+    /// rebuilds the half lists (each pair with its periodic image, fixed until the next
+    /// build).
     fn rebuild(&mut self) {
+        let (per, lo, len) = (self.periodic, self.lo, self.len);
+        if self.parallel {
+            self.p
+                .pos
+                .par_iter_mut()
+                .for_each(|x| wrap(x, per, lo, len));
+        } else {
+            self.p.pos.iter_mut().for_each(|x| wrap(x, per, lo, len));
+        }
         let order = self.bins.sort(&self.p.pos);
         let p = &mut self.p;
         let par = self.parallel;
@@ -424,6 +473,49 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
         permute(&mut p.id, &order, par);
         p.reference.clone_from(&p.pos);
         self.bins.build_lists(&p.pos, &mut self.blocks, par);
+        self.find_wall_candidates();
+    }
+
+    /// Lists for every particle the walls it may touch before the next list build: those
+    /// within `skin` (twice the largest displacement allowed between builds, plus 1 % of
+    /// the radius for round-off) of contact at any phase of the vibration; walls that
+    /// depend on a periodic coordinate are listed for every particle.
+    fn find_wall_candidates(&mut self) {
+        let margin = self.wall_margin;
+        let amplitude = self.prep.vibration.map_or(0.0, |v| v.amplitude.abs());
+        let vert = self.prep.vertical;
+        let (walls, pos, radius) = (&self.walls, &self.p.pos, &self.p.radius);
+        let find = |b: &mut Block<T, D>| {
+            b.walls.clear();
+            for i in b.start..b.end {
+                let r = radius[i].to_f64();
+                let x: [f64; D] = std::array::from_fn(|d| pos[i][d].to_f64());
+                for (k, w) in walls.iter().enumerate() {
+                    // Largest overlap the wall could have now (negative: a gap).
+                    let reach = if w.cylinder {
+                        (x[0] - w.center[0].to_f64()).hypot(x[1] - w.center[1].to_f64()) + r
+                            - w.radius.to_f64()
+                    } else {
+                        let h: f64 = (0..D).map(|d| w.normal[d].to_f64() * x[d]).sum::<f64>()
+                            - w.offset.to_f64();
+                        let travel = if w.vibrating {
+                            amplitude * w.normal[vert].to_f64().abs()
+                        } else {
+                            0.0
+                        };
+                        r - h + travel
+                    };
+                    if w.wrap || reach > -(margin + 0.01 * r) {
+                        b.walls.push(((i - b.start) as u32, k as u32));
+                    }
+                }
+            }
+        };
+        if self.parallel {
+            self.blocks.par_iter_mut().for_each(find);
+        } else {
+            self.blocks.iter_mut().for_each(find);
+        }
     }
 
     /// Forces at time `t` from the positions and `self.p.aux` (predicted velocities) or
@@ -455,8 +547,8 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
             vw: T::of(vw),
             vert: self.prep.vertical,
             periodic: self.periodic,
+            lo: self.lo,
             len: self.len,
-            half: self.half,
             cut2: self.cut2,
             block: bs,
         };
@@ -479,15 +571,13 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
     /// Completes the force pass per block: adds the reactions owed by earlier blocks (in
     /// block order), turns forces into accelerations, and with `kick` applies the closing
     /// half kick `v += a dt / 2`. With `drift` it goes straight on with the next velocity
-    /// Verlet step's opening half kick, drift and wrap (the same arithmetic as
+    /// Verlet step's opening half kick and drift (the same arithmetic as
     /// [`drift_velocity_verlet`], so the same bits) and returns the largest squared
     /// displacement since the list build; otherwise 0.
     fn finish(&mut self, kick: bool, drift: bool) -> f64 {
         let bs = self.block;
         let dt = T::of(self.prep.dt);
         let h = T::of(0.5 * self.prep.dt);
-        let (per, len, half) = (self.periodic, self.len, self.half);
-        let lo: [T; D] = std::array::from_fn(|d| T::of(self.prep.lo[d]));
         let blocks = &self.blocks;
         let p = &mut self.p;
         let inv_mass = &p.inv_mass;
@@ -521,7 +611,7 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
                     h,
                     dt,
                 );
-                wrap_and_measure(x, r, per, lo, len, half).to_f64()
+                max_displacement2(x, r).to_f64()
             } else {
                 0.0
             }
@@ -537,14 +627,12 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
         }
     }
 
-    /// The opening half kick, drift and wrap of a velocity Verlet step on its own (the
+    /// The opening half kick and drift of a velocity Verlet step on its own (the
     /// first step of a call; later ones are fused into [`finish`](Self::finish)); returns
     /// the largest squared displacement since the list build.
     fn drift_velocity_verlet(&mut self) -> f64 {
         let dt = T::of(self.prep.dt);
         let h = T::of(0.5 * self.prep.dt);
-        let (per, len, half) = (self.periodic, self.len, self.half);
-        let lo: [T; D] = std::array::from_fn(|d| T::of(self.prep.lo[d]));
         let bs = self.block;
         let p = &mut self.p;
         let drift = |((((a, v), x), vp), r): Chunks<'_, T, D>| {
@@ -556,7 +644,7 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
                 h,
                 dt,
             );
-            wrap_and_measure(x, r, per, lo, len, half).to_f64()
+            max_displacement2(x, r).to_f64()
         };
         let (acc, vel, pos, aux) = (&mut p.acc, &mut p.vel, &mut p.pos, &mut p.aux);
         max_over_blocks(
@@ -595,8 +683,6 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
         let h = T::of(0.5 * self.prep.dt);
         let inv_dt = T::of(1.0 / self.prep.dt);
         let first = !self.started;
-        let (per, len, half) = (self.periodic, self.len, self.half);
-        let lo: [T; D] = std::array::from_fn(|d| T::of(self.prep.lo[d]));
         let bs = self.block;
         let p = &mut self.p;
         let drift = |((((a, v), x), dx), r): Chunks<'_, T, D>| {
@@ -608,7 +694,7 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
                 [h, dt, inv_dt],
                 first,
             );
-            wrap_and_measure(x, r, per, lo, len, half).to_f64()
+            max_displacement2(x, r).to_f64()
         };
         let (acc, vel, pos, aux) = (&mut p.acc, &mut p.vel, &mut p.pos, &mut p.aux);
         let max2 = max_over_blocks(
@@ -669,49 +755,21 @@ fn drift_position_verlet<T: Real>(
     }
 }
 
-/// Wraps the periodic coordinates of `x` into `[lo, lo + len)` and returns the largest
-/// squared displacement (minimum image) from the reference positions `r`.
+/// The largest squared displacement of `x` from the reference positions `r` (positions
+/// are not wrapped between list builds, so no minimum image is needed).
 #[multiversion(
     targets("x86_64+avx512f+avx512vl+avx2+fma", "x86_64+avx2+fma"),
     dispatcher = "direct"
 )]
-fn wrap_and_measure<T: Real, const D: usize>(
-    x: &mut [[T; D]],
-    r: &[[T; D]],
-    per: [bool; D],
-    lo: [T; D],
-    len: [T; D],
-    half: [T; D],
-) -> T {
+fn max_displacement2<T: Real, const D: usize>(x: &[[T; D]], r: &[[T; D]]) -> T {
     let mut m2 = T::ZERO;
-    for (x, r) in x.iter_mut().zip(r) {
+    for (x, r) in x.iter().zip(r) {
         let mut s2 = T::ZERO;
         for d in 0..D {
-            let mut c = x[d];
-            let mut s = c - r[d];
-            if per[d] {
-                c = if c < lo[d] {
-                    c + len[d]
-                } else if c >= lo[d] + len[d] {
-                    c - len[d]
-                } else {
-                    c
-                };
-                x[d] = c;
-                s = c - r[d];
-                s = if s > half[d] {
-                    s - len[d]
-                } else if s < -half[d] {
-                    s + len[d]
-                } else {
-                    s
-                };
-            }
+            let s = x[d] - r[d];
             s2 += s * s;
         }
-        if s2 > m2 {
-            m2 = s2;
-        }
+        m2 = if s2 > m2 { s2 } else { m2 };
     }
     m2
 }
@@ -753,8 +811,12 @@ impl<const D: usize, T: Real> crate::engine::Engine for CpuEngine<D, T> {
         let n = self.p.pos.len();
         let mut positions = vec![[0.0; 3]; n];
         let mut velocities = vec![[0.0; 3]; n];
+        let (per, lo, len) = (self.periodic, self.lo, self.len);
         for (k, &id) in self.p.id.iter().enumerate() {
-            positions[id as usize] = c(&self.p.pos[k]);
+            // Positions drift out of a periodic box by up to skin / 2 between list builds.
+            let mut x = self.p.pos[k];
+            wrap(&mut x, per, lo, len);
+            positions[id as usize] = c(&x);
             velocities[id as usize] = c(&self.p.vel[k]);
         }
         Ok(State {
@@ -782,5 +844,131 @@ impl<const D: usize, T: Real> crate::engine::Engine for CpuEngine<D, T> {
         };
         let plural = if threads == 1 { "" } else { "s" };
         format!("cpu {precision} ({threads} thread{plural})")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::Engine;
+    use crate::scenes::{BedParams, vibrating_bed};
+    use crate::{Config, Dim, Material, Particle, Scene, Wall};
+
+    /// Final states after `steps` steps with the wall candidates of the list builds, and
+    /// with every wall tested against every particle.
+    fn listed_and_all<const D: usize>(scene: &Scene, steps: u32) -> (State, State) {
+        let run = |all: bool| {
+            let prep = Prepared::new(scene, &Config::default()).expect("prepared");
+            let mut e = CpuEngine::<D, f64>::new(prep).expect("engine");
+            if all {
+                e.wall_margin = f64::INFINITY;
+                e.rebuild();
+            }
+            e.advance(steps).expect("advance");
+            e.snapshot().expect("state")
+        };
+        (run(false), run(true))
+    }
+
+    fn assert_same(a: &State, b: &State) {
+        assert_eq!(a.positions, b.positions, "positions differ");
+        assert_eq!(a.velocities, b.velocities, "velocities differ");
+    }
+
+    #[test]
+    fn wall_candidates_miss_no_contact_of_a_vibrated_bed() {
+        let p = BedParams {
+            n: 256,
+            width: 16,
+            ..BedParams::default()
+        };
+        let (scene, _) = vibrating_bed(&p).expect("bed");
+        let (a, b) = listed_and_all::<2>(&scene, 4000);
+        assert_same(&a, &b);
+    }
+
+    #[test]
+    fn wall_candidates_cover_the_travel_of_a_vibrating_wall() {
+        // No gravity: grains at rest a little above the floor never move (no rebuild) until
+        // the rising floor reaches them, so only the travel margin can list them.
+        let m = Material::new(0.8, 0.05);
+        let mut scene = Scene::new(Dim::Two, [0.0; 3], [10.0, 10.0, 0.0], m).expect("scene");
+        scene.set_vibration(0.5, 1.0).expect("vibration");
+        scene.add_box_walls(m, true).expect("walls");
+        for k in 0..8 {
+            let pos = [0.5 + 1.2 * k as f64, 0.3 + 0.03 * k as f64, 0.0];
+            scene
+                .add_particle(Particle::new(pos, 0.25, 1.0))
+                .expect("particle");
+        }
+        let (a, b) = listed_and_all::<2>(&scene, 4000);
+        assert_same(&a, &b);
+        assert!(
+            a.velocities.iter().all(|v| v[1] > 0.0),
+            "the floor did not hit every grain"
+        );
+    }
+
+    /// 150 grains of radius 0.3 on a 5 x 5 x 6 lattice in an 8^3 box, thrown along
+    /// `direction` (with some spread), under gravity.
+    fn thrown_grains(scene: &mut Scene, direction: [f64; 2]) {
+        scene.set_gravity(1.0).expect("gravity");
+        for k in 0..150 {
+            let (x, y, z) = (k % 5, (k / 5) % 5, k / 25);
+            let pos = [
+                2.6 + 0.7 * x as f64,
+                2.6 + 0.7 * y as f64,
+                2.5 + 0.7 * z as f64,
+            ];
+            let spread = 0.1 * (k % 7) as f64 - 0.3;
+            let vel = [direction[0] + spread, direction[1] - spread, 0.0];
+            scene
+                .add_particle(Particle::new(pos, 0.3, 1.0).with_velocity(vel))
+                .expect("particle");
+        }
+    }
+
+    #[test]
+    fn wall_candidates_miss_no_contact_in_a_cylinder() {
+        let m = Material::new(0.7, 0.05).with_friction(0.3, 40.0);
+        let mut scene = Scene::new(Dim::Three, [0.0; 3], [8.0; 3], m).expect("scene");
+        scene
+            .add_wall(Wall::cylinder([4.0, 4.0], 3.5, m))
+            .expect("cylinder")
+            .add_wall(Wall::plane([0.0, 0.0, 1.0], [0.0, 0.0, 0.0], m))
+            .expect("floor");
+        thrown_grains(&mut scene, [1.5, 1.0]);
+        let (a, b) = listed_and_all::<3>(&scene, 6000);
+        assert_same(&a, &b);
+        // Grains do end up against the cylinder.
+        let touching = a
+            .positions
+            .iter()
+            .filter(|x| (x[0] - 4.0).hypot(x[1] - 4.0) + 0.3 > 3.5);
+        assert!(touching.count() > 0, "no grain touches the cylinder");
+    }
+
+    #[test]
+    fn wall_candidates_miss_no_contact_with_a_wall_across_a_periodic_axis() {
+        // y is periodic and the floor tilts slightly along y, so it depends on a periodic
+        // coordinate: listed for every particle, tested at the wrapped position.
+        let m = Material::new(0.7, 0.05);
+        let mut scene = Scene::new(Dim::Three, [0.0; 3], [8.0; 3], m).expect("scene");
+        scene.set_periodic([false, true, false]);
+        scene
+            .add_wall(Wall::plane([0.0, 0.01, 1.0], [0.0, 0.0, 0.0], m))
+            .expect("floor")
+            .add_wall(Wall::plane([1.0, 0.0, 0.0], [0.0, 0.0, 0.0], m))
+            .expect("left")
+            .add_wall(Wall::plane([-1.0, 0.0, 0.0], [8.0, 0.0, 0.0], m))
+            .expect("right");
+        thrown_grains(&mut scene, [0.0, 1.5]);
+        let (a, b) = listed_and_all::<3>(&scene, 6000);
+        assert_same(&a, &b);
+        // Grains started at y >= 2.6 moving +y: some went round the periodic boundary.
+        assert!(
+            a.positions.iter().any(|x| x[1] < 2.0),
+            "no grain crossed the periodic boundary"
+        );
     }
 }

@@ -3,6 +3,11 @@
 //! memory), and a half Verlet list (each pair once, `j > i` in sorted order) stored per
 //! fixed block of consecutive particles.
 //!
+//! The periodic image of every pair is fixed when the list is built: pairs that do not
+//! cross a periodic boundary (almost all) are stored as bare indices, the few that do carry
+//! their image shift. Between builds the positions are not wrapped, so the force loop never
+//! tests for a minimum image.
+//!
 //! Blocks have a size that depends only on the particle count, never on the number of
 //! threads: the force pass runs one task per block and reduces the cross-block reactions in
 //! block order, so results are bit-identical for any thread count.
@@ -30,7 +35,15 @@ pub(crate) struct Block<T, const D: usize> {
     pub end: usize,
     /// `offsets[k]..offsets[k + 1]` index `idx` for particle `start + k`.
     pub offsets: Vec<u32>,
+    /// Partners in the same periodic image: separation `x_i - x_j`.
     pub idx: Vec<u32>,
+    /// `img_offsets[k]..img_offsets[k + 1]` index `img` for particle `start + k`.
+    pub img_offsets: Vec<u32>,
+    /// Partners across a periodic boundary with their shift: separation `(x_i - x_j) - s`.
+    pub img: Vec<(u32, [T; D])>,
+    /// `(k, w)`: particle `start + k` may touch wall `w` before the next list build
+    /// (ascending `k`, walls in scene order); the others are too far away to be tested.
+    pub walls: Vec<(u32, u32)>,
     pub ghosts: Vec<Vec<(u32, [T; D])>>,
 }
 
@@ -166,15 +179,19 @@ impl<const D: usize> CellBins<D> {
         }
     }
 
-    /// Rebuilds the half list of every block from the sorted positions `pos` (sorted with
-    /// [`sort`](Self::sort) just before): pairs `j > i` within the list range. Blocks are
-    /// built on the rayon pool when `parallel`.
+    /// Rebuilds the half list of every block from the sorted positions `pos` (wrapped into
+    /// the box and sorted with [`sort`](Self::sort) just before): pairs `j > i` within the
+    /// list range, each with the minimum image it has now. Blocks are built on the rayon
+    /// pool when `parallel`.
     pub fn build_lists<T: Real>(&self, pos: &[[T; D]], blocks: &mut [Block<T, D>], parallel: bool) {
         let half: [f64; D] = std::array::from_fn(|d| 0.5 * self.len[d]);
         let build = |b: &mut Block<T, D>| {
             b.offsets.clear();
             b.idx.clear();
             b.offsets.push(0);
+            b.img_offsets.clear();
+            b.img.clear();
+            b.img_offsets.push(0);
             for (i, xi) in pos.iter().enumerate().take(b.end).skip(b.start) {
                 let c = self.cell_coords(xi);
                 let axes: [([usize; 3], usize); D] =
@@ -185,19 +202,29 @@ impl<const D: usize> CellBins<D> {
                     let (s, e) = (self.start[nc] as usize, self.start[nc + 1] as usize);
                     for (j, xj) in pos.iter().enumerate().take(e).skip(s.max(i + 1)) {
                         let mut r2 = 0.0;
+                        let mut shift = [T::ZERO; D];
+                        let mut crosses = false;
                         for d in 0..D {
                             let mut s = xi[d].to_f64() - xj[d].to_f64();
                             if self.periodic[d] {
                                 if s > half[d] {
                                     s -= self.len[d];
+                                    shift[d] = T::of(self.len[d]);
+                                    crosses = true;
                                 } else if s < -half[d] {
                                     s += self.len[d];
+                                    shift[d] = T::of(-self.len[d]);
+                                    crosses = true;
                                 }
                             }
                             r2 += s * s;
                         }
                         if r2 < self.range2 {
-                            b.idx.push(j as u32);
+                            if crosses {
+                                b.img.push((j as u32, shift));
+                            } else {
+                                b.idx.push(j as u32);
+                            }
                         }
                     }
                     // Next cell of the stencil (odometer over the axes).
@@ -215,6 +242,7 @@ impl<const D: usize> CellBins<D> {
                     }
                 }
                 b.offsets.push(b.idx.len() as u32);
+                b.img_offsets.push(b.img.len() as u32);
             }
         };
         if parallel {
@@ -235,6 +263,9 @@ pub(crate) fn make_blocks<T, const D: usize>(n: usize) -> Vec<Block<T, D>> {
             end: ((b + 1) * bs).min(n),
             offsets: Vec::new(),
             idx: Vec::new(),
+            img_offsets: Vec::new(),
+            img: Vec::new(),
+            walls: Vec::new(),
             ghosts: (0..count).map(|_| Vec::new()).collect(),
         })
         .collect()
