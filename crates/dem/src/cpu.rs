@@ -789,13 +789,21 @@ fn wrap<T: Real, const D: usize>(x: &mut [T; D], per: [bool; D], lo: [T; D], len
 
 impl<const D: usize, T: Real> crate::engine::Engine for CpuEngine<D, T> {
     fn advance(&mut self, steps: u32) -> Result<()> {
-        match self.prep.integrator {
-            Integrator::VelocityVerlet => self.advance_velocity_verlet(steps),
+        let run = |e: &mut Self| match e.prep.integrator {
+            Integrator::VelocityVerlet => e.advance_velocity_verlet(steps),
             Integrator::PositionVerlet => {
                 for _ in 0..steps {
-                    self.step_position_verlet();
+                    e.step_position_verlet();
                 }
             }
+        };
+        if self.parallel && rayon::current_thread_index().is_none() {
+            // Called from outside the pool: run the whole step loop on a pool thread, so
+            // that the passes do not each hand work to the pool and sleep until it is done
+            // (two thread wake-ups per step, about 15 % of the time on the 3D box).
+            rayon::scope(|_| run(self));
+        } else {
+            run(self);
         }
         Ok(())
     }
