@@ -9,6 +9,7 @@
 //! - [`GpuScan`]: multi-level exclusive prefix sum on the GPU; [`prefix`] has the CPU twins.
 //! - [`rng`]: the counter-based random numbers that CPU and WGSL draw bit for bit alike.
 //! - [`Simulation`], [`Backend`], [`Error`]: the common trait, backend selector and error type.
+//! - [`pool::on_pool`]: runs a stepping loop on the rayon pool (no thread hand-over per pass).
 //!
 //! ```no_run
 //! use backend::{GpuBuffer, GpuContext, GpuScan};
@@ -23,6 +24,7 @@
 
 pub mod error;
 pub mod gpu;
+pub mod pool;
 pub mod prefix;
 pub mod rng;
 mod simulation;

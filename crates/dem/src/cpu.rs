@@ -797,11 +797,9 @@ impl<const D: usize, T: Real> crate::engine::Engine for CpuEngine<D, T> {
                 }
             }
         };
-        if self.parallel && rayon::current_thread_index().is_none() {
-            // Called from outside the pool: run the whole step loop on a pool thread, so
-            // that the passes do not each hand work to the pool and sleep until it is done
-            // (two thread wake-ups per step, about 15 % of the time on the 3D box).
-            rayon::scope(|_| run(self));
+        if self.parallel {
+            // The whole loop on a pool thread: no hand-over to the pool per pass.
+            backend::pool::on_pool(|| run(self));
         } else {
             run(self);
         }

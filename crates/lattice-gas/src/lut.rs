@@ -284,9 +284,12 @@ impl Simulation for LutCpu {
     type State = Lattice;
 
     fn step(&mut self, steps: u32) -> Result<()> {
-        for _ in 0..steps {
-            self.step_once();
-        }
+        // The whole loop on a pool thread: no hand-over to the pool per row pass.
+        backend::pool::on_pool(|| {
+            for _ in 0..steps {
+                self.step_once();
+            }
+        });
         Ok(())
     }
 

@@ -293,7 +293,8 @@ impl<T: Real, M: Model> Simulation for CpuRd<T, M> {
             };
             check_dt_with(self.model.name(), d, self.grid.h(), &self.stepping)?;
         }
-        self.advance(steps);
+        // The whole loop on a pool thread: no hand-over to the pool per sweep.
+        backend::pool::on_pool(|| self.advance(steps));
         if steps > 0 {
             self.snapshot_fresh = false;
         }

@@ -151,23 +151,26 @@ impl<T: Real> CpuEngine<T> {
 impl<T: Real> Engine for CpuEngine<T> {
     fn step(&mut self, steps: u32) -> Result<()> {
         let half = self.dt * T::from_f64(0.5);
-        for _ in 0..steps {
-            match self.integrator {
-                Integrator::SymplecticEuler => {
-                    self.compute_accelerations()?;
-                    self.kick_drift(self.dt);
-                }
-                Integrator::Leapfrog => {
-                    if !self.a_valid {
+        // The whole loop on a pool thread: no hand-over to the pool per pass.
+        backend::pool::on_pool(|| {
+            for _ in 0..steps {
+                match self.integrator {
+                    Integrator::SymplecticEuler => {
                         self.compute_accelerations()?;
+                        self.kick_drift(self.dt);
                     }
-                    self.kick_drift(half);
-                    self.compute_accelerations()?;
-                    self.kick(half);
+                    Integrator::Leapfrog => {
+                        if !self.a_valid {
+                            self.compute_accelerations()?;
+                        }
+                        self.kick_drift(half);
+                        self.compute_accelerations()?;
+                        self.kick(half);
+                    }
                 }
             }
-        }
-        Ok(())
+            Ok(())
+        })
     }
 
     fn positions_velocities(&mut self) -> Result<PositionsVelocities> {
