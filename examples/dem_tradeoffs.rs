@@ -107,8 +107,8 @@ fn main() -> Result<()> {
                 let rerr = (mean - e).abs() / e;
                 let (eerr, spt) = energy(&scene, &cfg, div)?;
                 println!(
-                    "| {integrator:?} | {precision:?} | {div} | {rerr:.2e} | {worst:.2e} | {eerr:.2e} | {:.1} ms |",
-                    spt * 1e3
+                    "| {integrator:?} | {precision:?} | {div} | {rerr:.2e} | {worst:.2e} | {eerr:.2e} | {:.0} µs |",
+                    spt * 1e6
                 );
                 xs.push(div);
                 re.push(rerr.max(1e-8));
