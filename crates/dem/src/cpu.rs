@@ -14,7 +14,7 @@
 use multiversion::multiversion;
 use rayon::prelude::*;
 
-use backend::Result;
+use backend::{Error, Result};
 
 use crate::pairs::{Block, CellBins, PARALLEL_MIN, block_size, make_blocks};
 use crate::prepared::Prepared;
@@ -385,7 +385,20 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
         let lo: [f64; D] = std::array::from_fn(|d| prep.lo[d]);
         let len: [f64; D] = std::array::from_fn(|d| prep.len[d]);
         let periodic: [bool; D] = std::array::from_fn(|d| prep.periodic[d]);
-        let bins = CellBins::new(lo, len, periodic, prep.cutoff + prep.skin, n)?;
+        let range = prep.cutoff + prep.skin;
+        if let Some(d) = (0..D).find(|&d| periodic[d] && len[d] < 2.0 * range) {
+            // A pair keeps the periodic image it had at the list build; that image stays the
+            // nearest one until the next build only if no pair is within range twice.
+            return Err(Error::invalid(
+                format!("periodic box length along axis {d}"),
+                len[d],
+                format!(
+                    "must be at least twice the largest contact distance plus the skin \
+                     (2 x {range}) on the CPU backend; enlarge the box or reduce the skin"
+                ),
+            ));
+        }
+        let bins = CellBins::new(lo, len, periodic, range, n)?;
         let mut gravity = [T::ZERO; D];
         gravity[prep.vertical] = T::of(-prep.gravity);
         let p = Particles {
@@ -913,6 +926,22 @@ mod tests {
             a.velocities.iter().all(|v| v[1] > 0.0),
             "the floor did not hit every grain"
         );
+    }
+
+    #[test]
+    fn periodic_box_shorter_than_twice_the_list_range_is_refused() {
+        let m = Material::new(0.9, 0.05);
+        let mut scene = Scene::new(Dim::Two, [0.0; 3], [1.5, 6.0, 0.0], m).expect("scene");
+        scene.set_periodic([true, false, false]);
+        scene
+            .add_particle(Particle::new([0.5, 3.0, 0.0], 0.5, 1.0))
+            .expect("particle");
+        let prep = Prepared::new(&scene, &Config::default()).expect("prepared");
+        let Err(e) = CpuEngine::<2, f64>::new(prep) else {
+            panic!("a 1.5-long periodic axis with list range 1.1 was accepted");
+        };
+        let msg = e.to_string();
+        assert!(msg.contains("axis 0") && msg.contains("1.5"), "{msg}");
     }
 
     /// 150 grains of radius 0.3 on a 5 x 5 x 6 lattice in an 8^3 box, thrown along
