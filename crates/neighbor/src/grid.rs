@@ -237,14 +237,9 @@ impl<const D: usize> CellGrid<D> {
     /// Per-axis cell coordinates of a wrapped position (clamped into the grid).
     #[inline]
     pub fn cell_coords_of(&self, t: [f64; D]) -> [usize; D] {
-        std::array::from_fn(|d| {
-            let c = (t[d] * self.inv_cell[d]).floor();
-            if c <= 0.0 {
-                0
-            } else {
-                (c as usize).min(self.cells[d] - 1)
-            }
-        })
+        // `as usize` truncates toward zero and saturates (negative -> 0), which is `floor`
+        // followed by the clamp for every input, without a libm call on baseline x86_64.
+        std::array::from_fn(|d| ((t[d] * self.inv_cell[d]) as usize).min(self.cells[d] - 1))
     }
 
     /// Linear cell index of a wrapped position.

@@ -5,8 +5,8 @@
 use std::collections::BTreeMap;
 
 use neighbor::{
-    BruteForce, CellGrid, GpuNeighborList, GpuNeighborSearch, LinkedCells, ListKind, NeighborLists,
-    NeighborSearch, SortedCells, VerletList,
+    BruteForce, CellGrid, GpuCellList, GpuNeighborList, GpuNeighborSearch, LinkedCells, ListKind,
+    NeighborLists, NeighborSearch, SortedCells, VerletList,
 };
 
 /// Unordered pair -> (separation oriented from the smaller index, r2).
@@ -121,6 +121,24 @@ pub fn check_gpu<const D: usize>(
     reference: &PairMap<D>,
 ) {
     let mut gpu = GpuNeighborSearch::new(ctx, grid).unwrap();
+    // A cell over the adapter's per-cell limit (e.g. thousands of particles in a one-cell
+    // box on llvmpipe) must be a clear error, not a wrong list.
+    let mut sorted = SortedCells::new(grid);
+    sorted.build(p).unwrap();
+    let fullest = sorted
+        .cell_start()
+        .windows(2)
+        .map(|w| (w[1] - w[0]) as usize)
+        .max()
+        .unwrap_or(0);
+    let limit = GpuCellList::<D>::max_per_cell(ctx);
+    if fullest > limit {
+        let e = gpu
+            .build(p)
+            .expect_err("a cell over the per-cell limit must be refused");
+        assert!(e.to_string().contains(&limit.to_string()), "{e}");
+        return;
+    }
     let got = pairs_of(&mut gpu, p);
     // The device-side full list holds every half-list pair from both ends, nothing else.
     let cells = gpu.cells().expect("built");
