@@ -18,9 +18,15 @@ use crate::stencil::Shell;
 /// Lanes the distance pass always computes together (one AVX-512 vector of `f64`).
 const LANES: usize = 8;
 
-/// Coordinates stored after the last particle so that the distance pass may read a whole
-/// vector past the end of any run.
-pub(crate) const COORD_PAD: usize = LANES - 1;
+/// Coordinates stored after the last particle so that the distance pass may read whole
+/// vectors past the end of any run (the AVX-512 kernel reads 16 candidates at a time).
+pub(crate) const COORD_PAD: usize = 2 * LANES - 1;
+
+/// Bits of a packed hit that hold the sorted position (the run index is above them).
+pub(crate) const RUN_SHIFT: u32 = 27;
+
+/// Mask of the sorted position in a packed hit.
+const RUN_MASK: u32 = (1 << RUN_SHIFT) - 1;
 
 /// Borrowed sorted-cell data: what a traversal reads.
 pub(crate) struct View<'a, const D: usize> {
@@ -34,6 +40,8 @@ pub(crate) struct View<'a, const D: usize> {
 /// Scratch buffers of one traversal (one per thread).
 pub(crate) struct Scratch<const D: usize> {
     r2: Vec<f64>,
+    /// Packed hits (`sorted position | run << RUN_SHIFT`) of the AVX-512 kernel.
+    hits: Vec<u32>,
     shell: Shell<D>,
 }
 
@@ -41,6 +49,7 @@ impl<const D: usize> Scratch<D> {
     pub fn new() -> Self {
         Self {
             r2: Vec::new(),
+            hits: Vec::new(),
             shell: Shell::new(),
         }
     }
@@ -71,10 +80,68 @@ fn particle_runs<
     half_len: [f64; D],
     lengths: [f64; D],
     periodic: [bool; D],
+    hits: &mut Vec<u32>,
     r2buf: &mut Vec<f64>,
     f: &mut F,
 ) {
     let pi: [f64; D] = std::array::from_fn(|d| v.coords[d][i]);
+    #[cfg(target_arch = "x86_64")]
+    if AVX512 && !MI {
+        // All runs in one branch-free pass that packs the hits into a list, then one loop
+        // over the list (see `avx512::particle_hits`).
+        let mut spans = [(0usize, 0usize); 27];
+        let mut shifts = [[0.0f64; D]; 27];
+        let (mut nr, mut total) = (0, 0);
+        for (k, run) in runs.iter().enumerate() {
+            let j0 = if k == 0 && own == Own::After {
+                i + 1
+            } else {
+                v.cell_start[run.first] as usize
+            };
+            let j1 = v.cell_start[run.end] as usize;
+            if j0 < j1 {
+                spans[nr] = (j0, j1);
+                shifts[nr] = run.shift;
+                total += j1 - j0;
+                nr += 1;
+            }
+        }
+        if hits.len() < total + 2 * LANES {
+            hits.resize(total + 2 * LANES, 0);
+        }
+        // SAFETY: `AVX512` is only set by `visit_cells_avx512`/`visit_particle_avx512`,
+        // which run after `avx512_usable` (AVX-512F, at most `1 << RUN_SHIFT` particles);
+        // the coordinates carry `COORD_PAD` = 15 padding values; at most 27 runs.
+        let count =
+            unsafe { avx512::particle_hits(v.coords, pi, &spans[..nr], &shifts[..nr], rc2, hits) };
+        let oi = v.order[i] as usize;
+        for &packed in &hits[..count] {
+            let (j, r) = ((packed & RUN_MASK) as usize, (packed >> RUN_SHIFT) as usize);
+            if own == Own::AllButSelf && j == i {
+                continue;
+            }
+            let mut sep = [0.0; D];
+            let mut r2 = 0.0;
+            for d in 0..D {
+                // SAFETY: `j` is a sorted position of one of the runs (below the particle
+                // count) and `r < nr <= 27`. Without bounds checks the hit loop has no exit
+                // but its end, so a caller's accumulator can stay in a register.
+                sep[d] = unsafe {
+                    (pi[d] - *v.coords[d].get_unchecked(j))
+                        - *shifts.get_unchecked(r).get_unchecked(d)
+                };
+                // The kernel's operations in its order: the same bits.
+                r2 = if d == 0 {
+                    sep[d] * sep[d]
+                } else {
+                    r2 + sep[d] * sep[d]
+                };
+            }
+            // SAFETY: as above.
+            f(oi, unsafe { *v.order.get_unchecked(j) } as usize, sep, r2);
+        }
+        return;
+    }
     for (k, run) in runs.iter().enumerate() {
         let j0 = if k == 0 && own == Own::After {
             i + 1
@@ -91,14 +158,22 @@ fn particle_runs<
         let nv = n.next_multiple_of(LANES);
         let jv = j0 + nv;
         // One hit: candidate `jj` of the run at squared distance `r2`.
+        // Hits are handed on without bounds checks: a checked index would be a possible exit
+        // (panic) on every hit, which keeps the caller's accumulator (e.g. a pair counter)
+        // in memory instead of a register, a store-to-load chain through every hit.
+        let (oi, orun) = (v.order[i] as usize, &v.order[j0..j1]);
+        let crun: [&[f64]; D] = std::array::from_fn(|d| &v.coords[d][j0..j1]);
+        // One hit: candidate `jj` of the run at squared distance `r2`.
         let mut emit = |jj: usize, r2: f64| {
-            let j = j0 + jj;
-            if own == Own::AllButSelf && j == i {
+            debug_assert!(jj < n);
+            if own == Own::AllButSelf && j0 + jj == i {
                 return;
             }
             let mut sep = [0.0; D];
             for d in 0..D {
-                let mut dx = pi[d] - v.coords[d][j];
+                // SAFETY: hit indices are below `n`, the length of the run slices (lanes at
+                // or past `n` are masked off before any hit is enumerated).
+                let mut dx = pi[d] - unsafe { *crun[d].get_unchecked(jj) };
                 if MI && periodic[d] {
                     if dx > half_len[d] {
                         dx -= lengths[d];
@@ -110,22 +185,9 @@ fn particle_runs<
                 }
                 sep[d] = dx;
             }
-            f(v.order[i] as usize, v.order[j] as usize, sep, r2);
+            // SAFETY: as above.
+            f(oi, unsafe { *orun.get_unchecked(jj) } as usize, sep, r2);
         };
-        #[cfg(target_arch = "x86_64")]
-        if AVX512 && !MI && D == 3 {
-            let p = [pi[0], pi[1], pi[2]];
-            let sh = [run.shift[0], run.shift[1], run.shift[2]];
-            let cols = [
-                &v.coords[0][j0..jv],
-                &v.coords[1][j0..jv],
-                &v.coords[2][j0..jv],
-            ];
-            // SAFETY: `AVX512` is only set by `visit_cells_avx512`/`visit_particle_avx512`,
-            // which run after `is_x86_feature_detected!("avx512f")`.
-            unsafe { avx512::run_hits_3d(cols, p, sh, rc2, n, &mut emit) };
-            continue;
-        }
         if r2buf.len() < nv {
             r2buf.resize(nv, 0.0);
         }
@@ -193,7 +255,8 @@ fn particle_runs<
             while mask != 0 {
                 let jj = chunk_no * 64 + mask.trailing_zeros() as usize;
                 mask &= mask - 1;
-                emit(jj, buf[jj]);
+                // SAFETY: `jj < n <= nv`, the length of `buf`.
+                emit(jj, unsafe { *buf.get_unchecked(jj) });
             }
         }
     }
@@ -231,10 +294,27 @@ fn visit_impl<
         let runs = s.shell.as_slice();
         for i in a..b {
             particle_runs::<D, MI, AVX512, F>(
-                v, i, runs, own, rc2, half_len, lengths, periodic, &mut s.r2, f,
+                v,
+                i,
+                runs,
+                own,
+                rc2,
+                half_len,
+                lengths,
+                periodic,
+                &mut s.hits,
+                &mut s.r2,
+                f,
             );
         }
     }
+}
+
+/// Whether the AVX-512 kernel runs: the CPU has AVX-512F and every sorted position fits the
+/// packed hit format (below `1 << RUN_SHIFT`, 134 million particles).
+#[cfg(target_arch = "x86_64")]
+fn avx512_usable<const D: usize>(v: &View<'_, D>) -> bool {
+    v.order.len() <= 1 << RUN_SHIFT && std::arch::is_x86_feature_detected!("avx512f")
 }
 
 /// Visits the pairs of every particle in `cells` with its half shell (`half`) or full shell.
@@ -246,8 +326,8 @@ pub(crate) fn visit_cells<const D: usize, F: FnMut(usize, usize, [f64; D], f64)>
     f: &mut F,
 ) {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx512f") {
-        // SAFETY: the CPU has AVX-512F (checked above).
+    if avx512_usable(v) {
+        // SAFETY: the CPU has AVX-512F (checked by `avx512_usable`).
         unsafe { visit_cells_avx512(v, cells, half, s, f) };
         return;
     }
@@ -301,8 +381,8 @@ pub(crate) fn visit_particle<const D: usize, F: FnMut(usize, usize, [f64; D], f6
     f: &mut F,
 ) {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx512f") {
-        // SAFETY: the CPU has AVX-512F (checked above).
+    if avx512_usable(v) {
+        // SAFETY: the CPU has AVX-512F (checked by `avx512_usable`).
         unsafe { visit_particle_avx512(v, rank, cell, half, s, f) };
         return;
     }
@@ -363,87 +443,127 @@ fn particle_impl<const D: usize, const AVX512: bool, F: FnMut(usize, usize, [f64
     let runs = s.shell.as_slice();
     if g.needs_min_image_per_pair() {
         particle_runs::<D, true, AVX512, F>(
-            v, rank, runs, own, rc2, half_len, lengths, periodic, &mut s.r2, f,
+            v,
+            rank,
+            runs,
+            own,
+            rc2,
+            half_len,
+            lengths,
+            periodic,
+            &mut s.hits,
+            &mut s.r2,
+            f,
         );
     } else {
         particle_runs::<D, false, AVX512, F>(
-            v, rank, runs, own, rc2, half_len, lengths, periodic, &mut s.r2, f,
+            v,
+            rank,
+            runs,
+            own,
+            rc2,
+            half_len,
+            lengths,
+            periodic,
+            &mut s.hits,
+            &mut s.r2,
+            f,
         );
     }
 }
 
-/// The explicit AVX-512 kernel of one 3D run.
+/// The explicit AVX-512 kernel: all candidates of one particle, hits packed into a list.
 #[cfg(target_arch = "x86_64")]
 mod avx512 {
     use std::arch::x86_64::*;
 
-    /// Calls `hit(jj, r2)` for every candidate `jj < n` of a run whose squared distance
-    /// `r2` from `p` (separation `(p - x_j) - shift`) is within `rc2`, in ascending `jj`.
-    /// `cols` hold the run's coordinates, a whole number of 8-lane vectors long (at least
-    /// `n`); lanes at or past `n` are computed and dropped. Same operation order as the
-    /// portable pass, so both decide every candidate identically.
+    use super::RUN_SHIFT;
+
+    /// Squared distances from `p` (separation `(p - x) - s`, summed over the axes in order)
+    /// of the 8 particles at sorted positions `k..k + 8`.
     ///
     /// # Safety
-    /// The CPU must support AVX-512F.
+    /// The CPU must support AVX-512F; `k + 8` must not exceed any column's length.
     #[inline]
     #[target_feature(enable = "avx512f")]
-    pub(super) unsafe fn run_hits_3d(
-        cols: [&[f64]; 3],
-        p: [f64; 3],
-        shift: [f64; 3],
-        rc2: f64,
-        n: usize,
-        hit: &mut impl FnMut(usize, f64),
-    ) {
-        let nv = cols[0].len();
-        assert!(nv.is_multiple_of(8) && nv >= n && cols[1].len() == nv && cols[2].len() == nv);
-        let (px, py, pz) = (
-            _mm512_set1_pd(p[0]),
-            _mm512_set1_pd(p[1]),
-            _mm512_set1_pd(p[2]),
-        );
-        let (sx, sy, sz) = (
-            _mm512_set1_pd(shift[0]),
-            _mm512_set1_pd(shift[1]),
-            _mm512_set1_pd(shift[2]),
-        );
-        let cut = _mm512_set1_pd(rc2);
-        let mut r2s = [0.0f64; 64];
-        let mut base = 0;
-        while base < nv {
-            let end = (base + 64).min(nv);
-            let mut mask = 0u64;
-            let mut k = base;
-            while k < end {
-                // SAFETY: `k + 8 <= nv` (both multiples of 8, `k < end <= nv`), so the
-                // loads stay inside the columns; the store stays inside `r2s`.
-                unsafe {
-                    let x = _mm512_loadu_pd(cols[0].as_ptr().add(k));
-                    let y = _mm512_loadu_pd(cols[1].as_ptr().add(k));
-                    let z = _mm512_loadu_pd(cols[2].as_ptr().add(k));
-                    let dx = _mm512_sub_pd(_mm512_sub_pd(px, x), sx);
-                    let dy = _mm512_sub_pd(_mm512_sub_pd(py, y), sy);
-                    let dz = _mm512_sub_pd(_mm512_sub_pd(pz, z), sz);
-                    let r2 = _mm512_add_pd(
-                        _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy)),
-                        _mm512_mul_pd(dz, dz),
-                    );
-                    _mm512_storeu_pd(r2s.as_mut_ptr().add(k - base), r2);
-                    let m = _mm512_cmp_pd_mask::<_CMP_LE_OQ>(r2, cut);
-                    mask |= u64::from(m) << (k - base);
-                }
-                k += 8;
-            }
-            if n - base < 64 {
-                mask &= (1u64 << (n - base)) - 1;
-            }
-            while mask != 0 {
-                let jj = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                hit(base + jj, r2s[jj]);
-            }
-            base = end;
+    unsafe fn r2_of<const D: usize>(
+        cols: &[&[f64]; D],
+        k: usize,
+        p: &[__m512d; D],
+        s: &[__m512d; D],
+    ) -> __m512d {
+        let mut r2 = _mm512_setzero_pd();
+        for d in 0..D {
+            // SAFETY: in bounds per the caller's contract.
+            let x = unsafe { _mm512_loadu_pd(cols[d].as_ptr().add(k)) };
+            let dx = _mm512_sub_pd(_mm512_sub_pd(p[d], x), s[d]);
+            let sq = _mm512_mul_pd(dx, dx);
+            r2 = if d == 0 { sq } else { _mm512_add_pd(r2, sq) };
         }
+        r2
+    }
+
+    /// Writes every hit of particle `p` against the runs `spans` (sorted positions
+    /// `j0..j1`, seen through `shifts`) to `hits` as `j | run << RUN_SHIFT`, in run order and
+    /// ascending `j`; returns the hit count. Branch-free per 16 candidates: two 8-lane
+    /// squared-distance vectors, compared straight into one 16-bit mask, the hit lanes'
+    /// indices compressed into one vector and stored whole, the count advanced by the
+    /// number of hits (a store may write up to 16 slots past the last hit). Same
+    /// operations in the same order as the portable pass, so the same hits.
+    ///
+    /// # Safety
+    /// The CPU must support AVX-512F. Every `j1` must be at most `cols[d].len() - 15` (the
+    /// coordinate padding) and at most `1 << RUN_SHIFT`, there may be at most
+    /// `1 << (32 - RUN_SHIFT)` runs, and `hits` must hold the total run length plus 16.
+    #[inline]
+    #[target_feature(enable = "avx512f")]
+    pub(super) unsafe fn particle_hits<const D: usize>(
+        cols: [&[f64]; D],
+        p: [f64; D],
+        spans: &[(usize, usize)],
+        shifts: &[[f64; D]],
+        rc2: f64,
+        hits: &mut [u32],
+    ) -> usize {
+        let len = cols.iter().map(|c| c.len()).min().unwrap_or(0);
+        let total: usize = spans.iter().map(|&(a, b)| b - a).sum();
+        assert!(
+            spans
+                .iter()
+                .all(|&(_, b)| b + 15 <= len && b <= 1 << RUN_SHIFT)
+        );
+        assert!(spans.len() <= 1 << (32 - RUN_SHIFT) && hits.len() >= total + 16);
+        let pv: [__m512d; D] = std::array::from_fn(|d| _mm512_set1_pd(p[d]));
+        let cut = _mm512_set1_pd(rc2);
+        let iota = _mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0);
+        let mut count = 0usize;
+        for (r, (&(j0, j1), shift)) in spans.iter().zip(shifts).enumerate() {
+            let sv: [__m512d; D] = std::array::from_fn(|d| _mm512_set1_pd(shift[d]));
+            let tag = (r as u32) << RUN_SHIFT;
+            let mut k = j0;
+            while k < j1 {
+                let lanes = (j1 - k).min(16) as u32;
+                let tail = (0xffffu32 >> (16 - lanes)) as u16;
+                // SAFETY: `k + 16 <= j1 + 15 <= len` (asserted), so the loads stay inside
+                // the columns; `count + 16 <= total + 16` (at most one hit per candidate so
+                // far), so the store stays inside `hits`.
+                unsafe {
+                    let lo = r2_of(&cols, k, &pv, &sv);
+                    let hi = r2_of(&cols, k + 8, &pv, &sv);
+                    let m_lo = _mm512_cmp_pd_mask::<_CMP_LE_OQ>(lo, cut);
+                    let m_hi = _mm512_cmp_pd_mask::<_CMP_LE_OQ>(hi, cut);
+                    let m = (u16::from(m_lo) | (u16::from(m_hi) << 8)) & tail;
+                    let idx = _mm512_add_epi32(_mm512_set1_epi32((tag | k as u32) as i32), iota);
+                    _mm512_storeu_si512(
+                        hits.as_mut_ptr().add(count).cast(),
+                        _mm512_maskz_compress_epi32(m, idx),
+                    );
+                    count += m.count_ones() as usize;
+                }
+                k += 16;
+            }
+        }
+        count
     }
 }
 
@@ -469,13 +589,13 @@ mod tests {
         out
     }
 
-    fn kernels_agree<const D: usize>(periodic: [bool; D], seed: u64) {
+    fn kernels_agree<const D: usize>(periodic: [bool; D], cutoff: f64, seed: u64) {
         let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
         let l = 9.0;
         let p: Vec<[f64; D]> = (0..3000)
             .map(|_| std::array::from_fn(|_| rng.random::<f64>() * l))
             .collect();
-        let grid = CellGrid::new([0.0; D], [l; D], periodic, 1.3).unwrap();
+        let grid = CellGrid::new([0.0; D], [l; D], periodic, cutoff).unwrap();
         let mut cells = SortedCells::new(&grid);
         cells.build(&p).unwrap();
         let nc = grid.n_cells();
@@ -493,16 +613,74 @@ mod tests {
                     &cells,
                 );
                 assert_eq!(avx, portable, "AVX-512 and portable kernels differ");
+                // One particle at a time (the gather traversal's entry point).
+                for i in (0..p.len()).step_by(97) {
+                    let (rank, cell) = (cells.rank()[i] as usize, cells.cell_of()[i] as usize);
+                    let one = collect(
+                        |v, s, mut f| visit_particle_portable(v, rank, cell, half, s, &mut f),
+                        &cells,
+                    );
+                    // SAFETY: checked above.
+                    let avx = collect(
+                        |v, s, mut f| unsafe {
+                            visit_particle_avx512(v, rank, cell, half, s, &mut f)
+                        },
+                        &cells,
+                    );
+                    assert_eq!(avx, one, "particle {i}");
+                }
             }
         }
     }
 
+    /// The kernel reports exactly the candidates of its runs that are within the cutoff, in
+    /// order, even when the particles right after a run (read by its last vector) are hits.
+    #[test]
+    fn avx512_kernel_stops_at_the_end_of_every_run() {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // 60 particles on the x axis, every other one within the cutoff of the origin.
+            let xs: Vec<f64> = (0..60 + COORD_PAD)
+                .map(|k| if k % 2 == 0 { 0.5 } else { 5.0 })
+                .collect();
+            let zeros = vec![0.0; xs.len()];
+            let spans = [(3, 21), (21, 22), (30, 47), (50, 60)];
+            let shifts = [[0.0; 3]; 4];
+            let mut hits = vec![u32::MAX; 80];
+            // SAFETY: AVX-512F checked; runs end at 60 <= len - 15; 4 runs; hits hold 46 + 16.
+            let count = unsafe {
+                avx512::particle_hits(
+                    [&xs, &zeros, &zeros],
+                    [0.0; 3],
+                    &spans,
+                    &shifts,
+                    1.0,
+                    &mut hits,
+                )
+            };
+            let want: Vec<u32> = spans
+                .iter()
+                .enumerate()
+                .flat_map(|(r, &(a, b))| {
+                    (a..b)
+                        .filter(|k| k % 2 == 0)
+                        .map(move |k| k as u32 | (r as u32) << RUN_SHIFT)
+                })
+                .collect();
+            assert_eq!(&hits[..count], &want[..]);
+        }
+    }
+
     /// The explicit AVX-512 kernel reports exactly what the portable one does (same pairs,
-    /// same order, same bits), open and periodic boxes.
+    /// same order, same bits): open and periodic boxes, dense cells (runs of hundreds of
+    /// candidates), a periodic axis of 2 cells (minimum image per pair), 2D.
     #[test]
     fn avx512_kernel_matches_the_portable_kernel() {
-        kernels_agree::<3>([false; 3], 1);
-        kernels_agree::<3>([true, false, true], 2);
-        kernels_agree::<2>([true, true], 3);
+        kernels_agree::<3>([false; 3], 1.3, 1);
+        kernels_agree::<3>([true, false, true], 1.3, 2);
+        kernels_agree::<3>([true; 3], 2.9, 3);
+        kernels_agree::<3>([false, true, false], 4.0, 4);
+        kernels_agree::<2>([true, true], 1.3, 5);
+        kernels_agree::<2>([false, false], 0.4, 6);
     }
 }
