@@ -10,6 +10,9 @@ use crate::traverse::{COORD_PAD, Scratch, View, visit_cells, visit_particle};
 /// Cells handed to one rayon task in parallel traversals.
 const CELLS_PER_TASK: usize = 64;
 
+/// Particles per rayon task when positions are wrapped and assigned to cells.
+const WRAP_BLOCK: usize = 4096;
+
 /// Below this many particles the counting sort runs as one chunk.
 const PAR_SORT_MIN: usize = 1 << 15;
 
@@ -96,14 +99,17 @@ impl<const D: usize> SortedCells<D> {
         let g = &self.grid;
         self.wrapped.resize(n, [0.0; D]);
         self.cell_of.resize(n, 0);
+        // Blocks of particles per task, a plain loop inside (no per-particle closure call).
         self.wrapped
-            .par_iter_mut()
-            .zip(self.cell_of.par_iter_mut())
+            .par_chunks_mut(WRAP_BLOCK)
+            .zip(self.cell_of.par_chunks_mut(WRAP_BLOCK))
             .enumerate()
-            .with_min_len(4096)
-            .try_for_each(|(i, (w, c))| {
-                *w = g.wrap(i, positions[i])?;
-                *c = g.cell_of(*w) as u32;
+            .try_for_each(|(b, (ws, cs))| {
+                let first = b * WRAP_BLOCK;
+                for (k, (w, c)) in ws.iter_mut().zip(cs.iter_mut()).enumerate() {
+                    *w = g.wrap(first + k, positions[first + k])?;
+                    *c = g.cell_of(*w) as u32;
+                }
                 Ok::<(), Error>(())
             })?;
         // Pass 1: counts per cell of every chunk. Chunk-private counts cost `n_cells` words
