@@ -22,6 +22,15 @@ const LANES: usize = 8;
 /// vectors past the end of any run (the AVX-512 kernel reads 16 candidates at a time).
 pub(crate) const COORD_PAD: usize = 2 * LANES - 1;
 
+/// Kernel of a monomorphised traversal: compiler-vectorised distances per run.
+const PORTABLE: u8 = 0;
+
+/// Kernel: all hits of a particle packed into one list with AVX2 (permutation table).
+const PACKED_AVX2: u8 = 1;
+
+/// Kernel: all hits of a particle packed into one list with AVX-512 (`vpcompressd`).
+const PACKED_AVX512: u8 = 2;
+
 /// Bits of a packed hit that hold the sorted position (the run index is above them).
 pub(crate) const RUN_SHIFT: u32 = 27;
 
@@ -69,7 +78,7 @@ enum Own {
 fn particle_runs<
     const D: usize,
     const MI: bool,
-    const AVX512: bool,
+    const KERNEL: u8,
     F: FnMut(usize, usize, [f64; D], f64),
 >(
     v: &View<'_, D>,
@@ -86,9 +95,9 @@ fn particle_runs<
 ) {
     let pi: [f64; D] = std::array::from_fn(|d| v.coords[d][i]);
     #[cfg(target_arch = "x86_64")]
-    if AVX512 && !MI {
+    if KERNEL != PORTABLE && !MI {
         // All runs in one branch-free pass that packs the hits into a list, then one loop
-        // over the list (see `avx512::particle_hits`).
+        // over the list (see `avx512::particle_hits`, `avx2::particle_hits`).
         let mut spans = [(0usize, 0usize); 27];
         let mut shifts = [[0.0f64; D]; 27];
         let (mut nr, mut total) = (0, 0);
@@ -109,11 +118,18 @@ fn particle_runs<
         if hits.len() < total + 2 * LANES {
             hits.resize(total + 2 * LANES, 0);
         }
-        // SAFETY: `AVX512` is only set by `visit_cells_avx512`/`visit_particle_avx512`,
-        // which run after `avx512_usable` (AVX-512F, at most `1 << RUN_SHIFT` particles);
-        // the coordinates carry `COORD_PAD` = 15 padding values; at most 27 runs.
-        let count =
-            unsafe { avx512::particle_hits(v.coords, pi, &spans[..nr], &shifts[..nr], rc2, hits) };
+        let (sp, sh) = (&spans[..nr], &shifts[..nr]);
+        // SAFETY: `KERNEL` is a packed kernel only in `visit_*_avx512` / `visit_*_avx2`, which
+        // run after `packed_kernel` checked the CPU feature and that there are at most
+        // `1 << RUN_SHIFT` particles; the coordinates carry `COORD_PAD` = 15 padding values;
+        // at most 27 runs; `hits` holds the total plus 16.
+        let count = unsafe {
+            if KERNEL == PACKED_AVX512 {
+                avx512::particle_hits(v.coords, pi, sp, sh, rc2, hits)
+            } else {
+                avx2::particle_hits(v.coords, pi, sp, sh, rc2, hits)
+            }
+        };
         let oi = v.order[i] as usize;
         for &packed in &hits[..count] {
             let (j, r) = ((packed & RUN_MASK) as usize, (packed >> RUN_SHIFT) as usize);
@@ -266,7 +282,7 @@ fn particle_runs<
 fn visit_impl<
     const D: usize,
     const MI: bool,
-    const AVX512: bool,
+    const KERNEL: u8,
     F: FnMut(usize, usize, [f64; D], f64),
 >(
     v: &View<'_, D>,
@@ -293,7 +309,7 @@ fn visit_impl<
         }
         let runs = s.shell.as_slice();
         for i in a..b {
-            particle_runs::<D, MI, AVX512, F>(
+            particle_runs::<D, MI, KERNEL, F>(
                 v,
                 i,
                 runs,
@@ -310,11 +326,20 @@ fn visit_impl<
     }
 }
 
-/// Whether the AVX-512 kernel runs: the CPU has AVX-512F and every sorted position fits the
-/// packed hit format (below `1 << RUN_SHIFT`, 134 million particles).
+/// Which kernel a traversal runs: the packed AVX-512 or AVX2 kernel when the CPU has the
+/// feature and every sorted position fits the packed hit format (at most `1 << RUN_SHIFT`,
+/// 134 million particles), the portable one otherwise.
 #[cfg(target_arch = "x86_64")]
-fn avx512_usable<const D: usize>(v: &View<'_, D>) -> bool {
-    v.order.len() <= 1 << RUN_SHIFT && std::arch::is_x86_feature_detected!("avx512f")
+fn packed_kernel<const D: usize>(v: &View<'_, D>) -> u8 {
+    if v.order.len() > 1 << RUN_SHIFT {
+        PORTABLE
+    } else if std::arch::is_x86_feature_detected!("avx512f") {
+        PACKED_AVX512
+    } else if std::arch::is_x86_feature_detected!("avx2") {
+        PACKED_AVX2
+    } else {
+        PORTABLE
+    }
 }
 
 /// Visits the pairs of every particle in `cells` with its half shell (`half`) or full shell.
@@ -326,18 +351,20 @@ pub(crate) fn visit_cells<const D: usize, F: FnMut(usize, usize, [f64; D], f64)>
     f: &mut F,
 ) {
     #[cfg(target_arch = "x86_64")]
-    if avx512_usable(v) {
-        // SAFETY: the CPU has AVX-512F (checked by `avx512_usable`).
-        unsafe { visit_cells_avx512(v, cells, half, s, f) };
-        return;
+    match packed_kernel(v) {
+        // SAFETY: the CPU has the kernel's features (checked by `packed_kernel`).
+        PACKED_AVX512 => return unsafe { visit_cells_avx512(v, cells, half, s, f) },
+        // SAFETY: as above.
+        PACKED_AVX2 => return unsafe { visit_cells_avx2(v, cells, half, s, f) },
+        _ => {}
     }
     visit_cells_portable(v, cells, half, s, f);
 }
 
-/// [`visit_cells`] with the explicit AVX-512 distance-and-mask kernel.
+/// [`visit_cells`] with the packed AVX-512 kernel.
 ///
 /// # Safety
-/// The CPU must support AVX-512F.
+/// The CPU must support AVX-512F and AVX-512VL.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
 unsafe fn visit_cells_avx512<const D: usize, F: FnMut(usize, usize, [f64; D], f64)>(
@@ -347,14 +374,41 @@ unsafe fn visit_cells_avx512<const D: usize, F: FnMut(usize, usize, [f64; D], f6
     s: &mut Scratch<D>,
     f: &mut F,
 ) {
+    visit_mi_or_not::<D, PACKED_AVX512, F>(v, cells, half, s, f);
+}
+
+/// [`visit_cells`] with the packed AVX2 kernel.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn visit_cells_avx2<const D: usize, F: FnMut(usize, usize, [f64; D], f64)>(
+    v: &View<'_, D>,
+    cells: Range<usize>,
+    half: bool,
+    s: &mut Scratch<D>,
+    f: &mut F,
+) {
+    visit_mi_or_not::<D, PACKED_AVX2, F>(v, cells, half, s, f);
+}
+
+#[inline(always)]
+fn visit_mi_or_not<const D: usize, const KERNEL: u8, F: FnMut(usize, usize, [f64; D], f64)>(
+    v: &View<'_, D>,
+    cells: Range<usize>,
+    half: bool,
+    s: &mut Scratch<D>,
+    f: &mut F,
+) {
     if v.grid.needs_min_image_per_pair() {
-        visit_impl::<D, true, true, F>(v, cells, half, s, f);
+        visit_impl::<D, true, KERNEL, F>(v, cells, half, s, f);
     } else {
-        visit_impl::<D, false, true, F>(v, cells, half, s, f);
+        visit_impl::<D, false, KERNEL, F>(v, cells, half, s, f);
     }
 }
 
-/// [`visit_cells`] for CPUs without AVX-512 (compiler-vectorised, AVX2 where present).
+/// [`visit_cells`] without a packed kernel (compiler-vectorised, AVX2 where present).
 #[multiversion(targets("x86_64+avx2+fma"), dispatcher = "direct")]
 fn visit_cells_portable<const D: usize, F: FnMut(usize, usize, [f64; D], f64)>(
     v: &View<'_, D>,
@@ -363,11 +417,7 @@ fn visit_cells_portable<const D: usize, F: FnMut(usize, usize, [f64; D], f64)>(
     s: &mut Scratch<D>,
     f: &mut F,
 ) {
-    if v.grid.needs_min_image_per_pair() {
-        visit_impl::<D, true, false, F>(v, cells, half, s, f);
-    } else {
-        visit_impl::<D, false, false, F>(v, cells, half, s, f);
-    }
+    visit_mi_or_not::<D, PORTABLE, F>(v, cells, half, s, f);
 }
 
 /// Visits the neighbours of the particle at sorted position `rank` in cell `cell`: its half
@@ -381,18 +431,20 @@ pub(crate) fn visit_particle<const D: usize, F: FnMut(usize, usize, [f64; D], f6
     f: &mut F,
 ) {
     #[cfg(target_arch = "x86_64")]
-    if avx512_usable(v) {
-        // SAFETY: the CPU has AVX-512F (checked by `avx512_usable`).
-        unsafe { visit_particle_avx512(v, rank, cell, half, s, f) };
-        return;
+    match packed_kernel(v) {
+        // SAFETY: the CPU has the kernel's features (checked by `packed_kernel`).
+        PACKED_AVX512 => return unsafe { visit_particle_avx512(v, rank, cell, half, s, f) },
+        // SAFETY: as above.
+        PACKED_AVX2 => return unsafe { visit_particle_avx2(v, rank, cell, half, s, f) },
+        _ => {}
     }
     visit_particle_portable(v, rank, cell, half, s, f);
 }
 
-/// [`visit_particle`] with the explicit AVX-512 kernel.
+/// [`visit_particle`] with the packed AVX-512 kernel.
 ///
 /// # Safety
-/// The CPU must support AVX-512F.
+/// The CPU must support AVX-512F and AVX-512VL.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
 unsafe fn visit_particle_avx512<const D: usize, F: FnMut(usize, usize, [f64; D], f64)>(
@@ -403,10 +455,27 @@ unsafe fn visit_particle_avx512<const D: usize, F: FnMut(usize, usize, [f64; D],
     s: &mut Scratch<D>,
     f: &mut F,
 ) {
-    particle_impl::<D, true, F>(v, rank, cell, half, s, f);
+    particle_impl::<D, PACKED_AVX512, F>(v, rank, cell, half, s, f);
 }
 
-/// [`visit_particle`] for CPUs without AVX-512.
+/// [`visit_particle`] with the packed AVX2 kernel.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn visit_particle_avx2<const D: usize, F: FnMut(usize, usize, [f64; D], f64)>(
+    v: &View<'_, D>,
+    rank: usize,
+    cell: usize,
+    half: bool,
+    s: &mut Scratch<D>,
+    f: &mut F,
+) {
+    particle_impl::<D, PACKED_AVX2, F>(v, rank, cell, half, s, f);
+}
+
+/// [`visit_particle`] without a packed kernel.
 #[multiversion(targets("x86_64+avx2+fma"), dispatcher = "direct")]
 fn visit_particle_portable<const D: usize, F: FnMut(usize, usize, [f64; D], f64)>(
     v: &View<'_, D>,
@@ -416,11 +485,11 @@ fn visit_particle_portable<const D: usize, F: FnMut(usize, usize, [f64; D], f64)
     s: &mut Scratch<D>,
     f: &mut F,
 ) {
-    particle_impl::<D, false, F>(v, rank, cell, half, s, f);
+    particle_impl::<D, PORTABLE, F>(v, rank, cell, half, s, f);
 }
 
 #[inline(always)]
-fn particle_impl<const D: usize, const AVX512: bool, F: FnMut(usize, usize, [f64; D], f64)>(
+fn particle_impl<const D: usize, const KERNEL: u8, F: FnMut(usize, usize, [f64; D], f64)>(
     v: &View<'_, D>,
     rank: usize,
     cell: usize,
@@ -442,7 +511,7 @@ fn particle_impl<const D: usize, const AVX512: bool, F: FnMut(usize, usize, [f64
     };
     let runs = s.shell.as_slice();
     if g.needs_min_image_per_pair() {
-        particle_runs::<D, true, AVX512, F>(
+        particle_runs::<D, true, KERNEL, F>(
             v,
             rank,
             runs,
@@ -456,7 +525,7 @@ fn particle_impl<const D: usize, const AVX512: bool, F: FnMut(usize, usize, [f64
             f,
         );
     } else {
-        particle_runs::<D, false, AVX512, F>(
+        particle_runs::<D, false, KERNEL, F>(
             v,
             rank,
             runs,
@@ -567,6 +636,119 @@ mod avx512 {
     }
 }
 
+/// The packed kernel for AVX2: as [`avx512`], 8 candidates at a time, the hit lanes packed
+/// with a permutation from a table instead of `vpcompressd`.
+#[cfg(target_arch = "x86_64")]
+mod avx2 {
+    use std::arch::x86_64::*;
+
+    use super::RUN_SHIFT;
+
+    /// For every 8-bit hit mask, the lanes of its set bits in ascending order, first: the
+    /// `vpermd` permutation that packs the hit lanes to the front.
+    static PACK: [[u32; 8]; 256] = pack_table();
+
+    const fn pack_table() -> [[u32; 8]; 256] {
+        let mut table = [[0u32; 8]; 256];
+        let mut mask = 0;
+        while mask < 256 {
+            let (mut n, mut lane) = (0, 0);
+            while lane < 8 {
+                if (mask >> lane) & 1 == 1 {
+                    table[mask][n] = lane as u32;
+                    n += 1;
+                }
+                lane += 1;
+            }
+            mask += 1;
+        }
+        table
+    }
+
+    /// Squared distances from `p` (separation `(p - x) - s`, summed over the axes in order)
+    /// of the 4 particles at sorted positions `k..k + 4`.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2; `k + 4` must not exceed any column's length.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    unsafe fn r2_of<const D: usize>(
+        cols: &[&[f64]; D],
+        k: usize,
+        p: &[__m256d; D],
+        s: &[__m256d; D],
+    ) -> __m256d {
+        let mut r2 = _mm256_setzero_pd();
+        for d in 0..D {
+            // SAFETY: in bounds per the caller's contract.
+            let x = unsafe { _mm256_loadu_pd(cols[d].as_ptr().add(k)) };
+            let dx = _mm256_sub_pd(_mm256_sub_pd(p[d], x), s[d]);
+            let sq = _mm256_mul_pd(dx, dx);
+            r2 = if d == 0 { sq } else { _mm256_add_pd(r2, sq) };
+        }
+        r2
+    }
+
+    /// Same contract and output as [`super::avx512::particle_hits`], 8 candidates per step
+    /// (a store may write up to 8 slots past the last hit).
+    ///
+    /// # Safety
+    /// The CPU must support AVX2. Every `j1` must be at most `cols[d].len() - 7` and at most
+    /// `1 << RUN_SHIFT`, there may be at most `1 << (32 - RUN_SHIFT)` runs, and `hits` must
+    /// hold the total run length plus 8.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn particle_hits<const D: usize>(
+        cols: [&[f64]; D],
+        p: [f64; D],
+        spans: &[(usize, usize)],
+        shifts: &[[f64; D]],
+        rc2: f64,
+        hits: &mut [u32],
+    ) -> usize {
+        let len = cols.iter().map(|c| c.len()).min().unwrap_or(0);
+        let total: usize = spans.iter().map(|&(a, b)| b - a).sum();
+        assert!(
+            spans
+                .iter()
+                .all(|&(_, b)| b + 7 <= len && b <= 1 << RUN_SHIFT)
+        );
+        assert!(spans.len() <= 1 << (32 - RUN_SHIFT) && hits.len() >= total + 8);
+        let pv: [__m256d; D] = std::array::from_fn(|d| _mm256_set1_pd(p[d]));
+        let cut = _mm256_set1_pd(rc2);
+        let iota = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+        let mut count = 0usize;
+        for (r, (&(j0, j1), shift)) in spans.iter().zip(shifts).enumerate() {
+            let sv: [__m256d; D] = std::array::from_fn(|d| _mm256_set1_pd(shift[d]));
+            let tag = (r as u32) << RUN_SHIFT;
+            let mut k = j0;
+            while k < j1 {
+                let lanes = (j1 - k).min(8) as u32;
+                let tail = 0xffu32 >> (8 - lanes);
+                // SAFETY: `k + 8 <= j1 + 7 <= len` (asserted), so the loads stay inside the
+                // columns; `count + 8 <= total + 8` (at most one hit per candidate so far),
+                // so the store stays inside `hits`; `m < 256` indexes the table.
+                unsafe {
+                    let lo = r2_of(&cols, k, &pv, &sv);
+                    let hi = r2_of(&cols, k + 4, &pv, &sv);
+                    let m_lo = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LE_OQ>(lo, cut)) as u32;
+                    let m_hi = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LE_OQ>(hi, cut)) as u32;
+                    let m = (m_lo | (m_hi << 4)) & tail;
+                    let idx = _mm256_add_epi32(_mm256_set1_epi32((tag | k as u32) as i32), iota);
+                    let perm = _mm256_loadu_si256(PACK.get_unchecked(m as usize).as_ptr().cast());
+                    _mm256_storeu_si256(
+                        hits.as_mut_ptr().add(count).cast(),
+                        _mm256_permutevar8x32_epi32(idx, perm),
+                    );
+                    count += m.count_ones() as usize;
+                }
+                k += 8;
+            }
+        }
+        count
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use rand::{RngExt, SeedableRng};
@@ -589,6 +771,59 @@ mod tests {
         out
     }
 
+    /// The packed kernels this CPU can run (the portable one always runs).
+    fn packed_kernels() -> Vec<u8> {
+        let mut k = Vec::new();
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx2") {
+                k.push(PACKED_AVX2);
+            }
+            if std::arch::is_x86_feature_detected!("avx512f") {
+                k.push(PACKED_AVX512);
+            }
+        }
+        k
+    }
+
+    /// `visit_cells` with the packed kernel `kernel`.
+    #[cfg(target_arch = "x86_64")]
+    fn visit_cells_with<const D: usize, F: FnMut(usize, usize, [f64; D], f64)>(
+        kernel: u8,
+        v: &View<'_, D>,
+        cells: Range<usize>,
+        half: bool,
+        s: &mut Scratch<D>,
+        f: &mut F,
+    ) {
+        // SAFETY: only kernels from `packed_kernels` (features checked) are passed.
+        unsafe {
+            match kernel {
+                PACKED_AVX512 => visit_cells_avx512(v, cells, half, s, f),
+                _ => visit_cells_avx2(v, cells, half, s, f),
+            }
+        }
+    }
+
+    /// `visit_particle` with the packed kernel `kernel`.
+    #[cfg(target_arch = "x86_64")]
+    fn visit_particle_with<const D: usize, F: FnMut(usize, usize, [f64; D], f64)>(
+        kernel: u8,
+        v: &View<'_, D>,
+        (rank, cell): (usize, usize),
+        half: bool,
+        s: &mut Scratch<D>,
+        f: &mut F,
+    ) {
+        // SAFETY: only kernels from `packed_kernels` (features checked) are passed.
+        unsafe {
+            match kernel {
+                PACKED_AVX512 => visit_particle_avx512(v, rank, cell, half, s, f),
+                _ => visit_particle_avx2(v, rank, cell, half, s, f),
+            }
+        }
+    }
+
     fn kernels_agree<const D: usize>(periodic: [bool; D], cutoff: f64, seed: u64) {
         let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
         let l = 9.0;
@@ -606,76 +841,73 @@ mod tests {
             );
             assert!(!portable.is_empty());
             #[cfg(target_arch = "x86_64")]
-            if std::arch::is_x86_feature_detected!("avx512f") {
-                // SAFETY: checked above.
-                let avx = collect(
-                    |v, s, mut f| unsafe { visit_cells_avx512(v, 0..nc, half, s, &mut f) },
+            for kernel in packed_kernels() {
+                let packed = collect(
+                    |v, s, mut f| visit_cells_with(kernel, v, 0..nc, half, s, &mut f),
                     &cells,
                 );
-                assert_eq!(avx, portable, "AVX-512 and portable kernels differ");
+                assert_eq!(packed, portable, "kernel {kernel} and portable differ");
                 // One particle at a time (the gather traversal's entry point).
                 for i in (0..p.len()).step_by(97) {
-                    let (rank, cell) = (cells.rank()[i] as usize, cells.cell_of()[i] as usize);
+                    let at = (cells.rank()[i] as usize, cells.cell_of()[i] as usize);
                     let one = collect(
-                        |v, s, mut f| visit_particle_portable(v, rank, cell, half, s, &mut f),
+                        |v, s, mut f| visit_particle_portable(v, at.0, at.1, half, s, &mut f),
                         &cells,
                     );
-                    // SAFETY: checked above.
-                    let avx = collect(
-                        |v, s, mut f| unsafe {
-                            visit_particle_avx512(v, rank, cell, half, s, &mut f)
-                        },
+                    let packed = collect(
+                        |v, s, mut f| visit_particle_with(kernel, v, at, half, s, &mut f),
                         &cells,
                     );
-                    assert_eq!(avx, one, "particle {i}");
+                    assert_eq!(packed, one, "kernel {kernel}, particle {i}");
                 }
             }
         }
     }
 
-    /// The kernel reports exactly the candidates of its runs that are within the cutoff, in
-    /// order, even when the particles right after a run (read by its last vector) are hits.
+    /// Both packed kernels report exactly the candidates of their runs that are within the
+    /// cutoff, in order, even when the particles right after a run (read by its last vector)
+    /// are hits.
     #[test]
-    fn avx512_kernel_stops_at_the_end_of_every_run() {
+    fn packed_kernels_stop_at_the_end_of_every_run() {
+        // 60 particles on the x axis, every other one within the cutoff of the origin.
+        let xs: Vec<f64> = (0..60 + COORD_PAD)
+            .map(|k| if k % 2 == 0 { 0.5 } else { 5.0 })
+            .collect();
+        let zeros = vec![0.0; xs.len()];
+        let spans = [(3, 21), (21, 22), (30, 47), (50, 60)];
+        let shifts = [[0.0; 3]; 4];
+        let want: Vec<u32> = spans
+            .iter()
+            .enumerate()
+            .flat_map(|(r, &(a, b))| {
+                (a..b)
+                    .filter(|k| k % 2 == 0)
+                    .map(move |k| k as u32 | (r as u32) << RUN_SHIFT)
+            })
+            .collect();
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // 60 particles on the x axis, every other one within the cutoff of the origin.
-            let xs: Vec<f64> = (0..60 + COORD_PAD)
-                .map(|k| if k % 2 == 0 { 0.5 } else { 5.0 })
-                .collect();
-            let zeros = vec![0.0; xs.len()];
-            let spans = [(3, 21), (21, 22), (30, 47), (50, 60)];
-            let shifts = [[0.0; 3]; 4];
+        for kernel in packed_kernels() {
             let mut hits = vec![u32::MAX; 80];
-            // SAFETY: AVX-512F checked; runs end at 60 <= len - 15; 4 runs; hits hold 46 + 16.
+            let cols = [xs.as_slice(), &zeros, &zeros];
+            // SAFETY: features checked by `packed_kernels`; runs end at 60 <= len - 15;
+            // 4 runs; `hits` holds 46 + 16.
             let count = unsafe {
-                avx512::particle_hits(
-                    [&xs, &zeros, &zeros],
-                    [0.0; 3],
-                    &spans,
-                    &shifts,
-                    1.0,
-                    &mut hits,
-                )
+                match kernel {
+                    PACKED_AVX512 => {
+                        avx512::particle_hits(cols, [0.0; 3], &spans, &shifts, 1.0, &mut hits)
+                    }
+                    _ => avx2::particle_hits(cols, [0.0; 3], &spans, &shifts, 1.0, &mut hits),
+                }
             };
-            let want: Vec<u32> = spans
-                .iter()
-                .enumerate()
-                .flat_map(|(r, &(a, b))| {
-                    (a..b)
-                        .filter(|k| k % 2 == 0)
-                        .map(move |k| k as u32 | (r as u32) << RUN_SHIFT)
-                })
-                .collect();
-            assert_eq!(&hits[..count], &want[..]);
+            assert_eq!(&hits[..count], &want[..], "kernel {kernel}");
         }
     }
 
-    /// The explicit AVX-512 kernel reports exactly what the portable one does (same pairs,
-    /// same order, same bits): open and periodic boxes, dense cells (runs of hundreds of
-    /// candidates), a periodic axis of 2 cells (minimum image per pair), 2D.
+    /// The packed AVX-512 and AVX2 kernels report exactly what the portable one does (same
+    /// pairs, same order, same bits): open and periodic boxes, dense cells (runs of hundreds
+    /// of candidates), a periodic axis of 2 cells (minimum image per pair), 2D.
     #[test]
-    fn avx512_kernel_matches_the_portable_kernel() {
+    fn packed_kernels_match_the_portable_kernel() {
         kernels_agree::<3>([false; 3], 1.3, 1);
         kernels_agree::<3>([true, false, true], 1.3, 2);
         kernels_agree::<3>([true; 3], 2.9, 3);
