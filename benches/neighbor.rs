@@ -18,8 +18,8 @@ use rand::{RngExt, SeedableRng};
 use rayon::prelude::*;
 use simkit::backend::{GpuBuffer, GpuContext};
 use simkit::neighbor::{
-    BruteForce, CellGrid, GpuCellList, GpuNeighborList, LinkedCells, ListKind, NeighborSearch,
-    SortedCells, VerletList, positions_to_f32,
+    BruteForce, CellGrid, GpuCellList, GpuNeighborList, Kernel, LinkedCells, ListKind,
+    NeighborSearch, SortedCells, VerletList, positions_to_f32,
 };
 
 const CUTOFF: f64 = 2.5;
@@ -86,6 +86,16 @@ fn cpu_methods(c: &mut Criterion) {
         g.bench_with_input(BenchmarkId::new("sorted_cells_rayon", n), &n, |b, _| {
             b.iter(|| black_box(sorted_par(&mut cells, &p)))
         });
+        // The same with each other kernel this CPU runs (docs/neighbor.md compares them).
+        for kernel in [Kernel::PackedAvx2, Kernel::Portable] {
+            if kernel.is_supported() && kernel != Kernel::best() {
+                let mut forced = SortedCells::new(&grid).with_kernel(kernel).expect("kernel");
+                let id = format!("sorted_cells_rayon_{kernel:?}");
+                g.bench_with_input(BenchmarkId::new(id, n), &n, |b, _| {
+                    b.iter(|| black_box(sorted_par(&mut forced, &p)))
+                });
+            }
+        }
         g.bench_with_input(BenchmarkId::new("sorted_cells_serial", n), &n, |b, _| {
             b.iter(|| {
                 cells.build(&p).expect("build");

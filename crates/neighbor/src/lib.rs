@@ -65,4 +65,5 @@ pub use linked::{EMPTY, LinkedCells};
 pub use search::{NeighborLists, NeighborSearch};
 pub use sorted::SortedCells;
 pub use stencil::{HALF_SHELL_2D, HALF_SHELL_3D};
+pub use traverse::Kernel;
 pub use verlet::{ListKind, VerletList};

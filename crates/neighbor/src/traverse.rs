@@ -42,6 +42,8 @@ pub(crate) struct View<'a, const D: usize> {
     pub grid: &'a CellGrid<D>,
     pub cell_start: &'a [u32],
     pub order: &'a [u32],
+    /// The kernel to run.
+    pub kernel: Kernel,
     /// Sorted coordinates, each followed by [`COORD_PAD`] padding values.
     pub coords: [&'a [f64]; D],
 }
@@ -326,19 +328,61 @@ fn visit_impl<
     }
 }
 
-/// Which kernel a traversal runs: the packed AVX-512 or AVX2 kernel when the CPU has the
-/// feature and every sorted position fits the packed hit format (at most `1 << RUN_SHIFT`,
-/// 134 million particles), the portable one otherwise.
+/// The CPU traversal kernel of [`SortedCells`](crate::SortedCells) and the lists built from
+/// it. Every kernel reports the same pairs with the same bits in the same order (tested);
+/// they differ in speed only (figures in `docs/neighbor.md`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Kernel {
+    /// The fastest kernel the CPU supports: packed AVX-512, else packed AVX2, else portable.
+    #[default]
+    Auto,
+    /// Compiler-vectorised squared distances per run of cells, then hit masks (any CPU).
+    Portable,
+    /// All hits of a particle packed into one list with AVX2 (x86-64 with AVX2).
+    PackedAvx2,
+    /// All hits of a particle packed into one list with AVX-512F (x86-64 with AVX-512F).
+    PackedAvx512,
+}
+
+impl Kernel {
+    /// Whether this CPU can run the kernel.
+    pub fn is_supported(self) -> bool {
+        match self {
+            Kernel::Auto | Kernel::Portable => true,
+            #[cfg(target_arch = "x86_64")]
+            Kernel::PackedAvx2 => std::arch::is_x86_feature_detected!("avx2"),
+            #[cfg(target_arch = "x86_64")]
+            Kernel::PackedAvx512 => std::arch::is_x86_feature_detected!("avx512f"),
+            #[cfg(not(target_arch = "x86_64"))]
+            Kernel::PackedAvx2 | Kernel::PackedAvx512 => false,
+        }
+    }
+
+    /// The kernel [`Kernel::Auto`] picks on this CPU.
+    pub fn best() -> Kernel {
+        [Kernel::PackedAvx512, Kernel::PackedAvx2]
+            .into_iter()
+            .find(|k| k.is_supported())
+            .unwrap_or(Kernel::Portable)
+    }
+}
+
+/// Which kernel a traversal runs: the view's choice ([`Kernel::best`] for `Auto`), as long
+/// as the CPU supports it and every sorted position fits the packed hit format (at most
+/// `1 << RUN_SHIFT`, 134 million particles); the portable kernel otherwise.
 #[cfg(target_arch = "x86_64")]
 fn packed_kernel<const D: usize>(v: &View<'_, D>) -> u8 {
-    if v.order.len() > 1 << RUN_SHIFT {
-        PORTABLE
-    } else if std::arch::is_x86_feature_detected!("avx512f") {
-        PACKED_AVX512
-    } else if std::arch::is_x86_feature_detected!("avx2") {
-        PACKED_AVX2
-    } else {
-        PORTABLE
+    let k = match v.kernel {
+        Kernel::Auto => Kernel::best(),
+        k => k,
+    };
+    if v.order.len() > 1 << RUN_SHIFT || !k.is_supported() {
+        return PORTABLE;
+    }
+    match k {
+        Kernel::PackedAvx512 => PACKED_AVX512,
+        Kernel::PackedAvx2 => PACKED_AVX2,
+        _ => PORTABLE,
     }
 }
 

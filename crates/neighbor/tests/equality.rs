@@ -4,7 +4,7 @@
 mod common;
 
 use backend::testing::gpu_or_skip;
-use neighbor::{CellGrid, NeighborSearch, SortedCells};
+use neighbor::{CellGrid, Kernel, NeighborSearch, SortedCells};
 use proptest::prelude::*;
 
 use common::{check_cpu, check_gpu};
@@ -132,6 +132,29 @@ proptest! {
         let reference = check_cpu(&grid, &c.positions);
         check_gpu(&ctx, &grid, &c.positions, &reference);
     }
+}
+
+#[test]
+fn a_kernel_the_cpu_lacks_is_an_error() {
+    let grid = CellGrid::new([0.0; 3], [5.0; 3], [true; 3], 1.0).unwrap();
+    for kernel in [
+        Kernel::Auto,
+        Kernel::Portable,
+        Kernel::PackedAvx2,
+        Kernel::PackedAvx512,
+    ] {
+        let r = SortedCells::new(&grid).with_kernel(kernel);
+        if kernel.is_supported() {
+            assert_eq!(r.unwrap().kernel(), kernel);
+        } else {
+            let e = r.unwrap_err().to_string();
+            assert!(
+                e.contains(&format!("{kernel:?}")) && e.contains("Kernel::Auto"),
+                "{e}"
+            );
+        }
+    }
+    assert!(Kernel::best().is_supported());
 }
 
 #[test]

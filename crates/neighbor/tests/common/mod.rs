@@ -5,8 +5,8 @@
 use std::collections::BTreeMap;
 
 use neighbor::{
-    BruteForce, CellGrid, GpuCellList, GpuNeighborList, GpuNeighborSearch, LinkedCells, ListKind,
-    NeighborLists, NeighborSearch, SortedCells, VerletList,
+    BruteForce, CellGrid, GpuCellList, GpuNeighborList, GpuNeighborSearch, Kernel, LinkedCells,
+    ListKind, NeighborLists, NeighborSearch, SortedCells, VerletList,
 };
 
 /// Unordered pair -> (separation oriented from the smaller index, r2).
@@ -53,6 +53,13 @@ pub fn check_cpu<const D: usize>(grid: &CellGrid<D>, p: &[[f64; D]]) -> PairMap<
     let mut sorted = SortedCells::new(grid);
     let m = pairs_of(&mut sorted, p);
     assert_eq!(m, reference, "sorted cells differ from brute force");
+    // Every traversal kernel this CPU runs (the default picked one of them).
+    for kernel in [Kernel::Portable, Kernel::PackedAvx2, Kernel::PackedAvx512] {
+        if kernel.is_supported() {
+            let mut k = SortedCells::new(grid).with_kernel(kernel).unwrap();
+            assert_eq!(pairs_of(&mut k, p), reference, "kernel {kernel:?}");
+        }
+    }
     // rayon half shell.
     let parts = sorted.par_fold_pairs(Vec::new, |v, i, j, sep, r2| v.push((i, j, sep, r2)));
     let mut par = PairMap::new();
