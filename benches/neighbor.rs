@@ -5,9 +5,9 @@
 //!
 //! Workload (issue 3): N uniform random points at number density 1 in a cube (square in
 //! 2D), closed box, cutoff 2.5 (about 65 neighbours per point in 3D, 20 in 2D),
-//! N = 1e4, 1e5, 1e6. Run: `cargo bench --bench neighbor`. After the criterion groups it
-//! prints a side-by-side summary (medians of 5 runs) with the sorted-cells / kiddo ratio
-//! and the build-time scaling from N = 1e4 to 1e6.
+//! N = 1e4, 1e5, 1e6. Run: `cargo bench --bench neighbor`. Before the criterion groups it
+//! prints a side-by-side summary (sorted cells and kiddo timed alternately, medians of 7)
+//! with the sorted-cells / kiddo ratio and the build-time scaling from N = 1e4 to 1e6.
 
 use std::hint::black_box;
 use std::time::{Duration, Instant};
@@ -192,33 +192,53 @@ fn gpu(c: &mut Criterion) {
     }
 }
 
-fn median_secs(mut f: impl FnMut() -> usize) -> (f64, usize) {
-    let mut t = Vec::new();
-    let mut k = 0;
-    for _ in 0..5 {
-        let s = Instant::now();
-        k = black_box(f());
-        t.push(s.elapsed().as_secs_f64());
-    }
+/// Repetitions of the summary's timings.
+const REPS: usize = 7;
+
+/// Median of a list of times.
+fn median(mut t: Vec<f64>) -> f64 {
     t.sort_by(f64::total_cmp);
-    (t[2], k)
+    t[t.len() / 2]
+}
+
+/// Times `a` and `b` alternately, [`REPS`] times each (so a burst of other load on the
+/// machine hits both); returns their median times and last results.
+fn interleaved(
+    mut a: impl FnMut() -> usize,
+    mut b: impl FnMut() -> usize,
+) -> ((f64, usize), (f64, usize)) {
+    let (mut ta, mut tb, mut ka, mut kb) = (Vec::new(), Vec::new(), 0, 0);
+    for _ in 0..REPS {
+        let s = Instant::now();
+        ka = black_box(a());
+        ta.push(s.elapsed().as_secs_f64());
+        let s = Instant::now();
+        kb = black_box(b());
+        tb.push(s.elapsed().as_secs_f64());
+    }
+    ((median(ta), ka), (median(tb), kb))
 }
 
 fn summary(_: &mut Criterion) {
     println!(
-        "\nSummary (median of 5, rayon threads = {}):",
+        "\nSummary (medians of {REPS}, sorted cells and kiddo timed alternately, rayon threads = {}):",
         rayon::current_num_threads()
     );
     let mut build_times = Vec::new();
     for &n in &SIZES {
         let (grid, p) = points::<3>(n);
         let mut cells = SortedCells::new(&grid);
-        let (ts, ps) = median_secs(|| sorted_par(&mut cells, &p));
-        let (tk, pk) = median_secs(|| kiddo_par(&p));
-        let (tb, _) = median_secs(|| {
-            cells.build(&p).expect("build");
-            cells.len()
-        });
+        sorted_par(&mut cells, &p); // allocate the buffers before timing
+        let ((ts, ps), (tk, pk)) = interleaved(|| sorted_par(&mut cells, &p), || kiddo_par(&p));
+        let tb = median(
+            (0..REPS)
+                .map(|_| {
+                    let s = Instant::now();
+                    cells.build(&p).expect("build");
+                    s.elapsed().as_secs_f64()
+                })
+                .collect(),
+        );
         build_times.push(tb);
         assert_eq!(ps, pk, "sorted cells and kiddo disagree on the pair count");
         println!(
