@@ -1,12 +1,18 @@
-//! The hot loop: one particle against runs of sorted neighbour cells.
+//! The hot loop: one particle against runs of sorted neighbour cells, three kernels (see
+//! [`Kernel`]), all evaluating every candidate with the same operations in the same order,
+//! so they report the same pairs bit for bit (tested).
 //!
-//! On CPUs with AVX-512F an explicit kernel computes 8 squared distances per instruction
-//! sequence and compares them straight into a bit mask (`vcmppd` to a mask register); only
-//! the hits reach the caller's callback. Elsewhere the squared distances of a whole run go
-//! to a buffer first (a branch-free loop the compiler vectorises, built for AVX2+FMA and the
-//! baseline and picked at run time with `multiversion`), then become 64-bit hit masks. Both
-//! kernels evaluate every candidate with the same operations in the same order, so they
-//! report the same pairs bit for bit (tested).
+//! - Packed (AVX-512F or AVX2, explicit intrinsics): all runs of a particle's shell in one
+//!   branch-free pass that compares squared distances straight into a mask and packs the
+//!   indices of the hits into one list (`vpcompressd`, or `vpermd` with a table); then one
+//!   loop over that list recomputes each hit's separation and calls the callback. One
+//!   unpredictable loop exit per particle instead of two per run, and no bounds check per
+//!   hit (which would keep a caller's accumulator in memory).
+//! - Portable (`multiversion`: AVX2+FMA clone and baseline): the squared distances of a run
+//!   into a buffer (a loop the compiler vectorises), then 64-bit hit masks, one step per hit.
+//!
+//! The kernel is picked at run time ([`Kernel::Auto`]), so no `-C target-cpu=native` is
+//! needed.
 
 use std::ops::Range;
 
@@ -15,7 +21,8 @@ use multiversion::multiversion;
 use crate::CellGrid;
 use crate::stencil::Shell;
 
-/// Lanes the distance pass always computes together (one AVX-512 vector of `f64`).
+/// Lanes the portable distance pass always computes together; `COORD_PAD` and the packed
+/// hit list's slack are counted in it.
 const LANES: usize = 8;
 
 /// Coordinates stored after the last particle so that the distance pass may read whole
@@ -51,7 +58,7 @@ pub(crate) struct View<'a, const D: usize> {
 /// Scratch buffers of one traversal (one per thread).
 pub(crate) struct Scratch<const D: usize> {
     r2: Vec<f64>,
-    /// Packed hits (`sorted position | run << RUN_SHIFT`) of the AVX-512 kernel.
+    /// Packed hits (`sorted position | run << RUN_SHIFT`) of the packed kernels.
     hits: Vec<u32>,
     shell: Shell<D>,
 }
