@@ -345,9 +345,10 @@ pub enum Kernel {
     Auto,
     /// Compiler-vectorised squared distances per run of cells, then hit masks (any CPU).
     Portable,
-    /// All hits of a particle packed into one list with AVX2 (x86-64 with AVX2).
+    /// All hits of a particle packed into one list with AVX2 (x86-64 with AVX2 and FMA).
     PackedAvx2,
-    /// All hits of a particle packed into one list with AVX-512F (x86-64 with AVX-512F).
+    /// All hits of a particle packed into one list with AVX-512 (x86-64 with AVX-512F,
+    /// AVX-512VL, AVX2 and FMA).
     PackedAvx512,
 }
 
@@ -356,10 +357,19 @@ impl Kernel {
     pub fn is_supported(self) -> bool {
         match self {
             Kernel::Auto | Kernel::Portable => true,
+            // Every feature the kernel's functions are compiled with (`target_feature`).
             #[cfg(target_arch = "x86_64")]
-            Kernel::PackedAvx2 => std::arch::is_x86_feature_detected!("avx2"),
+            Kernel::PackedAvx2 => {
+                std::arch::is_x86_feature_detected!("avx2")
+                    && std::arch::is_x86_feature_detected!("fma")
+            }
             #[cfg(target_arch = "x86_64")]
-            Kernel::PackedAvx512 => std::arch::is_x86_feature_detected!("avx512f"),
+            Kernel::PackedAvx512 => {
+                std::arch::is_x86_feature_detected!("avx512f")
+                    && std::arch::is_x86_feature_detected!("avx512vl")
+                    && std::arch::is_x86_feature_detected!("avx2")
+                    && std::arch::is_x86_feature_detected!("fma")
+            }
             #[cfg(not(target_arch = "x86_64"))]
             Kernel::PackedAvx2 | Kernel::PackedAvx512 => false,
         }
@@ -415,7 +425,7 @@ pub(crate) fn visit_cells<const D: usize, F: FnMut(usize, usize, [f64; D], f64)>
 /// [`visit_cells`] with the packed AVX-512 kernel.
 ///
 /// # Safety
-/// The CPU must support AVX-512F and AVX-512VL.
+/// The CPU must support AVX-512F, AVX-512VL, AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
 unsafe fn visit_cells_avx512<const D: usize, F: FnMut(usize, usize, [f64; D], f64)>(
@@ -431,7 +441,7 @@ unsafe fn visit_cells_avx512<const D: usize, F: FnMut(usize, usize, [f64; D], f6
 /// [`visit_cells`] with the packed AVX2 kernel.
 ///
 /// # Safety
-/// The CPU must support AVX2.
+/// The CPU must support AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 unsafe fn visit_cells_avx2<const D: usize, F: FnMut(usize, usize, [f64; D], f64)>(
@@ -495,7 +505,7 @@ pub(crate) fn visit_particle<const D: usize, F: FnMut(usize, usize, [f64; D], f6
 /// [`visit_particle`] with the packed AVX-512 kernel.
 ///
 /// # Safety
-/// The CPU must support AVX-512F and AVX-512VL.
+/// The CPU must support AVX-512F, AVX-512VL, AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
 unsafe fn visit_particle_avx512<const D: usize, F: FnMut(usize, usize, [f64; D], f64)>(
@@ -512,7 +522,7 @@ unsafe fn visit_particle_avx512<const D: usize, F: FnMut(usize, usize, [f64; D],
 /// [`visit_particle`] with the packed AVX2 kernel.
 ///
 /// # Safety
-/// The CPU must support AVX2.
+/// The CPU must support AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 unsafe fn visit_particle_avx2<const D: usize, F: FnMut(usize, usize, [f64; D], f64)>(
@@ -825,14 +835,11 @@ mod tests {
     /// The packed kernels this CPU can run (the portable one always runs).
     fn packed_kernels() -> Vec<u8> {
         let mut k = Vec::new();
-        #[cfg(target_arch = "x86_64")]
-        {
-            if std::arch::is_x86_feature_detected!("avx2") {
-                k.push(PACKED_AVX2);
-            }
-            if std::arch::is_x86_feature_detected!("avx512f") {
-                k.push(PACKED_AVX512);
-            }
+        if Kernel::PackedAvx2.is_supported() {
+            k.push(PACKED_AVX2);
+        }
+        if Kernel::PackedAvx512.is_supported() {
+            k.push(PACKED_AVX512);
         }
         k
     }
