@@ -103,40 +103,42 @@ fn particle_runs<
     f: &mut F,
 ) {
     let pi: [f64; D] = std::array::from_fn(|d| v.coords[d][i]);
+    // The non-empty runs as sorted positions `j0..j1` (the own cell of a half shell from
+    // after `i`), with their shifts.
+    let mut spans = [(0usize, 0usize); 27];
+    let mut shifts = [[0.0f64; D]; 27];
+    let mut nr = 0;
+    for (k, run) in runs.iter().enumerate() {
+        let j0 = if k == 0 && own == Own::After {
+            i + 1
+        } else {
+            v.cell_start[run.first] as usize
+        };
+        let j1 = v.cell_start[run.end] as usize;
+        if j0 < j1 {
+            spans[nr] = (j0, j1);
+            shifts[nr] = run.shift;
+            nr += 1;
+        }
+    }
+    let (spans, shifts) = (&spans[..nr], &shifts[..nr]);
     #[cfg(target_arch = "x86_64")]
     if KERNEL != PORTABLE && !MI {
         // All runs in one branch-free pass that packs the hits into a list, then one loop
         // over the list (see `avx512::particle_hits`, `avx2::particle_hits`).
-        let mut spans = [(0usize, 0usize); 27];
-        let mut shifts = [[0.0f64; D]; 27];
-        let (mut nr, mut total) = (0, 0);
-        for (k, run) in runs.iter().enumerate() {
-            let j0 = if k == 0 && own == Own::After {
-                i + 1
-            } else {
-                v.cell_start[run.first] as usize
-            };
-            let j1 = v.cell_start[run.end] as usize;
-            if j0 < j1 {
-                spans[nr] = (j0, j1);
-                shifts[nr] = run.shift;
-                total += j1 - j0;
-                nr += 1;
-            }
-        }
+        let total: usize = spans.iter().map(|&(a, b)| b - a).sum();
         if hits.len() < total + 2 * LANES {
             hits.resize(total + 2 * LANES, 0);
         }
-        let (sp, sh) = (&spans[..nr], &shifts[..nr]);
         // SAFETY: `KERNEL` is a packed kernel only in `visit_*_avx512` / `visit_*_avx2`, which
         // run after `packed_kernel` checked the CPU feature and that there are at most
         // `1 << RUN_SHIFT` particles; the coordinates carry `COORD_PAD` = 15 padding values;
         // at most 27 runs; `hits` holds the total plus 16.
         let count = unsafe {
             if KERNEL == PACKED_AVX512 {
-                avx512::particle_hits(v.coords, pi, sp, sh, rc2, hits)
+                avx512::particle_hits(v.coords, pi, spans, shifts, rc2, hits)
             } else {
-                avx2::particle_hits(v.coords, pi, sp, sh, rc2, hits)
+                avx2::particle_hits(v.coords, pi, spans, shifts, rc2, hits)
             }
         };
         let oi = v.order[i] as usize;
@@ -149,7 +151,7 @@ fn particle_runs<
             let mut r2 = 0.0;
             for d in 0..D {
                 // SAFETY: `j` is a sorted position of one of the runs (below the particle
-                // count) and `r < nr <= 27`. Without bounds checks the hit loop has no exit
+                // count) and `r < shifts.len()`. Without bounds checks the hit loop has no exit
                 // but its end, so a caller's accumulator can stay in a register.
                 sep[d] = unsafe {
                     (pi[d] - *v.coords[d].get_unchecked(j))
@@ -167,22 +169,12 @@ fn particle_runs<
         }
         return;
     }
-    for (k, run) in runs.iter().enumerate() {
-        let j0 = if k == 0 && own == Own::After {
-            i + 1
-        } else {
-            v.cell_start[run.first] as usize
-        };
-        let j1 = v.cell_start[run.end] as usize;
-        if j0 >= j1 {
-            continue;
-        }
+    for (&(j0, j1), shift) in spans.iter().zip(shifts) {
         let n = j1 - j0;
         // Whole vectors: the distance pass runs on past the run into the next particles (or
         // the padding after the last one, `COORD_PAD`); the hit masks drop those lanes.
         let nv = n.next_multiple_of(LANES);
         let jv = j0 + nv;
-        // One hit: candidate `jj` of the run at squared distance `r2`.
         // Hits are handed on without bounds checks: a checked index would be a possible exit
         // (panic) on every hit, which keeps the caller's accumulator (e.g. a pair counter)
         // in memory instead of a register, a store-to-load chain through every hit.
@@ -206,7 +198,7 @@ fn particle_runs<
                         dx += lengths[d];
                     }
                 } else {
-                    dx -= run.shift[d];
+                    dx -= shift[d];
                 }
                 sep[d] = dx;
             }
@@ -225,7 +217,7 @@ fn particle_runs<
                 &v.coords[2][j0..jv],
             );
             let (px, py, pz) = (pi[0], pi[1], pi[2]);
-            let (sx, sy, sz) = (run.shift[0], run.shift[1], run.shift[2]);
+            let (sx, sy, sz) = (shift[0], shift[1], shift[2]);
             for (((b, &x), &y), &z) in buf.iter_mut().zip(xs).zip(ys).zip(zs) {
                 let dx = (px - x) - sx;
                 let dy = (py - y) - sy;
@@ -235,7 +227,7 @@ fn particle_runs<
         } else if !MI && D == 2 {
             let (xs, ys) = (&v.coords[0][j0..jv], &v.coords[1][j0..jv]);
             let (px, py) = (pi[0], pi[1]);
-            let (sx, sy) = (run.shift[0], run.shift[1]);
+            let (sx, sy) = (shift[0], shift[1]);
             for ((b, &x), &y) in buf.iter_mut().zip(xs).zip(ys) {
                 let dx = (px - x) - sx;
                 let dy = (py - y) - sy;
@@ -245,7 +237,7 @@ fn particle_runs<
             buf.fill(0.0);
             for d in 0..D {
                 let xs = &v.coords[d][j0..jv];
-                let (p, s, h, l) = (pi[d], run.shift[d], half_len[d], lengths[d]);
+                let (p, s, h, l) = (pi[d], shift[d], half_len[d], lengths[d]);
                 if MI && periodic[d] {
                     for (b, &x) in buf.iter_mut().zip(xs) {
                         let mut dx = p - x;
