@@ -3,12 +3,11 @@
 //!
 //! `cargo bench --bench scan`
 
-use backend::gpu::run_pass;
-use backend::prefix::{exclusive_scan, par_exclusive_scan};
-use backend::rng::rng_u32;
-use backend::{GpuBuffer, GpuContext, GpuScan};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use simkit::backend;
+use simkit::backend::gpu::run_pass;
+use simkit::backend::prefix::{exclusive_scan, par_exclusive_scan};
+use simkit::backend::rng::rng_u32;
+use simkit::backend::{GpuBuffer, GpuContext, GpuScan};
 
 const SIZES: [usize; 4] = [10_000, 100_000, 1_000_000, 10_000_000];
 

@@ -15,13 +15,13 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use output::csv::CsvWriter;
-use output::gif::write_gif;
-use output::heatmap::{HeatmapOptions, render_heatmap};
-use output::plot::{Plot, Series};
-use output::progress::Progress;
-use output::vtk::ImageData;
 use simkit::backend::{Backend, Error, GpuContext, Result, Simulation};
+use simkit::output::csv::CsvWriter;
+use simkit::output::gif::write_gif;
+use simkit::output::heatmap::{HeatmapOptions, render_heatmap};
+use simkit::output::plot::{Plot, Series};
+use simkit::output::progress::Progress;
+use simkit::output::vtk::ImageData;
 use simkit::rd::scenes::{colony_scene, gap_width};
 use simkit::rd::{Rd, Stepping};
 
@@ -108,7 +108,7 @@ fn main() -> Result<()> {
             sim.steps_done()
         ));
         let (img, _) = render_heatmap(g.field(0), N, N, &opts)?;
-        output::png::write_png(out.join(format!("b_{:06}.png", sim.steps_done())), &img)?;
+        simkit::output::png::write_png(out.join(format!("b_{:06}.png", sim.steps_done())), &img)?;
         frames.push(img);
     }
     progress.finish();

@@ -9,8 +9,8 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use output::heatmap::{HeatmapOptions, write_heatmap};
 use simkit::backend::{Backend, GpuContext, Result, Simulation};
+use simkit::output::heatmap::{HeatmapOptions, write_heatmap};
 use simkit::rd::scenes::{count_spots, gray_scott_square, variance};
 use simkit::rd::{GrayScott, Rd, Stepping};
 

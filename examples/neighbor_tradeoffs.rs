@@ -16,10 +16,10 @@
 use std::fmt::Write as _;
 use std::time::Instant;
 
-use output::plot::{Plot, Scale, Series};
 use rand::{RngExt, SeedableRng};
 use simkit::backend::{Error, Result};
 use simkit::neighbor::{CellGrid, ListKind, SortedCells, VerletList};
+use simkit::output::plot::{Plot, Scale, Series};
 
 const N: usize = 20_000;
 const RC: f64 = 2.5;
@@ -226,7 +226,7 @@ fn main() -> Result<()> {
          cheapest case for cells."
     );
     plot.write("docs/tradeoffs/neighbor.png")?;
-    output::write_atomic("docs/tradeoffs/neighbor.md", |w| w.write_all(md.as_bytes()))?;
+    simkit::output::write_atomic("docs/tradeoffs/neighbor.md", |w| w.write_all(md.as_bytes()))?;
     print!("{md}");
     Ok(())
 }

@@ -9,8 +9,8 @@
 use std::fmt::Write as _;
 use std::time::Instant;
 
-use output::plot::{Plot, Scale, Series};
 use simkit::backend::{Backend, GpuContext, Result, Simulation};
+use simkit::output::plot::{Plot, Scale, Series};
 use simkit::rd::scenes::colony_scene;
 use simkit::rd::{
     Boundaries, Diffusion, GpuKernel, GpuOptions, Grid, Integrator, Rd, Real, Stepping,
@@ -206,7 +206,7 @@ fn main() -> Result<()> {
             }
         }
     }
-    output::write_atomic("docs/tradeoffs/rd.md", |w| w.write_all(md.as_bytes()))?;
+    simkit::output::write_atomic("docs/tradeoffs/rd.md", |w| w.write_all(md.as_bytes()))?;
     print!("{md}");
     Ok(())
 }

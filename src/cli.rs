@@ -8,7 +8,7 @@
 //! assert!(!simkit::cli::flag("--gpu"));
 //! ```
 
-use backend::{Error, Result};
+use crate::backend::{Error, Result};
 
 /// The value after `name` on the command line parsed as `T`, or `default` when `name` is
 /// absent. A missing or unparsable value is an [`Error::InvalidParameter`] naming both.

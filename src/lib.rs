@@ -14,12 +14,12 @@
 //!
 //! This facade re-exports the crates and owns the workspace's `examples/` and `benches/`.
 
-pub use backend;
-pub use dem;
-pub use lattice_gas;
-pub use neighbor;
-pub use output;
-pub use pp_coulomb;
-pub use rd;
+pub use simkit_backend as backend;
+pub use simkit_dem as dem;
+pub use simkit_lattice_gas as lattice_gas;
+pub use simkit_neighbor as neighbor;
+pub use simkit_output as output;
+pub use simkit_pp_coulomb as pp_coulomb;
+pub use simkit_rd as rd;
 
 pub mod cli;

@@ -4,12 +4,12 @@
 use std::path::Path;
 use std::time::Instant;
 
-use output::png::write_png;
-use output::raster::{fill_disc, fill_rect};
-use output::{Colormap, RgbImage};
 use simkit::backend::{Backend, Error, Result, Simulation};
 use simkit::dem::scenes::{BedParams, vibrating_bed};
 use simkit::dem::{Config, Dem};
+use simkit::output::png::write_png;
+use simkit::output::raster::{fill_disc, fill_rect};
+use simkit::output::{Colormap, RgbImage};
 
 use crate::Row;
 
@@ -64,7 +64,7 @@ pub fn run(backend: Backend<'_>, out: &Path) -> Result<Row> {
             c,
         );
     }
-    std::fs::create_dir_all(out).map_err(|e| output::atomic::io_error(out, &e))?;
+    std::fs::create_dir_all(out).map_err(|e| simkit::output::atomic::io_error(out, &e))?;
     write_png(out.join("bed.png"), &img)?;
     let steps = sim.steps_done();
     Ok(Row {

@@ -5,10 +5,10 @@
 use std::path::Path;
 use std::time::Instant;
 
-use output::plot::{Plot, Series};
 use rand::{RngExt, SeedableRng};
 use simkit::backend::{Backend, Result};
 use simkit::neighbor::{CellGrid, GpuNeighborSearch, LinkedCells, NeighborSearch, SortedCells};
+use simkit::output::plot::{Plot, Series};
 
 use crate::Row;
 

@@ -3,8 +3,8 @@
 use std::path::Path;
 use std::time::Instant;
 
-use output::heatmap::{HeatmapOptions, write_heatmap};
 use simkit::backend::{Backend, Result, Simulation};
+use simkit::output::heatmap::{HeatmapOptions, write_heatmap};
 use simkit::rd::scenes::colony_scene;
 use simkit::rd::{Rd, Stepping};
 

@@ -4,32 +4,46 @@
 //!   lavapipe; `SIMKIT_ADAPTER=<name substring>` overrides), device limits and features.
 //! - [`GpuBuffer`]: typed storage buffers with size checks against the device limits, upload
 //!   and download.
-//! - [`Kernel`]: WGSL from `shaders/` (embedded with `include_str!`), pipelines, bind groups and
+//! - [`Kernel`]: WGSL from each crate's `shaders/` (embedded with [`wgsl!`]), pipelines, bind groups and
 //!   dispatch of any number of items.
 //! - [`GpuScan`]: multi-level exclusive prefix sum on the GPU; [`prefix`] has the CPU twins.
 //! - [`rng`]: the counter-based random numbers that CPU and WGSL draw bit for bit alike.
+//! - [`Real`], [`Precision`]: the `f32`/`f64` scalar every CPU law is generic over.
 //! - [`Simulation`], [`Backend`], [`Error`]: the common trait, backend selector and error type.
 //! - [`pool::on_pool`]: runs a stepping loop on the rayon pool (no thread hand-over per pass).
 //!
-//! ```no_run
-//! use backend::{GpuBuffer, GpuContext, GpuScan};
-//! # fn main() -> backend::Result<()> {
-//! let ctx = GpuContext::new()?; // Err(Error::NoAdapter) with advice when there is no GPU
-//! let counts = GpuBuffer::from_slice(&ctx, "counts", &[3u32, 1, 4, 1, 5])?;
-//! GpuScan::new(&ctx)?.scan_in_place(&ctx, &counts)?;
-//! assert_eq!(counts.download(&ctx)?, vec![0, 3, 4, 8, 9]);
-//! # Ok(())
-//! # }
-//! ```
+//! The GPU half (everything wgpu) is the `gpu` cargo feature, on by default; without it the
+//! crate, and every simkit crate, builds its CPU side only. An example is in [`gpu`].
+
+/// The WGSL source `shaders/<file>` of the crate that invokes it, embedded at compile time.
+///
+/// This is how every simkit crate loads its shaders: each crate keeps its WGSL in its own
+/// `shaders/` folder (so a packaged crate carries its kernels), and a kernel is composed by
+/// listing pieces in [`KernelDesc::sources`], shared pieces from this crate first
+/// ([`rng::RNG_WGSL`], [`gpu::DISPATCH_WGSL`]), then the crate's own:
+///
+/// ```ignore
+/// const FORCE_WGSL: &str = simkit_backend::wgsl!("force.wgsl"); // <crate>/shaders/force.wgsl
+/// ```
+#[macro_export]
+macro_rules! wgsl {
+    ($file:literal) => {
+        include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders/", $file))
+    };
+}
 
 pub mod error;
+#[cfg(feature = "gpu")]
 pub mod gpu;
 pub mod pool;
 pub mod prefix;
+mod real;
 pub mod rng;
 mod simulation;
 pub mod testing;
 
 pub use error::{Error, Result, require_finite, require_non_negative, require_positive};
+#[cfg(feature = "gpu")]
 pub use gpu::{GpuBuffer, GpuContext, GpuScan, Kernel, KernelDesc};
+pub use real::{Precision, Real};
 pub use simulation::{Backend, Simulation};

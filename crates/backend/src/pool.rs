@@ -12,7 +12,7 @@
 /// and returns its result. Simulation backends wrap their `step` loops in it.
 ///
 /// ```
-/// let on_worker = backend::pool::on_pool(|| rayon::current_thread_index().is_some());
+/// let on_worker = simkit_backend::pool::on_pool(|| rayon::current_thread_index().is_some());
 /// assert!(on_worker);
 /// ```
 pub fn on_pool<R: Send>(f: impl FnOnce() -> R + Send) -> R {

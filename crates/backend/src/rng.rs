@@ -4,11 +4,11 @@
 //! backend, thread and work item draws the same bits for the same key without any shared state.
 //! The mixing function is the PCG-family integer hash of Jarzynski & Olano (JCGT 2020): one
 //! 32-bit multiply-add, a data-dependent shift, xor and a second multiply. The WGSL twin lives
-//! in `shaders/common/rng.wgsl` ([`RNG_WGSL`]) and uses only the same 32-bit wrapping integer
+//! in `shaders/rng.wgsl` of this crate ([`RNG_WGSL`]) and uses only the same 32-bit wrapping integer
 //! operations, so results are identical on every device.
 
 /// WGSL source of the same functions (`pcg_hash`, `rng_u32`, `rng_uniform`, `rng_bit`).
-pub const RNG_WGSL: &str = include_str!("../../../shaders/common/rng.wgsl");
+pub const RNG_WGSL: &str = crate::wgsl!("rng.wgsl");
 
 /// The PCG hash: a bijective mixing of a 32-bit word.
 #[inline(always)]

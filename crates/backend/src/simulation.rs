@@ -1,6 +1,8 @@
 //! The common trait every simulation backend implements, and the backend selector.
 
-use crate::{Error, GpuContext};
+use crate::Error;
+#[cfg(feature = "gpu")]
+use crate::GpuContext;
 
 /// A time-stepping simulation with a host-side snapshot type.
 ///
@@ -25,7 +27,14 @@ pub enum Backend<'a> {
     /// Multi-threaded CPU backend (rayon).
     Cpu,
     /// GPU backend on the given context.
+    #[cfg(feature = "gpu")]
     Gpu(&'a GpuContext),
+    /// Never constructed: keeps the lifetime parameter when the `gpu` feature is off, so that
+    /// code naming `Backend<'_>` builds either way (an uninhabited variant: a by-value `match`
+    /// need not list it).
+    #[cfg(not(feature = "gpu"))]
+    #[doc(hidden)]
+    NoGpu(std::convert::Infallible, std::marker::PhantomData<&'a ()>),
 }
 
 impl Backend<'_> {
@@ -33,7 +42,10 @@ impl Backend<'_> {
     pub fn name(&self) -> String {
         match self {
             Backend::Cpu => "cpu".to_string(),
+            #[cfg(feature = "gpu")]
             Backend::Gpu(ctx) => format!("gpu ({})", ctx.adapter_info().name),
+            #[cfg(not(feature = "gpu"))]
+            Backend::NoGpu(never, _) => match *never {},
         }
     }
 }

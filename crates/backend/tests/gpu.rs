@@ -1,11 +1,12 @@
 //! GPU tests of the backend: they run on any adapter (lavapipe in CI) and are skipped with a
 //! printed reason when there is none, unless `SIMKIT_REQUIRE_GPU=1` makes that a failure.
+#![cfg(feature = "gpu")]
 
-use backend::gpu::{DISPATCH_WGSL, run_pass};
-use backend::prefix::exclusive_scan;
-use backend::rng::{RNG_WGSL, rng_bit, rng_u32, rng_uniform};
-use backend::testing::gpu_or_skip;
-use backend::{Error, GpuBuffer, GpuScan, Kernel, KernelDesc};
+use simkit_backend::gpu::{DISPATCH_WGSL, run_pass};
+use simkit_backend::prefix::exclusive_scan;
+use simkit_backend::rng::{RNG_WGSL, rng_bit, rng_u32, rng_uniform};
+use simkit_backend::testing::gpu_or_skip;
+use simkit_backend::{Error, GpuBuffer, GpuScan, Kernel, KernelDesc};
 
 /// The key of item `i` in the RNG test: seeds, steps and indices all vary.
 fn key(i: u32) -> (u32, u32, u32) {
@@ -172,7 +173,7 @@ fn main() {
 "#;
 
 /// Runs the three loops of `LOOPS_WGSL` once with the given trip counts.
-fn run_loops(ctx: &backend::GpuContext, trips: [u32; 4]) -> Vec<u32> {
+fn run_loops(ctx: &simkit_backend::GpuContext, trips: [u32; 4]) -> Vec<u32> {
     let kernel = Kernel::new(
         ctx,
         &KernelDesc {
@@ -277,4 +278,98 @@ fn empty_buffers_round_trip() {
     assert!(buf.download(&ctx).unwrap().is_empty());
     let err = buf.upload(&ctx, &[1.0]).unwrap_err();
     assert!(err.to_string().contains("empty"), "{err}");
+}
+
+#[test]
+fn a_wgsl_function_evaluates_like_its_rust_twin() {
+    use simkit_backend::rng::{RNG_WGSL, rng_u32};
+    use simkit_backend::testing::eval_wgsl;
+    let Some(ctx) = gpu_or_skip("a_wgsl_function_evaluates_like_its_rust_twin") else {
+        return;
+    };
+    // 100,000 keys: more than one row of the workgroup grid on no adapter, but over many
+    // workgroups, so the harness's index arithmetic is exercised too.
+    let keys: Vec<[u32; 4]> = (0..100_000u32)
+        .map(|i| [i.wrapping_mul(2_654_435_761), i / 7, i, 0])
+        .collect();
+    let gpu: Vec<u32> = eval_wgsl(
+        &ctx,
+        &[RNG_WGSL],
+        "vec4<u32>",
+        "u32",
+        "rng_u32(x.x, x.y, x.z)",
+        &keys,
+    )
+    .unwrap();
+    let cpu: Vec<u32> = keys.iter().map(|k| rng_u32(k[0], k[1], k[2])).collect();
+    assert_eq!(gpu, cpu);
+    let none: Vec<u32> = eval_wgsl(
+        &ctx,
+        &[RNG_WGSL],
+        "vec4<u32>",
+        "u32",
+        "x.x",
+        &[] as &[[u32; 4]],
+    )
+    .unwrap();
+    assert!(none.is_empty());
+}
+
+#[test]
+fn wgsl_struct_layouts_are_read_with_their_padding() {
+    use simkit_backend::testing::{WgslStruct, wgsl_struct};
+    let src = "struct S { a: f32, b: vec3<f32>, c: u32 }\nstruct T { x: vec2<f32>, y: f32 }";
+    let s = wgsl_struct(src, "S").unwrap();
+    let names = |w: &WgslStruct| {
+        w.members
+            .iter()
+            .map(|(n, o)| (n.clone(), *o))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(s.size, 32);
+    assert_eq!(
+        names(&s),
+        [("a".into(), 0), ("b".into(), 16), ("c".into(), 28)]
+    );
+    let t = wgsl_struct(src, "T").unwrap();
+    assert_eq!((t.size, t.members.len()), (16, 2));
+    assert!(wgsl_struct(src, "Missing").is_err());
+    assert!(wgsl_struct("struct {", "S").is_err());
+}
+
+#[test]
+fn a_drifted_mirror_is_caught() {
+    use simkit_backend::testing::assert_mirrors;
+    #[repr(C)]
+    #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+    struct P {
+        n: u32,
+        dt: f32,
+    }
+    let wgsl = "struct P { n: u32, dt: f32 }";
+    assert_mirrors::<P>(
+        wgsl,
+        "P",
+        &[
+            ("n", std::mem::offset_of!(P, n)),
+            ("dt", std::mem::offset_of!(P, dt)),
+        ],
+    );
+    // A WGSL side that gained a field (or reordered two) no longer matches.
+    for drifted in [
+        "struct P { n: u32, dt: f32, extra: u32 }",
+        "struct P { dt: f32, n: u32 }",
+    ] {
+        let caught = std::panic::catch_unwind(|| {
+            assert_mirrors::<P>(
+                drifted,
+                "P",
+                &[
+                    ("n", std::mem::offset_of!(P, n)),
+                    ("dt", std::mem::offset_of!(P, dt)),
+                ],
+            );
+        });
+        assert!(caught.is_err(), "{drifted}");
+    }
 }

@@ -1,6 +1,6 @@
 //! Solver settings: integrator, precision, time step and its guard.
 
-use backend::{Error, Result};
+use simkit_backend::{Error, Result};
 
 use crate::{ContactCoefficients, Scene};
 
@@ -98,7 +98,7 @@ pub fn safe_dt(scene: &Scene) -> f64 {
 /// [`Error::Unstable`] when it exceeds [`safe_dt`] without the explicit override.
 pub fn resolve_dt(scene: &Scene, config: &Config) -> Result<f64> {
     let dt = match config.dt {
-        Some(dt) => backend::require_positive("dt", dt)?,
+        Some(dt) => simkit_backend::require_positive("dt", dt)?,
         None => scene.min_contact_time() / DEFAULT_STEPS_PER_CONTACT,
     };
     let bound = safe_dt(scene);

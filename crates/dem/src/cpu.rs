@@ -14,7 +14,7 @@
 use multiversion::multiversion;
 use rayon::prelude::*;
 
-use backend::{Error, Result};
+use simkit_backend::{Error, Result};
 
 use crate::pairs::{Block, CellBins, PARALLEL_MIN, block_size, make_blocks};
 use crate::prepared::Prepared;
@@ -812,7 +812,7 @@ impl<const D: usize, T: Real> crate::engine::Engine for CpuEngine<D, T> {
         };
         if self.parallel {
             // The whole loop on a pool thread: no hand-over to the pool per pass.
-            backend::pool::on_pool(|| run(self));
+            simkit_backend::pool::on_pool(|| run(self));
         } else {
             run(self);
         }

@@ -1,8 +1,8 @@
 //! Diagnostics of a state: energies, momentum, overlaps, contacts, granular temperature.
 
-use neighbor::{CellGrid, OutOfBox, SortedCells};
+use simkit_neighbor::{CellGrid, OutOfBox, SortedCells};
 
-use backend::Result;
+use simkit_backend::Result;
 
 use crate::prepared::Prepared;
 

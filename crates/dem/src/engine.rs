@@ -1,6 +1,6 @@
 //! The backend-neutral engine interface behind [`crate::Dem`].
 
-use backend::Result;
+use simkit_backend::Result;
 
 use crate::State;
 use crate::prepared::Prepared;

@@ -9,26 +9,26 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use neighbor::{CELLS_WGSL, CellGrid, GPU_LOOP_RESERVE, GpuCellList, OutOfBox};
+use simkit_neighbor::{CELLS_WGSL, CellGrid, GPU_LOOP_RESERVE, GpuCellList, OutOfBox};
 
-use backend::gpu::{DISPATCH_WGSL, Uniform};
-use backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Result};
+use simkit_backend::gpu::{DISPATCH_WGSL, Uniform};
+use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Result};
 
 use crate::State;
 use crate::engine::Engine;
 use crate::prepared::Prepared;
 
-const PARAMS_WGSL: &str = include_str!("../../../shaders/dem/params.wgsl");
-const DRIFT_WGSL: &str = include_str!("../../../shaders/dem/drift.wgsl");
-const FORCE_WGSL: &str = include_str!("../../../shaders/dem/force.wgsl");
-const TICK_WGSL: &str = include_str!("../../../shaders/dem/tick.wgsl");
+const PARAMS_WGSL: &str = simkit_backend::wgsl!("params.wgsl");
+const DRIFT_WGSL: &str = simkit_backend::wgsl!("drift.wgsl");
+const FORCE_WGSL: &str = simkit_backend::wgsl!("force.wgsl");
+const TICK_WGSL: &str = simkit_backend::wgsl!("tick.wgsl");
 
 /// Steps recorded into one command buffer.
 const STEPS_PER_SUBMIT: u32 = 64;
 /// Storage buffers the force kernel binds.
 const STORAGE_BUFFERS_NEEDED: u32 = 10;
 
-/// Mirror of `DemParams` in `shaders/dem/params.wgsl`.
+/// Mirror of `DemParams` in `shaders/params.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct GpuParams {
@@ -48,7 +48,7 @@ struct GpuParams {
 
 /// The cell-list buffers the force kernel reads.
 struct CellBuffers<'a> {
-    grid: &'a Uniform<neighbor::GpuGridParams>,
+    grid: &'a Uniform<simkit_neighbor::GpuGridParams>,
     cell_start: &'a GpuBuffer<u32>,
     sorted_ids: &'a GpuBuffer<u32>,
     sorted_pos: &'a GpuBuffer<[f32; 4]>,

@@ -8,13 +8,13 @@
 //!   contact time `t_c` with the reduced mass, so `e` holds for any mass pair and for walls.
 //! - [`Config`]: [`Integrator`] (velocity or position Verlet), [`Precision`], time step
 //!   (default `t_c / 30`; above [`safe_dt`] an error unless overridden).
-//! - [`Dem`]: the simulation ([`backend::Simulation`]), with [`Diagnostics`].
+//! - [`Dem`]: the simulation ([`simkit_backend::Simulation`]), with [`Diagnostics`].
 //! - [`Units`]: the source's normalised units from cm, g, s, Hz and `Gamma`.
 //!
 //! ```
-//! use backend::{Backend, Simulation};
-//! use dem::{Config, Dem, Dim, Material, Particle, Scene};
-//! # fn main() -> backend::Result<()> {
+//! use simkit_backend::{Backend, Simulation};
+//! use simkit_dem::{Config, Dem, Dim, Material, Particle, Scene};
+//! # fn main() -> simkit_backend::Result<()> {
 //! // A disc dropped on a vibrating floor.
 //! let mut scene = Scene::new(Dim::Two, [0.0; 3], [4.0, 8.0, 0.0], Material::new(0.9, 0.02))?;
 //! scene.set_gravity(1.0)?.set_vibration(0.05, 2.0)?;
@@ -33,6 +33,7 @@ mod contact;
 mod cpu;
 mod diagnostics;
 mod engine;
+#[cfg(feature = "gpu")]
 mod gpu;
 mod pairs;
 mod prepared;

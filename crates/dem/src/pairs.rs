@@ -14,7 +14,7 @@
 
 use rayon::prelude::*;
 
-use backend::{Error, Result};
+use simkit_backend::{Error, Result};
 
 use crate::real::Real;
 

@@ -1,6 +1,6 @@
 //! Scene data resolved for the backends: coefficients, time step, grid geometry.
 
-use backend::{Error, Result};
+use simkit_backend::{Error, Result};
 
 use crate::{Config, ContactCoefficients, Integrator, Scene, Vibration, WallShape, resolve_dt};
 

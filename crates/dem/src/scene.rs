@@ -1,6 +1,6 @@
 //! Scene description: particles, species-pair materials, walls, gravity, vibration, box.
 
-use backend::{Error, Result};
+use simkit_backend::{Error, Result};
 
 /// Spatial dimension of a scene.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -232,8 +232,8 @@ impl Vibration {
 /// select kernel variants once).
 ///
 /// ```
-/// use dem::{Dim, Material, Particle, Scene};
-/// # fn main() -> backend::Result<()> {
+/// use simkit_dem::{Dim, Material, Particle, Scene};
+/// # fn main() -> simkit_backend::Result<()> {
 /// let mut scene = Scene::new(Dim::Two, [0.0; 3], [10.0, 10.0, 0.0], Material::new(0.9, 0.01))?;
 /// scene.set_gravity(1.0)?;
 /// scene.add_box_walls(Material::new(0.8, 0.01), true)?;
@@ -328,15 +328,15 @@ impl Scene {
 
     /// Gravity of magnitude `g` along minus the vertical axis (y in 2D, z in 3D).
     pub fn set_gravity(&mut self, g: f64) -> Result<&mut Self> {
-        backend::require_non_negative("gravity", g)?;
+        simkit_backend::require_non_negative("gravity", g)?;
         self.gravity = g;
         Ok(self)
     }
 
     /// Vibrates the walls marked [`Wall::vibrating`]: `z_w(t) = -A cos(omega t)`.
     pub fn set_vibration(&mut self, amplitude: f64, omega: f64) -> Result<&mut Self> {
-        backend::require_non_negative("vibration amplitude", amplitude)?;
-        backend::require_positive("vibration omega", omega)?;
+        simkit_backend::require_non_negative("vibration amplitude", amplitude)?;
+        simkit_backend::require_positive("vibration omega", omega)?;
         self.vibration = Some(Vibration { amplitude, omega });
         Ok(self)
     }
@@ -411,8 +411,8 @@ impl Scene {
     pub fn add_particle(&mut self, p: Particle) -> Result<&mut Self> {
         let i = self.particles.len();
         for ((axis, &x), &v) in AXES.iter().zip(&p.position).zip(&p.velocity) {
-            backend::require_finite(&format!("particle[{i}].position.{axis}"), x)?;
-            backend::require_finite(&format!("particle[{i}].velocity.{axis}"), v)?;
+            simkit_backend::require_finite(&format!("particle[{i}].position.{axis}"), x)?;
+            simkit_backend::require_finite(&format!("particle[{i}].velocity.{axis}"), v)?;
         }
         if self.dim == Dim::Two && (p.position[2] != 0.0 || p.velocity[2] != 0.0) {
             return Err(Error::invalid(
@@ -421,8 +421,8 @@ impl Scene {
                 "2D scenes need z = 0 and v_z = 0",
             ));
         }
-        backend::require_positive(&format!("particle[{i}].radius"), p.radius)?;
-        backend::require_positive(&format!("particle[{i}].mass"), p.mass)?;
+        simkit_backend::require_positive(&format!("particle[{i}].radius"), p.radius)?;
+        simkit_backend::require_positive(&format!("particle[{i}].mass"), p.mass)?;
         if p.species as usize >= self.n_species {
             return Err(Error::invalid(
                 format!("particle[{i}].species"),

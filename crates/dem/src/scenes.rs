@@ -2,7 +2,7 @@
 
 use std::f64::consts::PI;
 
-use backend::Result;
+use simkit_backend::Result;
 
 use crate::{Dim, Material, Particle, Scene, Units, Wall};
 
@@ -61,8 +61,8 @@ fn friction(m: Material, mu: f64) -> Material {
 /// `z_w(t) = -A cos(t)`. Returns the scene and the units.
 pub fn vibrating_bed(p: &BedParams) -> Result<(Scene, Units)> {
     let u = Units::new(0.6, 0.2, p.freq_hz)?;
-    backend::require_positive("bed width", p.width as f64)?;
-    backend::require_positive("bed particle count", p.n as f64)?;
+    simkit_backend::require_positive("bed width", p.width as f64)?;
+    simkit_backend::require_positive("bed particle count", p.n as f64)?;
     let tc = u.time(p.contact_time_s);
     let rows = p.n.div_ceil((p.width.max(2) - 1).max(1));
     let height = (3.0 * 1.05 * rows as f64).max(10.0);
@@ -136,8 +136,8 @@ pub fn granular_box(nx: usize, ny: usize, nz: usize, seed: u32) -> Result<Scene>
 
 /// A standard normal deviate from the counter-based RNG (Box–Muller).
 fn gaussian(seed: u32, stream: u32, index: u32) -> f64 {
-    let u1 = (backend::rng::rng_uniform(seed, stream, index) as f64).max(1e-12);
-    let u2 = backend::rng::rng_uniform(seed, stream + 1, index) as f64;
+    let u1 = (simkit_backend::rng::rng_uniform(seed, stream, index) as f64).max(1e-12);
+    let u2 = simkit_backend::rng::rng_uniform(seed, stream + 1, index) as f64;
     (-2.0 * u1.ln()).sqrt() * (2.0 * PI * u2).cos()
 }
 
@@ -227,7 +227,7 @@ pub fn segregation_monolayer(p: &MonolayerParams) -> Result<(Scene, Units)> {
         ring -= 1.1;
     }
     if spots.len() < p.n {
-        return Err(backend::Error::invalid(
+        return Err(simkit_backend::Error::invalid(
             "monolayer particle count",
             p.n,
             format!(
@@ -239,8 +239,8 @@ pub fn segregation_monolayer(p: &MonolayerParams) -> Result<(Scene, Units)> {
     spots.truncate(p.n);
     let mut species: Vec<u32> = (0..p.n as u32).map(|k| k % 2).collect();
     for k in 0..(4 * p.n) as u32 {
-        let a = backend::rng::rng_u32(p.seed, 0, k) as usize % p.n;
-        let b = backend::rng::rng_u32(p.seed, 1, k) as usize % p.n;
+        let a = simkit_backend::rng::rng_u32(p.seed, 0, k) as usize % p.n;
+        let b = simkit_backend::rng::rng_u32(p.seed, 1, k) as usize % p.n;
         species.swap(a, b);
     }
     // Small random horizontal velocities (up to the plate speed A omega) break the symmetry:
@@ -248,7 +248,8 @@ pub fn segregation_monolayer(p: &MonolayerParams) -> Result<(Scene, Units)> {
     let vmax = u.amplitude(p.gamma);
     for (k, xy) in spots.iter().enumerate() {
         let h = |stream: u32| {
-            vmax * (2.0 * backend::rng::rng_uniform(p.seed, 2 + stream, k as u32) as f64 - 1.0)
+            vmax * (2.0 * simkit_backend::rng::rng_uniform(p.seed, 2 + stream, k as u32) as f64
+                - 1.0)
         };
         s.add_particle(
             Particle::new([xy[0], xy[1], 0.5], 0.5, 1.0)

@@ -1,11 +1,13 @@
 //! The user-facing simulation object and its state snapshot.
 
-use backend::{Backend, Error, Result, Simulation};
+use simkit_backend::{Backend, Error, Result, Simulation};
 
+#[cfg(feature = "gpu")]
+use crate::Integrator;
 use crate::cpu::CpuEngine;
 use crate::engine::Engine;
 use crate::prepared::Prepared;
-use crate::{Config, Diagnostics, Integrator, Precision, Scene};
+use crate::{Config, Diagnostics, Precision, Scene};
 
 /// Host-side snapshot: time, positions and velocities (`[x, y, 0]` in 2D), in the scene's
 /// particle order.
@@ -22,9 +24,9 @@ pub struct State {
 /// A granular DEM simulation of a [`Scene`] on a chosen backend.
 ///
 /// ```
-/// use backend::{Backend, Simulation};
-/// use dem::{Config, Dem, Dim, Material, Particle, Scene};
-/// # fn main() -> backend::Result<()> {
+/// use simkit_backend::{Backend, Simulation};
+/// use simkit_dem::{Config, Dem, Dim, Material, Particle, Scene};
+/// # fn main() -> simkit_backend::Result<()> {
 /// let mut scene = Scene::new(Dim::Two, [0.0; 3], [4.0, 4.0, 0.0], Material::new(0.9, 0.05))?;
 /// scene.add_particle(Particle::new([1.0, 2.0, 0.0], 0.5, 1.0).with_velocity([1.0, 0.0, 0.0]))?;
 /// scene.add_particle(Particle::new([2.5, 2.0, 0.0], 0.5, 1.0))?;
@@ -57,6 +59,7 @@ impl Dem {
                 (_, Precision::F64) => Box::new(CpuEngine::<3, f64>::new(prep)?),
                 (_, Precision::F32) => Box::new(CpuEngine::<3, f32>::new(prep)?),
             },
+            #[cfg(feature = "gpu")]
             Backend::Gpu(ctx) => {
                 if config.integrator != Integrator::VelocityVerlet {
                     return Err(Error::Unsupported(

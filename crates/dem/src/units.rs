@@ -1,6 +1,6 @@
 //! The source's normalised units for vibrated beds, from physical inputs.
 
-use backend::Result;
+use simkit_backend::Result;
 
 /// Normalisation of a vibrated granular bed: length unit `d0` (a grain diameter), time unit
 /// `1 / omega` (`omega = 2 pi f`), mass unit `m0`. In these units the vibration has
@@ -10,8 +10,8 @@ use backend::Result;
 /// Physical inputs are in cm, g, s and Hz (CGS), as in the source.
 ///
 /// ```
-/// use dem::Units;
-/// # fn main() -> backend::Result<()> {
+/// use simkit_dem::Units;
+/// # fn main() -> simkit_backend::Result<()> {
 /// let u = Units::new(0.6, 0.2, 20.0)?; // d0 = 0.6 cm, m0 = 0.2 g, f = 20 Hz
 /// assert!((u.gravity() - 980.0 / (0.6 * (2.0 * std::f64::consts::PI * 20.0f64).powi(2))).abs() < 1e-12);
 /// assert!((u.amplitude(3.0) - 3.0 * u.gravity()).abs() < 1e-12);
@@ -34,9 +34,9 @@ impl Units {
     /// Units for grains of diameter `d0_cm` and mass `m0_g` shaken at `freq_hz`
     /// (g = 980 cm/s^2).
     pub fn new(d0_cm: f64, m0_g: f64, freq_hz: f64) -> Result<Self> {
-        backend::require_positive("d0 (cm)", d0_cm)?;
-        backend::require_positive("m0 (g)", m0_g)?;
-        backend::require_positive("frequency (Hz)", freq_hz)?;
+        simkit_backend::require_positive("d0 (cm)", d0_cm)?;
+        simkit_backend::require_positive("m0 (g)", m0_g)?;
+        simkit_backend::require_positive("frequency (Hz)", freq_hz)?;
         Ok(Self {
             d0_cm,
             m0_g,

@@ -2,8 +2,8 @@
 //! `(e, t_c)`, for mass ratios 1, 3 and 10 (the particle mass against walls), both integrators, 2D and 3D, particle–particle,
 //! particle–wall and particle–moving-wall contacts.
 
-use backend::{Backend, Simulation};
-use dem::{Config, Dem, Dim, Integrator, Material, Particle, Scene, Wall};
+use simkit_backend::{Backend, Simulation};
+use simkit_dem::{Config, Dem, Dim, Integrator, Material, Particle, Scene, Wall};
 
 const TC: f64 = 0.01;
 const PHASES: usize = 8;
@@ -87,7 +87,7 @@ fn collide(
     }
     let cfg = Config::default().with_dt(dt).with_integrator(integrator);
     let mut sim = Dem::new(&scene, &cfg, Backend::Cpu).unwrap();
-    let gap = |s: &dem::State, sim: &Dem| -> (f64, f64) {
+    let gap = |s: &simkit_dem::State, sim: &Dem| -> (f64, f64) {
         match target {
             Target::Particle => (
                 s.positions[1][v] - s.positions[0][v] - 1.0,

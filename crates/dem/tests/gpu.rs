@@ -1,9 +1,10 @@
 //! GPU backend against the CPU backend: a dilute gas over a short horizon, and the
 //! statistics of a vibrated bed.
+#![cfg(feature = "gpu")]
 
-use backend::testing::gpu_or_skip;
-use backend::{Backend, Error, Simulation};
-use dem::{Config, Dem, Dim, Integrator, Material, Particle, Scene};
+use simkit_backend::testing::gpu_or_skip;
+use simkit_backend::{Backend, Error, Simulation};
+use simkit_dem::{Config, Dem, Dim, Integrator, Material, Particle, Scene};
 
 fn dilute_gas() -> Scene {
     let mut s = Scene::new(
@@ -21,7 +22,7 @@ fn dilute_gas() -> Scene {
         for y in 0..8 {
             for x in 0..8 {
                 k += 1;
-                let h = |a: u32| backend::rng::rng_uniform(3, a, k) as f64 - 0.5;
+                let h = |a: u32| simkit_backend::rng::rng_uniform(3, a, k) as f64 - 0.5;
                 // Pairs 1.02 apart along x that approach each other: contacts within 50 steps.
                 let p = [
                     1.0 + 2.0 * x as f64,
@@ -85,7 +86,7 @@ fn bed(replica: u32) -> Scene {
         .unwrap();
     for k in 0..360u32 {
         let (x, y) = (k % 30, k / 30);
-        let h = backend::rng::rng_uniform(5, 0, k) as f64 - 0.5;
+        let h = simkit_backend::rng::rng_uniform(5, 0, k) as f64 - 0.5;
         let shift = if k == 0 {
             1e-4 * f64::from(replica)
         } else {
@@ -174,7 +175,7 @@ fn gpu_wall_count_within_the_adapter_loop_limit() {
         // Parallel floors under the box floor: never touched, only looped over.
         let k = scene.walls().len() as f64;
         scene
-            .add_wall(dem::Wall::plane(
+            .add_wall(simkit_dem::Wall::plane(
                 [0.0, 0.0, 1.0],
                 [0.0, 0.0, -1.0 - k],
                 floor,
@@ -203,7 +204,8 @@ fn cylinder_monolayer_agrees_after_50_steps() {
         return;
     };
     let (scene, _) =
-        dem::scenes::segregation_monolayer(&dem::scenes::MonolayerParams::default()).unwrap();
+        simkit_dem::scenes::segregation_monolayer(&simkit_dem::scenes::MonolayerParams::default())
+            .unwrap();
     let cfg = Config::default();
     let mut cpu = Dem::new(&scene, &cfg, Backend::Cpu).unwrap();
     // Start from a state a quarter cycle in (spheres bouncing on the floor); the restart puts

@@ -1,7 +1,7 @@
 //! Conservation laws, a settled pile, coarse steps, thread-count independence, bad input.
 
-use backend::{Backend, Error, Simulation};
-use dem::{Config, Dem, Dim, Integrator, Material, Particle, Precision, Scene, Units};
+use simkit_backend::{Backend, Error, Simulation};
+use simkit_dem::{Config, Dem, Dim, Integrator, Material, Particle, Precision, Scene, Units};
 
 /// A simple-cubic (3D) or square (2D) lattice of `n` particles with pseudo-random velocities.
 fn gas(dim: Dim, n_side: usize, spacing: f64, e: f64, friction: bool) -> Scene {
@@ -19,7 +19,7 @@ fn gas(dim: Dim, n_side: usize, spacing: f64, e: f64, friction: bool) -> Scene {
         for y in 0..n_side {
             for x in 0..n_side {
                 k += 1;
-                let h = |a: u32| backend::rng::rng_uniform(7, a, k) as f64 - 0.5;
+                let h = |a: u32| simkit_backend::rng::rng_uniform(7, a, k) as f64 - 0.5;
                 let mut p = [(x as f64 + 0.5) * spacing, (y as f64 + 0.5) * spacing, 0.0];
                 let mut v = [h(0), h(1), 0.0];
                 if dim == Dim::Three {
@@ -343,7 +343,7 @@ fn bad_input_is_refused_with_clear_errors() {
     // Cylinder walls only in 3D, bad dt.
     let mut s2 = Scene::new(Dim::Two, [0.0; 3], [4.0, 4.0, 0.0], m).unwrap();
     assert!(
-        s2.add_wall(dem::Wall::cylinder([0.0, 0.0], 1.0, m))
+        s2.add_wall(simkit_dem::Wall::cylinder([0.0, 0.0], 1.0, m))
             .is_err()
     );
     assert!(matches!(
@@ -372,7 +372,7 @@ fn units_follow_the_source_normalisation() {
 
 #[test]
 fn ready_made_scenes_build_and_run() {
-    use dem::scenes::{
+    use simkit_dem::scenes::{
         BedParams, MonolayerParams, granular_box, like_neighbor_fraction, segregation_monolayer,
         vibrating_bed,
     };

@@ -9,17 +9,17 @@
 //! Both use pull streaming, ping-pong buffers, a device-side step counter and many steps per
 //! submission. On lavapipe the bit-planes run 45x – 110x faster at 1024^2 (docs/lattice-gas.md).
 
-use backend::gpu::{DISPATCH_WGSL, Uniform};
-use backend::rng::RNG_WGSL;
-use backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Result, Simulation};
 use bytemuck::{Pod, Zeroable};
+use simkit_backend::gpu::{DISPATCH_WGSL, Uniform};
+use simkit_backend::rng::RNG_WGSL;
+use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Result, Simulation};
 
 use crate::random::{FORCE_STREAM, force_threshold};
 use crate::{CollisionTable, Lattice, Params, RuleSet, WALL};
 
-const STEP_WGSL: &str = include_str!("../../../shaders/lattice-gas/step.wgsl");
-const PLANES_WGSL: &str = include_str!("../../../shaders/lattice-gas/planes.wgsl");
-const COUNTER_WGSL: &str = include_str!("../../../shaders/lattice-gas/counter.wgsl");
+const STEP_WGSL: &str = simkit_backend::wgsl!("step.wgsl");
+const PLANES_WGSL: &str = simkit_backend::wgsl!("planes.wgsl");
+const COUNTER_WGSL: &str = simkit_backend::wgsl!("counter.wgsl");
 
 /// Steps recorded into one command submission.
 pub const STEPS_PER_SUBMIT: u32 = 64;
@@ -228,7 +228,7 @@ impl Simulation for GpuLattice {
             let ctx = self.ctx.clone();
             let mut current = self.current;
             ctx.checked("recording FHP steps", || -> Result<()> {
-                backend::gpu::run_pass(&ctx, "fhp steps", |pass| {
+                simkit_backend::gpu::run_pass(&ctx, "fhp steps", |pass| {
                     for _ in 0..batch {
                         self.step_kernel.dispatch_items(
                             &ctx,

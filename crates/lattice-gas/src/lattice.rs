@@ -1,6 +1,6 @@
 //! The hexagonal lattice (one byte per site), obstacles and the scene parameters.
 
-use backend::{Error, Result};
+use simkit_backend::{Error, Result};
 
 use crate::{REST, RuleSet, WALL};
 
@@ -124,7 +124,7 @@ impl Lattice {
             for k in 0..6 {
                 let p = prob(i, j, k);
                 check_probability("occupation probability", p)?;
-                let u = backend::rng::rng_uniform(seed, k as u32, s as u32);
+                let u = simkit_backend::rng::rng_uniform(seed, k as u32, s as u32);
                 if f64::from(u) < p {
                     v |= 1 << k;
                 }
@@ -378,6 +378,7 @@ impl Params {
     }
 
     /// Bit flags shared by the backends (periodic x, periodic y, inflow, outflow, force).
+    #[cfg(feature = "gpu")]
     pub(crate) fn flags(&self) -> u32 {
         u32::from(self.periodic_x)
             | u32::from(self.periodic_y) << 1

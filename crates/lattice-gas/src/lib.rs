@@ -5,7 +5,7 @@
 //!   a site; [`Obstacle`] masks (rectangle, disc, bitmap/PNG).
 //! - [`RuleSet`]: FHP-I or the full conservation-law table ([`CollisionTable`] generates both).
 //! - [`Params`]: seed, periodic axes, inflow/outflow columns, body force.
-//! - Backends implementing [`backend::Simulation`] with `State = Lattice`, bit-identical for
+//! - Backends implementing [`simkit_backend::Simulation`] with `State = Lattice`, bit-identical for
 //!   the same seed and scene: [`LutCpu`] (one byte per site, table lookup; 64 sites per
 //!   `vpermi2b` where the CPU has AVX-512 VBMI), [`MultiSpinCpu`]
 //!   (64-site bit-planes, boolean collisions, AVX-512/AVX2 dispatch) and [`GpuLattice`]
@@ -16,9 +16,9 @@
 //! - [`random`]: the exact use of the counter-based random bits shared by all backends.
 //!
 //! ```
-//! use backend::Simulation;
-//! use lattice_gas::{Engine, Lattice, Params, simulation};
-//! # fn main() -> backend::Result<()> {
+//! use simkit_backend::Simulation;
+//! use simkit_lattice_gas::{Engine, Lattice, Params, simulation};
+//! # fn main() -> simkit_backend::Result<()> {
 //! let mut lattice = Lattice::new(64, 32)?;
 //! lattice.fill_random(0.2, 7)?;
 //! let n0 = lattice.particle_count();
@@ -29,6 +29,7 @@
 //! # }
 //! ```
 
+#[cfg(feature = "gpu")]
 pub mod gpu;
 pub mod lattice;
 pub mod lut;
@@ -40,13 +41,16 @@ pub mod random;
 pub mod rules;
 pub mod viscosity;
 
+#[cfg(feature = "gpu")]
 pub use gpu::{GpuLattice, GpuLayout};
 pub use lattice::{Lattice, Obstacle, Params, ROW_SPACING};
 pub use lut::LutCpu;
 pub use multispin::MultiSpinCpu;
 pub use rules::{CollisionTable, RuleSet};
 
-use backend::{Backend, GpuContext, Result, Simulation};
+#[cfg(feature = "gpu")]
+use simkit_backend::GpuContext;
+use simkit_backend::{Backend, Result, Simulation};
 
 /// Bit of an east-moving particle (direction 1).
 pub const EAST: u8 = 1;
@@ -65,7 +69,12 @@ pub enum Engine<'a> {
     /// CPU multi-spin coding, 64 sites per word (width a multiple of 64).
     MultiSpin,
     /// GPU (WGSL) on the given context.
+    #[cfg(feature = "gpu")]
     Gpu(&'a GpuContext),
+    /// Never constructed (keeps the lifetime when the `gpu` feature is off).
+    #[cfg(not(feature = "gpu"))]
+    #[doc(hidden)]
+    NoGpu(std::convert::Infallible, std::marker::PhantomData<&'a ()>),
 }
 
 impl<'a> Engine<'a> {
@@ -78,6 +87,7 @@ impl<'a> Engine<'a> {
             Backend::Cpu if lut::has_vbmi() => Engine::Lut,
             Backend::Cpu if width.is_multiple_of(64) => Engine::MultiSpin,
             Backend::Cpu => Engine::Lut,
+            #[cfg(feature = "gpu")]
             Backend::Gpu(ctx) => Engine::Gpu(ctx),
         }
     }
@@ -92,6 +102,7 @@ pub fn simulation(
     Ok(match engine {
         Engine::Lut => Box::new(LutCpu::new(lattice, params)?),
         Engine::MultiSpin => Box::new(MultiSpinCpu::new(lattice, params)?),
+        #[cfg(feature = "gpu")]
         Engine::Gpu(ctx) => Box::new(GpuLattice::new(ctx, lattice, params)?),
     })
 }

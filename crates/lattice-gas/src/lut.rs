@@ -8,12 +8,12 @@
 //! (`vpermi2b`); elsewhere, and for the last `width % 64` sites of a row, a portable loop
 //! (vectorisable gather pass, then one table load per site).
 
-use backend::{Result, Simulation};
 use rayon::prelude::*;
+use simkit_backend::{Result, Simulation};
 
 use crate::random::{FORCE_STREAM, force_threshold, step_key};
 use crate::{CollisionTable, EAST, Lattice, Params, REST, WALL, WEST};
-use backend::rng::pcg_hash;
+use simkit_backend::rng::pcg_hash;
 
 /// The lookup-table CPU backend.
 pub struct LutCpu {
@@ -285,7 +285,7 @@ impl Simulation for LutCpu {
 
     fn step(&mut self, steps: u32) -> Result<()> {
         // The whole loop on a pool thread: no hand-over to the pool per row pass.
-        backend::pool::on_pool(|| {
+        simkit_backend::pool::on_pool(|| {
             for _ in 0..steps {
                 self.step_once();
             }

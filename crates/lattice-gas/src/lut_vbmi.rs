@@ -8,7 +8,7 @@
 
 use std::arch::x86_64::*;
 
-use backend::rng::pcg_hash;
+use simkit_backend::rng::pcg_hash;
 
 use crate::REST;
 

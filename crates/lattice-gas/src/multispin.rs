@@ -5,10 +5,10 @@
 //! The width must be a multiple of 64. The chirality bits of a word are the two 32-bit hashes
 //! of [`crate::random`] for its 64 sites, so this backend is bit-identical to the others.
 
-use backend::rng::pcg_hash;
-use backend::{Error, Result, Simulation};
 use multiversion::multiversion;
 use rayon::prelude::*;
+use simkit_backend::rng::pcg_hash;
+use simkit_backend::{Error, Result, Simulation};
 
 use crate::observables::{BlockField, CX, CY};
 use crate::random::{FORCE_STREAM, force_threshold, step_key};
@@ -378,7 +378,7 @@ impl Simulation for MultiSpinCpu {
 
     fn step(&mut self, steps: u32) -> Result<()> {
         // The whole loop on a pool thread: no hand-over to the pool per row pass.
-        backend::pool::on_pool(|| {
+        simkit_backend::pool::on_pool(|| {
             for _ in 0..steps {
                 self.step_once();
             }

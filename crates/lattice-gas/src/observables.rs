@@ -3,10 +3,10 @@
 
 use std::path::Path;
 
-use backend::{Error, Result};
-use output::heatmap::HeatmapOptions;
-use output::vector_field::{VectorFieldOptions, write_vector_field};
-use output::vtk::ImageData;
+use simkit_backend::{Error, Result};
+use simkit_output::heatmap::HeatmapOptions;
+use simkit_output::vector_field::{VectorFieldOptions, write_vector_field};
+use simkit_output::vtk::ImageData;
 
 use crate::{Lattice, ROW_SPACING, WALL};
 

@@ -1,6 +1,6 @@
 //! The random bits of the automaton, defined once and drawn identically by every backend.
 //!
-//! All draws use [`backend::rng::rng_u32`] (a stateless hash of `(seed, step, index)`), where
+//! All draws use [`simkit_backend::rng::rng_u32`] (a stateless hash of `(seed, step, index)`), where
 //! `step` is the number of steps completed before the current one and the site index is
 //! `s = j * width + i`.
 //!
@@ -11,7 +11,7 @@
 //!   `rng_u32(seed ^ FORCE_STREAM, step, s) >> 8` (24 bits) is compared with
 //!   `round(p * 2^24)`; the force acts when the draw is smaller.
 
-use backend::rng::{pcg_hash, rng_u32};
+use simkit_backend::rng::{pcg_hash, rng_u32};
 
 /// Salt xor-ed into the seed for the body-force stream.
 pub const FORCE_STREAM: u32 = 0x5bd1_e995;

@@ -6,7 +6,7 @@
 //! decays as `exp(-nu k^2 t)` with `k = 2 pi / (H sqrt(3)/2)`; a least-squares fit of `ln A`
 //! against `t` gives `nu`. Runs on the multi-spin backend.
 
-use backend::{Error, Result, Simulation};
+use simkit_backend::{Error, Result, Simulation};
 
 use crate::{Lattice, MultiSpinCpu, Params, ROW_SPACING, RuleSet};
 

@@ -1,11 +1,18 @@
 //! Conservation, bit-identity of the three backends, the source's hand test, equilibrium and
 //! bad input.
 
-use backend::GpuContext;
-use backend::Simulation;
-use backend::testing::gpu_or_skip;
-use lattice_gas::random::chirality;
-use lattice_gas::{Engine, GpuLattice, GpuLayout, Lattice, Obstacle, Params, RuleSet, simulation};
+use simkit_backend::Backend;
+#[cfg(feature = "gpu")]
+use simkit_backend::GpuContext;
+#[cfg(feature = "gpu")]
+use simkit_backend::Simulation;
+use simkit_backend::testing::backends;
+#[cfg(feature = "gpu")]
+use simkit_backend::testing::gpu_or_skip;
+use simkit_lattice_gas::random::chirality;
+use simkit_lattice_gas::{Engine, Lattice, Obstacle, Params, RuleSet, simulation};
+#[cfg(feature = "gpu")]
+use simkit_lattice_gas::{GpuLattice, GpuLayout};
 
 fn periodic_box(w: usize, h: usize, d: f64, seed: u32) -> Lattice {
     let mut l = Lattice::new(w, h).unwrap();
@@ -41,14 +48,28 @@ fn channel(w: usize, h: usize) -> (Lattice, Params) {
     (l, params)
 }
 
-fn engines(ctx: Option<&GpuContext>) -> Vec<Engine<'_>> {
+/// Both CPU engines, then the GPU (bit planes) when `backends` offers one.
+fn engines(test: &str) -> Vec<Engine<'static>> {
     let mut e = vec![Engine::Lut, Engine::MultiSpin];
-    if let Some(ctx) = ctx {
-        e.push(Engine::Gpu(ctx));
+    for backend in backends(test) {
+        if !matches!(backend, Backend::Cpu) {
+            e.push(Engine::for_backend(backend, 0));
+        }
     }
     e
 }
 
+/// The byte-layout GPU engine's result, when the GPU is compiled in and present.
+#[cfg(feature = "gpu")]
+fn gpu_bytes(test: &str, lattice: &Lattice, params: &Params, steps: u32) -> Option<Lattice> {
+    simkit_backend::testing::shared_gpu(test).map(|ctx| run_gpu_bytes(ctx, lattice, params, steps))
+}
+#[cfg(not(feature = "gpu"))]
+fn gpu_bytes(_: &str, _: &Lattice, _: &Params, _: u32) -> Option<Lattice> {
+    None
+}
+
+#[cfg(feature = "gpu")]
 /// The byte-layout GPU backend (the engines above get bit-planes for widths divisible by 32).
 fn run_gpu_bytes(ctx: &GpuContext, lattice: &Lattice, params: &Params, steps: u32) -> Lattice {
     let mut sim =
@@ -67,7 +88,7 @@ fn run(lattice: &Lattice, params: &Params, engine: Engine<'_>, steps: u32) -> La
 
 #[test]
 fn conservation_over_1000_steps_every_backend_both_rule_sets() {
-    let ctx = gpu_or_skip("lattice-gas conservation");
+    let test = "lattice-gas conservation";
     let lattice = periodic_box(64, 32, 0.3, 3);
     let n0 = lattice.particle_count();
     let p0 = lattice.momentum_units();
@@ -76,7 +97,7 @@ fn conservation_over_1000_steps_every_backend_both_rule_sets() {
             rules,
             ..Params::default()
         };
-        for engine in engines(ctx.as_ref()) {
+        for engine in engines(test) {
             let mut sim = simulation(lattice.clone(), params.clone(), engine).unwrap();
             for _ in 0..10 {
                 sim.step(100).unwrap();
@@ -87,8 +108,7 @@ fn conservation_over_1000_steps_every_backend_both_rule_sets() {
             // The lattice did change.
             assert_ne!(sim.state().unwrap(), lattice);
         }
-        if let Some(ctx) = ctx.as_ref() {
-            let l = run_gpu_bytes(ctx, &lattice, &params, 1000);
+        if let Some(l) = gpu_bytes(test, &lattice, &params, 1000) {
             assert_eq!(l.particle_count(), n0, "{rules:?} gpu bytes");
             assert_eq!(l.momentum_units(), p0, "{rules:?} gpu bytes");
         }
@@ -97,22 +117,21 @@ fn conservation_over_1000_steps_every_backend_both_rule_sets() {
 
 #[test]
 fn backends_bit_identical_channel_and_periodic_box() {
-    let ctx = gpu_or_skip("lattice-gas bit identity");
+    let test = "lattice-gas bit identity";
     let (chan, chan_params) = channel(128, 64);
     let boxed = periodic_box(128, 64, 0.25, 9);
     for rules in [RuleSet::FhpI, RuleSet::Full] {
         for (lattice, base) in [(&chan, chan_params.clone()), (&boxed, Params::default())] {
             let params = Params { rules, ..base };
             let reference = run(lattice, &params, Engine::Lut, 500);
-            for engine in engines(ctx.as_ref()).into_iter().skip(1) {
+            for engine in engines(test).into_iter().skip(1) {
                 let got = run(lattice, &params, engine, 500);
                 assert!(
                     got == reference,
                     "{rules:?} {engine:?} differs from the LUT backend"
                 );
             }
-            if let Some(ctx) = ctx.as_ref() {
-                let got = run_gpu_bytes(ctx, lattice, &params, 500);
+            if let Some(got) = gpu_bytes(test, lattice, &params, 500) {
                 assert!(got == reference, "{rules:?} GPU bytes differs from LUT");
             }
         }
@@ -124,7 +143,7 @@ fn backends_bit_identical_channel_and_periodic_box() {
 
 #[test]
 fn body_force_bit_identical_and_drives_flow() {
-    let ctx = gpu_or_skip("lattice-gas body force");
+    let test = "lattice-gas body force";
     let mut l = Lattice::new(64, 34).unwrap();
     l.add_wall_rows();
     l.fill_random(0.2, 4).unwrap();
@@ -134,14 +153,11 @@ fn body_force_bit_identical_and_drives_flow() {
         ..Params::default()
     };
     let reference = run(&l, &params, Engine::Lut, 300);
-    for engine in engines(ctx.as_ref()).into_iter().skip(1) {
+    for engine in engines(test).into_iter().skip(1) {
         assert!(run(&l, &params, engine, 300) == reference, "{engine:?}");
     }
-    if let Some(ctx) = ctx.as_ref() {
-        assert!(
-            run_gpu_bytes(ctx, &l, &params, 300) == reference,
-            "GPU bytes"
-        );
+    if let Some(got) = gpu_bytes(test, &l, &params, 300) {
+        assert!(got == reference, "GPU bytes");
     }
     assert!(reference.momentum_units().0 > l.momentum_units().0 + 200);
     assert_eq!(reference.particle_count(), l.particle_count());
@@ -149,7 +165,7 @@ fn body_force_bit_identical_and_drives_flow() {
 
 #[test]
 fn hand_test_head_on_pair_gives_18_or_36() {
-    let ctx = gpu_or_skip("lattice-gas hand test");
+    let test = "lattice-gas hand test";
     let (w, h, j) = (64usize, 8usize, 2usize);
     let mut seen = [false, false];
     for seed in 0..16u32 {
@@ -163,7 +179,7 @@ fn hand_test_head_on_pair_gives_18_or_36() {
         let bit = chirality(seed, 0, (j * w + 5) as u32);
         let want = if bit == 1 { 18 } else { 36 };
         seen[bit as usize] = true;
-        for engine in engines(ctx.as_ref()) {
+        for engine in engines(test) {
             let out = run(&l, &params, engine, 1);
             assert_eq!(out.get(5, j), Some(want), "seed {seed} {engine:?}");
             assert_eq!(out.particle_count(), 2);
@@ -237,6 +253,7 @@ fn bad_input_is_refused() {
     assert!(simulation(narrow.clone(), Params::default(), Engine::MultiSpin).is_err());
     assert!(simulation(narrow.clone(), Params::default(), Engine::Lut).is_ok());
     // The GPU bit-plane layout needs a multiple of 32.
+    #[cfg(feature = "gpu")]
     if let Some(ctx) = gpu_or_skip("lattice-gas bad layout") {
         let e = GpuLattice::with_layout(
             &ctx,
@@ -258,6 +275,7 @@ fn bad_input_is_refused() {
     assert!(simulation(Lattice::new(64, 4).unwrap(), inflow_periodic, Engine::Lut).is_err());
 }
 
+#[cfg(feature = "gpu")]
 #[test]
 fn gpu_matches_lut_on_odd_sizes() {
     // Widths that are not multiples of 4 (the GPU packs four sites per word) or 64.
@@ -301,7 +319,7 @@ fn obstacle_from_png_mask() {
     l.add_obstacle(&obstacle).unwrap();
     let walls: Vec<(usize, usize)> = (0..6)
         .flat_map(|j| (0..8).map(move |i| (i, j)))
-        .filter(|&(i, j)| l.get(i, j).unwrap() & lattice_gas::WALL != 0)
+        .filter(|&(i, j)| l.get(i, j).unwrap() & simkit_lattice_gas::WALL != 0)
         .collect();
     // Image row 0 is the top row of the lattice (j = 5).
     assert_eq!(walls, vec![(2, 4), (3, 4), (2, 5), (3, 5)]);

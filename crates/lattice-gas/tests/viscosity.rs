@@ -1,7 +1,7 @@
 //! Shear viscosity of FHP-I against 1/(12 d (1-d)^3) - 1/8, and the full table is less viscous.
 
-use lattice_gas::RuleSet;
-use lattice_gas::viscosity::{ShearWave, fhp1_viscosity};
+use simkit_lattice_gas::RuleSet;
+use simkit_lattice_gas::viscosity::{ShearWave, fhp1_viscosity};
 
 #[test]
 fn fhp1_shear_viscosity_matches_theory_within_5_percent() {

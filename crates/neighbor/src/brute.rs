@@ -1,6 +1,6 @@
 //! Brute force O(N^2): the reference every other method is tested against.
 
-use backend::Result;
+use simkit_backend::Result;
 
 use crate::{CellGrid, NeighborSearch};
 

@@ -7,20 +7,20 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use bytemuck::{Pod, Zeroable};
 
-use backend::gpu::{DISPATCH_WGSL, ScanPlan, Uniform, run_pass};
-use backend::{Error, GpuBuffer, GpuContext, GpuScan, Kernel, KernelDesc, Result};
+use simkit_backend::gpu::{DISPATCH_WGSL, ScanPlan, Uniform, run_pass};
+use simkit_backend::{Error, GpuBuffer, GpuContext, GpuScan, Kernel, KernelDesc, Result};
 
 use crate::{CellGrid, ListKind, NeighborLists, NeighborSearch, OutOfBox};
 
 /// WGSL helpers for kernels that use a [`GpuCellList`]: the `NbGrid` struct and
 /// `nb_wrap`, `nb_cell_coord`, `nb_cell_index`, `nb_shell_lo`, `nb_shell_hi`,
 /// `nb_neighbor_cell`, `nb_min_image`, `nb_not_finite`, `nb_outside`. Declares no bindings.
-pub const CELLS_WGSL: &str = include_str!("../../../shaders/neighbor/cells.wgsl");
-const CLEAR_WGSL: &str = include_str!("../../../shaders/neighbor/clear.wgsl");
-const ASSIGN_WGSL: &str = include_str!("../../../shaders/neighbor/assign.wgsl");
-const SCATTER_WGSL: &str = include_str!("../../../shaders/neighbor/scatter.wgsl");
-const SORT_WGSL: &str = include_str!("../../../shaders/neighbor/sort_cells.wgsl");
-const LIST_WGSL: &str = include_str!("../../../shaders/neighbor/list.wgsl");
+pub const CELLS_WGSL: &str = simkit_backend::wgsl!("cells.wgsl");
+const CLEAR_WGSL: &str = simkit_backend::wgsl!("clear.wgsl");
+const ASSIGN_WGSL: &str = simkit_backend::wgsl!("assign.wgsl");
+const SCATTER_WGSL: &str = simkit_backend::wgsl!("scatter.wgsl");
+const SORT_WGSL: &str = simkit_backend::wgsl!("sort_cells.wgsl");
+const LIST_WGSL: &str = simkit_backend::wgsl!("list.wgsl");
 
 /// The most cells per axis a GPU grid may have: beyond it, `f32` rounding of the cell
 /// assignment could exceed the cell margin ([`crate::CELL_MARGIN`]).

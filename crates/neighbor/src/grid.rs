@@ -1,6 +1,6 @@
 //! The simulation box and its cell grid: validation, wrapping, cell assignment, minimum image.
 
-use backend::{Error, Result};
+use simkit_backend::{Error, Result};
 
 /// Cells are at least `cutoff * (1 + CELL_MARGIN)` wide.
 ///

@@ -30,8 +30,8 @@
 //! `i` is unspecified); full-shell traversals report each pair from both ends.
 //!
 //! ```
-//! use neighbor::{CellGrid, NeighborSearch, SortedCells};
-//! # fn main() -> backend::Result<()> {
+//! use simkit_neighbor::{CellGrid, NeighborSearch, SortedCells};
+//! # fn main() -> simkit_backend::Result<()> {
 //! let grid = CellGrid::new([0.0; 3], [10.0; 3], [true; 3], 2.5)?;
 //! let positions = vec![[0.5, 0.5, 0.5], [9.5, 0.5, 0.5], [5.0, 5.0, 5.0]];
 //! let mut cells = SortedCells::new(&grid);
@@ -46,6 +46,7 @@
 //! ```
 
 mod brute;
+#[cfg(feature = "gpu")]
 mod gpu;
 mod grid;
 mod linked;
@@ -56,6 +57,7 @@ mod traverse;
 mod verlet;
 
 pub use brute::BruteForce;
+#[cfg(feature = "gpu")]
 pub use gpu::{
     CELLS_WGSL, GPU_LOOP_RESERVE, GPU_MAX_CELLS_PER_AXIS, GPU_MAX_PER_CELL, GpuCellList,
     GpuGridParams, GpuNeighborList, GpuNeighborSearch, positions_to_f32,

@@ -1,6 +1,6 @@
 //! Linked-list cells: `head[cell]` and `link[particle]`.
 
-use backend::{Error, Result};
+use simkit_backend::{Error, Result};
 
 use crate::stencil::Shell;
 use crate::{CellGrid, NeighborSearch};

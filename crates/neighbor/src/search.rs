@@ -1,6 +1,6 @@
 //! The trait shared by every method and backend, and per-particle neighbour lists.
 
-use backend::Result;
+use simkit_backend::Result;
 
 /// Per-particle neighbour lists in compressed sparse row form: the neighbours of particle
 /// `i` are `neighbors[offsets[i]..offsets[i + 1]]`, in ascending order.

@@ -2,7 +2,7 @@
 
 use rayon::prelude::*;
 
-use backend::{Error, Result};
+use simkit_backend::{Error, Result};
 
 use crate::CellGrid;
 use crate::traverse::{COORD_PAD, Kernel, Scratch, View, visit_cells, visit_particle};

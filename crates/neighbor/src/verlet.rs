@@ -2,7 +2,7 @@
 
 use rayon::prelude::*;
 
-use backend::{Error, Result};
+use simkit_backend::{Error, Result};
 
 use std::ops::Range;
 

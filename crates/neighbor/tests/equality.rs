@@ -3,11 +3,14 @@
 
 mod common;
 
-use backend::testing::gpu_or_skip;
-use neighbor::{CellGrid, Kernel, NeighborSearch, SortedCells};
 use proptest::prelude::*;
+#[cfg(feature = "gpu")]
+use simkit_backend::testing::gpu_or_skip;
+use simkit_neighbor::{CellGrid, Kernel, NeighborSearch, SortedCells};
 
-use common::{check_cpu, check_gpu};
+use common::check_cpu;
+#[cfg(feature = "gpu")]
+use common::check_gpu;
 
 /// A coordinate along one axis: uniform, or one of the edge values (exactly the lower face,
 /// exactly the upper face `origin + L`, one ulp below it, and on periodic axes values below
@@ -117,6 +120,7 @@ proptest! {
 proptest! {
     #![proptest_config(ProptestConfig { cases: 10, failure_persistence: None, ..ProptestConfig::default() })]
 
+    #[cfg(feature = "gpu")]
     #[test]
     fn gpu_agrees_2d(c in case::<2>(3000)) {
         let Some(ctx) = gpu_or_skip("gpu_agrees_2d") else { return Ok(()) };
@@ -125,6 +129,7 @@ proptest! {
         check_gpu(&ctx, &grid, &c.positions, &reference);
     }
 
+    #[cfg(feature = "gpu")]
     #[test]
     fn gpu_agrees_3d(c in case::<3>(3000)) {
         let Some(ctx) = gpu_or_skip("gpu_agrees_3d") else { return Ok(()) };
@@ -163,6 +168,7 @@ fn empty_and_single_particle() {
     for p in [vec![], vec![[1.0, 2.0, 3.0]]] {
         let r = check_cpu(&grid, &p);
         assert!(r.is_empty());
+        #[cfg(feature = "gpu")]
         if let Some(ctx) = gpu_or_skip("empty_and_single_particle") {
             check_gpu(&ctx, &grid, &p, &r);
         }
@@ -176,6 +182,7 @@ fn coincident_particles_are_one_pair_at_zero_distance() {
     let r = check_cpu(&grid, &p);
     assert_eq!(r.len(), 1);
     assert_eq!(r[&(0, 1)], ([0.0, 0.0], 0.0));
+    #[cfg(feature = "gpu")]
     if let Some(ctx) = gpu_or_skip("coincident_particles") {
         check_gpu(&ctx, &grid, &p, &r);
     }
@@ -194,6 +201,7 @@ fn cutoff_over_half_a_periodic_box_counts_each_pair_once() {
     assert!((sep[0] - -1.5).abs() < 1e-12 && (r2 - 2.25).abs() < 1e-12);
     let (sep, _) = r[&(0, 2)];
     assert!((sep[0] - 0.2).abs() < 1e-12 && (sep[1] - 0.2).abs() < 1e-12);
+    #[cfg(feature = "gpu")]
     if let Some(ctx) = gpu_or_skip("cutoff_over_half_box") {
         check_gpu(&ctx, &grid, &p, &r);
     }
@@ -211,6 +219,7 @@ fn one_two_and_three_cells_along_a_periodic_axis() {
             .collect();
         let r = check_cpu(&grid, &p);
         assert!(!r.is_empty());
+        #[cfg(feature = "gpu")]
         if let Some(ctx) = gpu_or_skip("few_cells_periodic") {
             check_gpu(&ctx, &grid, &p, &r);
         }
@@ -225,22 +234,23 @@ fn errors_name_the_particle() {
     assert!(e.contains("position[1].y"), "{e}");
     let e = s.build(&[[f64::NAN, 1.0]]).unwrap_err().to_string();
     assert!(e.contains("position[0].x"), "{e}");
-    let mut b = neighbor::BruteForce::new(&grid);
+    let mut b = simkit_neighbor::BruteForce::new(&grid);
     assert!(b.build(&[[1.0, f64::INFINITY]]).is_err());
+    #[cfg(feature = "gpu")]
     if let Some(ctx) = gpu_or_skip("gpu_errors") {
-        let mut g = neighbor::GpuNeighborSearch::new(&ctx, &grid).unwrap();
+        let mut g = simkit_neighbor::GpuNeighborSearch::new(&ctx, &grid).unwrap();
         assert!(g.build(&[[1.0, 1.0], [-3.0, 6.0]]).is_err());
         // The device-side check catches what bypasses host validation.
-        let buf = backend::GpuBuffer::from_slice(
+        let buf = simkit_backend::GpuBuffer::from_slice(
             &ctx,
             "p",
             &[[1.0f32, 1.0, 0.0, 0.0], [1.0, 9.0, 0.0, 0.0]],
         )
         .unwrap();
-        let cells = neighbor::GpuCellList::new(&ctx, &grid, &buf).unwrap();
+        let cells = simkit_neighbor::GpuCellList::new(&ctx, &grid, &buf).unwrap();
         let e = cells.build(&ctx).unwrap_err().to_string();
         assert!(e.contains("position[1].y") && e.contains('9'), "{e}");
-        let buf = backend::GpuBuffer::from_slice(
+        let buf = simkit_backend::GpuBuffer::from_slice(
             &ctx,
             "p",
             &[
@@ -250,7 +260,7 @@ fn errors_name_the_particle() {
             ],
         )
         .unwrap();
-        let cells = neighbor::GpuCellList::new(&ctx, &grid, &buf).unwrap();
+        let cells = simkit_neighbor::GpuCellList::new(&ctx, &grid, &buf).unwrap();
         let e = cells.build(&ctx).unwrap_err().to_string();
         assert!(
             e.contains("position[1].x") && e.contains("2 particle(s)"),
@@ -261,8 +271,8 @@ fn errors_name_the_particle() {
 
 #[test]
 fn parallel_counting_sort_is_thread_count_independent() {
-    use neighbor::LinkedCells;
     use rand::{RngExt, SeedableRng};
+    use simkit_neighbor::LinkedCells;
     // Large enough for the chunked two-pass sort; compared across pool sizes and with
     // linked cells.
     let mut rng = rand_pcg::Pcg64::seed_from_u64(5);
@@ -318,7 +328,7 @@ fn parallel_counting_sort_is_thread_count_independent() {
 
 #[test]
 fn clamped_positions_outside_closed_faces_keep_exact_pairs() {
-    use neighbor::OutOfBox;
+    use simkit_neighbor::OutOfBox;
     // Opt-in clamping: particles up to 3 cutoffs outside the closed y and z faces are put
     // in the boundary cells, and every method still finds exactly the brute-force pairs.
     use rand::{RngExt, SeedableRng};
@@ -337,6 +347,7 @@ fn clamped_positions_outside_closed_faces_keep_exact_pairs() {
         .collect();
     let r = check_cpu(&grid, &p);
     assert!(!r.is_empty());
+    #[cfg(feature = "gpu")]
     if let Some(ctx) = gpu_or_skip("clamped_positions") {
         check_gpu(&ctx, &grid, &p, &r);
     }
@@ -362,9 +373,10 @@ fn reorder_and_restore_are_inverse_permutations() {
     assert!(s.restore(&data[..3]).is_err());
 }
 
+#[cfg(feature = "gpu")]
 #[test]
 fn gpu_cell_at_the_per_cell_limit_works_and_one_more_is_an_error() {
-    use neighbor::{GPU_MAX_PER_CELL, GpuCellList};
+    use simkit_neighbor::{GPU_MAX_PER_CELL, GpuCellList};
     // All particles in one cell. At the adapter's limit the build must give every id once,
     // ascending (the cell order), and the neighbour lists must match the CPU's; one particle
     // more must be refused. On llvmpipe the limit comes from its shader loop limit (one cell
@@ -388,8 +400,12 @@ fn gpu_cell_at_the_per_cell_limit_works_and_one_more_is_an_error() {
     };
     for (n, ok) in [(max, true), (max + 1, false)] {
         let p = positions(n);
-        let buf =
-            backend::GpuBuffer::from_slice(&ctx, "p", &neighbor::positions_to_f32(&p)).unwrap();
+        let buf = simkit_backend::GpuBuffer::from_slice(
+            &ctx,
+            "p",
+            &simkit_neighbor::positions_to_f32(&p),
+        )
+        .unwrap();
         let cells = GpuCellList::new(&ctx, &grid, &buf).unwrap();
         let r = cells.build(&ctx);
         if ok {
@@ -400,11 +416,15 @@ fn gpu_cell_at_the_per_cell_limit_works_and_one_more_is_an_error() {
             // device's full list must hold them all, in ascending order. It has n (n - 1)
             // entries: affordable only for a small limit.
             if n <= 10_000 {
-                let mut search = neighbor::GpuNeighborSearch::new(&ctx, &grid).unwrap();
+                let mut search = simkit_neighbor::GpuNeighborSearch::new(&ctx, &grid).unwrap();
                 search.build(&p).unwrap();
                 let cells = search.cells().expect("built");
-                let mut full =
-                    neighbor::GpuNeighborList::new(&ctx, cells, neighbor::ListKind::Full).unwrap();
+                let mut full = simkit_neighbor::GpuNeighborList::new(
+                    &ctx,
+                    cells,
+                    simkit_neighbor::ListKind::Full,
+                )
+                .unwrap();
                 assert_eq!(full.build(&ctx, cells).unwrap(), n * (n - 1));
                 let lists = full.download(&ctx).unwrap();
                 for i in 0..n {

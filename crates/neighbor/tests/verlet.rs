@@ -3,8 +3,8 @@
 
 mod common;
 
-use neighbor::{BruteForce, CellGrid, ListKind, NeighborSearch, VerletList};
 use rand::{RngExt, SeedableRng};
+use simkit_neighbor::{BruteForce, CellGrid, ListKind, NeighborSearch, VerletList};
 
 use common::pairs_of;
 

@@ -10,11 +10,11 @@ use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use backend::{Error, Result};
+use simkit_backend::{Error, Result};
 
 static COUNTER: AtomicU64 = AtomicU64::new(0);
 
-/// Converts an I/O error on `path` into [`backend::Error::Io`], adding a hint for the usual
+/// Converts an I/O error on `path` into [`simkit_backend::Error::Io`], adding a hint for the usual
 /// causes.
 pub fn io_error(path: &Path, e: &io::Error) -> Error {
     let hint = match e.kind() {
@@ -176,9 +176,9 @@ impl Drop for AtomicFile {
 ///
 /// ```
 /// use std::io::Write;
-/// # fn main() -> backend::Result<()> {
+/// # fn main() -> simkit_backend::Result<()> {
 /// let path = std::env::temp_dir().join("simkit-doc-atomic").join("hello.txt");
-/// output::atomic::write_atomic(&path, |w| writeln!(w, "hello"))?;
+/// simkit_output::atomic::write_atomic(&path, |w| writeln!(w, "hello"))?;
 /// assert_eq!(std::fs::read_to_string(&path).unwrap(), "hello\n");
 /// # Ok(())
 /// # }

@@ -5,8 +5,8 @@
 //! containing commas, quotes or line breaks are quoted.
 //!
 //! ```
-//! use output::csv::CsvWriter;
-//! # fn main() -> backend::Result<()> {
+//! use simkit_output::csv::CsvWriter;
+//! # fn main() -> simkit_backend::Result<()> {
 //! let path = std::env::temp_dir().join("simkit-doc-csv").join("energy.csv");
 //! let mut csv = CsvWriter::create(&path, &["t", "kinetic", "potential"])?;
 //! for step in 0..10 {
@@ -23,7 +23,7 @@ use std::path::Path;
 
 use crate::atomic::{AtomicFile, io_error, write_atomic};
 use crate::numfmt;
-use backend::{Error, Result};
+use simkit_backend::{Error, Result};
 
 /// Streams rows to a temporary file; [`finish`](Self::finish) renames it into place.
 /// Dropping the writer without finishing leaves any previous file untouched.

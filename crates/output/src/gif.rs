@@ -2,9 +2,9 @@
 //! [`render_heatmap`](crate::heatmap::render_heatmap)), written atomically.
 //!
 //! ```
-//! use output::gif::write_gif;
-//! use output::heatmap::{render_heatmap, HeatmapOptions};
-//! # fn main() -> backend::Result<()> {
+//! use simkit_output::gif::write_gif;
+//! use simkit_output::heatmap::{render_heatmap, HeatmapOptions};
+//! # fn main() -> simkit_backend::Result<()> {
 //! let opts = HeatmapOptions::new().range(-1.0, 1.0).upscale(4);
 //! let mut frames = Vec::new();
 //! for step in 0..5 {
@@ -25,7 +25,7 @@ use image::codecs::gif::{GifEncoder, Repeat};
 use image::{Delay, Frame, RgbImage};
 
 use crate::atomic::AtomicFile;
-use backend::{Error, Result};
+use simkit_backend::{Error, Result};
 
 /// Writes `frames` as a looping animated GIF with `delay_ms` between frames.
 ///

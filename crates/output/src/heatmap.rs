@@ -10,7 +10,7 @@ use image::{Rgb, RgbImage};
 
 use crate::colormap::Colormap;
 use crate::{font, numfmt, png, raster};
-use backend::{Error, Result};
+use simkit_backend::{Error, Result};
 
 /// Largest image side in pixels this crate renders.
 pub const MAX_SIDE: usize = 32_768;

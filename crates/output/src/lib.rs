@@ -5,7 +5,7 @@
 //! Every file is written atomically through [`atomic::write_atomic`] (temporary file in the
 //! same directory, flush, sync, rename), so a crash or an error never leaves a half-written
 //! output, and parent directories are created as needed. Errors are
-//! [`backend::Error`] values whose messages name the bad value and the fix.
+//! [`simkit_backend::Error`] values whose messages name the bad value and the fix.
 //!
 //! | module | what it writes |
 //! |---|---|
@@ -20,8 +20,8 @@
 //! | [`colormap`], [`font`], [`raster`], [`numfmt`], [`png`], [`atomic`] | building blocks |
 //!
 //! ```
-//! use output::heatmap::{write_heatmap, HeatmapOptions};
-//! # fn main() -> backend::Result<()> {
+//! use simkit_output::heatmap::{write_heatmap, HeatmapOptions};
+//! # fn main() -> simkit_backend::Result<()> {
 //! let (w, h) = (32, 24);
 //! let field: Vec<f64> = (0..w * h).map(|i| ((i % w) as f64 * 0.3).sin()).collect();
 //! let path = std::env::temp_dir().join("simkit-doc-heatmap").join("field.png");

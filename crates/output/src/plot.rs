@@ -2,8 +2,8 @@
 //! axis titles, legend and title. Enough for convergence plots and radius-vs-time curves.
 //!
 //! ```
-//! use output::plot::{Plot, Scale, Series};
-//! # fn main() -> backend::Result<()> {
+//! use simkit_output::plot::{Plot, Scale, Series};
+//! # fn main() -> simkit_backend::Result<()> {
 //! let h = [0.1, 0.05, 0.025, 0.0125];
 //! let err: Vec<f64> = h.iter().map(|h| 0.3 * h * h).collect();
 //! let path = std::env::temp_dir().join("simkit-doc-plot").join("convergence.png");
@@ -24,7 +24,7 @@ use std::path::Path;
 use image::{Rgb, RgbImage};
 
 use crate::{font, numfmt, png, raster};
-use backend::{Error, Result};
+use simkit_backend::{Error, Result};
 
 /// Default series colours, in order.
 pub const PALETTE: [[u8; 3]; 8] = [

@@ -7,7 +7,7 @@ use image::codecs::png::{CompressionType, FilterType, PngEncoder};
 use image::{ExtendedColorType, ImageEncoder, RgbImage};
 
 use crate::atomic::write_atomic;
-use backend::Result;
+use simkit_backend::Result;
 
 /// Writes `img` as an 8-bit RGB PNG, atomically.
 pub fn write_png(path: impl AsRef<Path>, img: &RgbImage) -> Result<()> {

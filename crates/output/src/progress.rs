@@ -5,7 +5,7 @@
 //! Calling [`Progress::inc`] every step is cheap: one clock read and a comparison.
 //!
 //! ```
-//! use output::progress::Progress;
+//! use simkit_output::progress::Progress;
 //! let mut bar = Progress::new("relax", 1000);
 //! for _ in 0..1000 {
 //!     // ... one step ...

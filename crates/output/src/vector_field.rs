@@ -15,7 +15,7 @@ use image::RgbImage;
 use crate::colormap::luminance;
 use crate::heatmap::{HeatmapOptions, check_grid, render_field};
 use crate::{png, raster};
-use backend::{Error, Result};
+use simkit_backend::{Error, Result};
 
 /// How to draw a vector field.
 #[derive(Debug, Clone, PartialEq, Default)]

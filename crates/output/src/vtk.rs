@@ -10,8 +10,8 @@
 //! as ParaView's glyph and stream filters expect.
 //!
 //! ```
-//! use output::vtk::Particles;
-//! # fn main() -> backend::Result<()> {
+//! use simkit_output::vtk::Particles;
+//! # fn main() -> simkit_backend::Result<()> {
 //! let xy = [[0.0, 0.0], [1.0, 0.5], [2.0, 1.0]];
 //! let mut p = Particles::from_xy(&xy)?;
 //! p.add_scalar("radius", &[0.5, 0.5, 0.25])?
@@ -28,7 +28,7 @@ use std::path::Path;
 
 use crate::atomic::write_atomic;
 use crate::numfmt;
-use backend::{Error, Result};
+use simkit_backend::{Error, Result};
 
 /// How array values are stored in the XML.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

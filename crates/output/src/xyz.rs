@@ -6,8 +6,8 @@
 //! rejected because readers cannot parse them.
 //!
 //! ```
-//! use output::xyz::{XyzFrame, XyzWriter};
-//! # fn main() -> backend::Result<()> {
+//! use simkit_output::xyz::{XyzFrame, XyzWriter};
+//! # fn main() -> simkit_backend::Result<()> {
 //! let path = std::env::temp_dir().join("simkit-doc-xyz").join("traj.xyz");
 //! let mut traj = XyzWriter::create(&path)?;
 //! for step in 0..3 {
@@ -29,7 +29,7 @@ use std::path::Path;
 use crate::atomic::{AtomicFile, io_error, write_atomic};
 use crate::numfmt;
 use crate::vtk::check_interleaved;
-use backend::{Error, Result};
+use simkit_backend::{Error, Result};
 
 #[derive(Debug, Clone, PartialEq)]
 struct Column {

@@ -3,7 +3,7 @@
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
-use output::atomic::{AtomicFile, write_atomic};
+use simkit_output::atomic::{AtomicFile, write_atomic};
 
 fn tmp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("simkit-output-{name}-{}", std::process::id()));

@@ -3,9 +3,9 @@
 use std::collections::HashMap;
 use std::path::PathBuf;
 
-use output::csv::{CsvWriter, write_csv};
-use output::vtk::{Encoding, ImageData, Particles, write_pvd};
-use output::xyz::{XyzFrame, XyzWriter, write_xyz};
+use simkit_output::csv::{CsvWriter, write_csv};
+use simkit_output::vtk::{Encoding, ImageData, Particles, write_pvd};
+use simkit_output::xyz::{XyzFrame, XyzWriter, write_xyz};
 
 fn tmp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("simkit-output-{name}-{}", std::process::id()));

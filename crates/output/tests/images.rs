@@ -4,11 +4,11 @@ use std::path::PathBuf;
 
 use image::AnimationDecoder;
 use image::codecs::gif::GifDecoder;
-use output::colormap::{Colormap, NAN_COLOR};
-use output::gif::{GifWriter, write_gif};
-use output::heatmap::{HeatmapOptions, render_heatmap, write_heatmap};
-use output::plot::{Plot, Scale, Series};
-use output::vector_field::{VectorFieldOptions, write_vector_field};
+use simkit_output::colormap::{Colormap, NAN_COLOR};
+use simkit_output::gif::{GifWriter, write_gif};
+use simkit_output::heatmap::{HeatmapOptions, render_heatmap, write_heatmap};
+use simkit_output::plot::{Plot, Scale, Series};
+use simkit_output::vector_field::{VectorFieldOptions, write_vector_field};
 
 fn tmp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("simkit-output-{name}-{}", std::process::id()));
@@ -112,7 +112,7 @@ fn plot_writes_png() {
         .unwrap();
     let img = image::open(&path).unwrap().to_rgb8();
     assert_eq!(img.dimensions(), (800, 500));
-    assert!(img.pixels().any(|p| p.0 == output::plot::PALETTE[0]));
+    assert!(img.pixels().any(|p| p.0 == simkit_output::plot::PALETTE[0]));
     assert!(img.pixels().any(|p| p.0 == [200, 0, 0]));
 
     let h = [0.1, 0.05, 0.025, 0.0125, 0.00625];

@@ -1,6 +1,6 @@
 //! Run configuration: force law, integrator, precision and time step.
 
-use backend::{Error, Result, require_positive};
+use simkit_backend::{Error, Result, require_positive};
 
 /// How the pair force is evaluated. Each law is a separate compiled kernel: the choice is made
 /// once per force evaluation, never per pair.

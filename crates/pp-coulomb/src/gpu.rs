@@ -1,20 +1,20 @@
 //! The GPU backend: tiled all-pairs field kernel and integrator passes, all on the device.
 
-use backend::gpu::DISPATCH_WGSL;
-use backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Result};
 use bytemuck::Pod;
+use simkit_backend::gpu::DISPATCH_WGSL;
+use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Result};
 
 use crate::config::{Config, ForceLaw, Integrator, Precision, coincident_error};
 use crate::cpu::Real;
 use crate::particles::Particles;
 use crate::sim::{Engine, PositionsVelocities};
 
-const ACCEL_WGSL: &str = include_str!("../../../shaders/pp-coulomb/accel.wgsl");
-const UPDATE_WGSL: &str = include_str!("../../../shaders/pp-coulomb/update.wgsl");
-const KICK_WGSL: &str = include_str!("../../../shaders/pp-coulomb/kick.wgsl");
-const LAW_EXACT_WGSL: &str = include_str!("../../../shaders/pp-coulomb/law_exact.wgsl");
-const LAW_EXCLUSION_WGSL: &str = include_str!("../../../shaders/pp-coulomb/law_exclusion.wgsl");
-const LAW_PLUMMER_WGSL: &str = include_str!("../../../shaders/pp-coulomb/law_plummer.wgsl");
+const ACCEL_WGSL: &str = simkit_backend::wgsl!("accel.wgsl");
+const UPDATE_WGSL: &str = simkit_backend::wgsl!("update.wgsl");
+const KICK_WGSL: &str = simkit_backend::wgsl!("kick.wgsl");
+const LAW_EXACT_WGSL: &str = simkit_backend::wgsl!("law_exact.wgsl");
+const LAW_EXCLUSION_WGSL: &str = simkit_backend::wgsl!("law_exclusion.wgsl");
+const LAW_PLUMMER_WGSL: &str = simkit_backend::wgsl!("law_plummer.wgsl");
 /// Workgroup size and tile length (the `WG` constant of the shaders).
 const WG: usize = 128;
 
@@ -259,7 +259,7 @@ impl<T: Real + Pod> Engine for GpuEngine<T> {
         let mut cur = self.cur;
         let mut a_valid = self.a_valid;
         let n = self.n as u64;
-        backend::gpu::run_pass(&self.ctx, "pp-coulomb steps", |pass| {
+        simkit_backend::gpu::run_pass(&self.ctx, "pp-coulomb steps", |pass| {
             for _ in 0..steps {
                 match self.integrator {
                     Integrator::SymplecticEuler => {
@@ -303,7 +303,7 @@ impl<T: Real + Pod> Engine for GpuEngine<T> {
     fn accelerations(&mut self) -> Result<Vec<[f64; 3]>> {
         if !self.a_valid {
             let cur = self.cur;
-            backend::gpu::run_pass(&self.ctx, "pp-coulomb accel", |pass| {
+            simkit_backend::gpu::run_pass(&self.ctx, "pp-coulomb accel", |pass| {
                 self.encode_accel(pass, cur)
             })?;
             self.check_coincident()?;

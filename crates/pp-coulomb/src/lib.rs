@@ -18,9 +18,9 @@
 //! - [`analytic`]: Coulomb explosion of a cold uniform sphere and Rutherford scattering.
 //!
 //! ```
-//! use pp_coulomb::{Config, ForceLaw, Particles, PpCoulomb, Region, Species, Velocities};
-//! use backend::{Backend, Simulation};
-//! # fn main() -> backend::Result<()> {
+//! use simkit_pp_coulomb::{Config, ForceLaw, Particles, PpCoulomb, Region, Species, Velocities};
+//! use simkit_backend::{Backend, Simulation};
+//! # fn main() -> simkit_backend::Result<()> {
 //! let mut p = Particles::new();
 //! let e = p.add_species(Species::new("electron", -1.0, 1.0))?;
 //! let cube = Region::Cube { min: [0.0; 3], length: 20.0 };
@@ -39,15 +39,17 @@ pub mod analytic;
 mod config;
 mod cpu;
 mod diagnostics;
+#[cfg(feature = "gpu")]
 mod gpu;
 mod particles;
 pub mod scenes;
 mod sim;
 pub mod units;
 
-pub use backend::{Backend, Simulation};
 pub use config::{Config, ForceLaw, Integrator, Precision};
 pub use diagnostics::{Diagnostics, diagnostics, potential_energy, reference_accelerations};
+#[cfg(feature = "gpu")]
 pub use gpu::gpu_max_particles;
 pub use particles::{Particles, Region, Species, Velocities};
 pub use sim::PpCoulomb;
+pub use simkit_backend::{Backend, Simulation};

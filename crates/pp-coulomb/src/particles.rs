@@ -1,8 +1,8 @@
 //! Particles with per-particle charge and mass, species, and seeded initial conditions.
 
-use backend::{Error, Result, require_finite, require_positive};
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
+use simkit_backend::{Error, Result, require_finite, require_positive};
 
 /// A particle species: normalised charge and mass.
 #[derive(Clone, Debug, PartialEq)]
@@ -164,10 +164,10 @@ impl Particles {
         match velocities {
             Velocities::Cold => {}
             Velocities::Maxwellian { thermal_speed } => {
-                backend::require_non_negative("thermal_speed", thermal_speed)?;
+                simkit_backend::require_non_negative("thermal_speed", thermal_speed)?;
             }
             Velocities::Uniform { half_width } => {
-                backend::require_non_negative("half_width", half_width)?;
+                simkit_backend::require_non_negative("half_width", half_width)?;
             }
         }
         let mut rng = Pcg64::seed_from_u64(seed);

@@ -1,7 +1,7 @@
 //! Ready-made initial conditions: the source's plasma box and a cold uniform sphere for the
 //! Coulomb explosion, plus the expansion measurement used to validate the latter.
 
-use backend::{Result, require_positive};
+use simkit_backend::{Result, require_positive};
 
 use crate::config::ForceLaw;
 use crate::particles::{Particles, Region, Species, Velocities};
@@ -102,7 +102,7 @@ pub fn run_explosion(
     t_max: f64,
     mut on_step: impl FnMut(&Particles, ExplosionSample) -> Result<()>,
 ) -> Result<Vec<ExplosionSample>> {
-    use backend::Simulation;
+    use simkit_backend::Simulation;
     require_positive("omega", omega)?;
     require_positive("courant", courant)?;
     let mut samples = vec![ExplosionSample {

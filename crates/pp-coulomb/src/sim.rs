@@ -1,11 +1,13 @@
 //! [`PpCoulomb`]: the direct-sum Coulomb simulation behind the common [`Simulation`] trait.
 
-use backend::{Backend, Result, Simulation};
+use simkit_backend::{Backend, Result, Simulation};
 
 use crate::config::Config;
+use crate::cpu;
 use crate::diagnostics::{Diagnostics, diagnostics};
+#[cfg(feature = "gpu")]
+use crate::gpu;
 use crate::particles::Particles;
-use crate::{cpu, gpu};
 
 /// Positions and velocities of a state, in f64.
 pub(crate) type PositionsVelocities = (Vec<[f64; 3]>, Vec<[f64; 3]>);
@@ -59,6 +61,7 @@ impl PpCoulomb {
         config.validate()?;
         let engine = match backend {
             Backend::Cpu => cpu::engine(&particles, &config),
+            #[cfg(feature = "gpu")]
             Backend::Gpu(ctx) => gpu::engine(ctx, &particles, &config)?,
         };
         Ok(Self {
@@ -98,7 +101,7 @@ impl PpCoulomb {
 
     /// Changes the time step for the following steps (e.g. to grow it as a cloud expands).
     pub fn set_dt(&mut self, dt: f64) -> Result<()> {
-        backend::require_positive("dt", dt)?;
+        simkit_backend::require_positive("dt", dt)?;
         self.engine.set_dt(dt)?;
         self.config.dt = dt;
         Ok(())

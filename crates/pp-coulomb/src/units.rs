@@ -6,7 +6,7 @@
 //! so that the acceleration is `a_i = (q_i/m_i) sum_j q_j r_ij / |r_ij|^3` and the time step
 //! is 1.
 
-use backend::{Error, Result, require_positive};
+use simkit_backend::{Error, Result, require_positive};
 
 /// Elementary charge in C (CODATA 2018, exact).
 pub const ELEMENTARY_CHARGE: f64 = 1.602_176_634e-19;

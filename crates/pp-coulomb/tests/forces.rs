@@ -1,9 +1,13 @@
 //! Force kernels against the plain f64 reference, Newton's third law, CPU vs GPU, bad input.
 
-use backend::testing::gpu_or_skip;
-use backend::{Backend, Simulation};
-use pp_coulomb::{
-    Config, ForceLaw, Integrator, Particles, PpCoulomb, Precision, Region, Species, Velocities,
+use simkit_backend::testing::backends;
+#[cfg(feature = "gpu")]
+use simkit_backend::testing::gpu_or_skip;
+use simkit_backend::{Backend, Simulation};
+#[cfg(feature = "gpu")]
+use simkit_pp_coulomb::Integrator;
+use simkit_pp_coulomb::{
+    Config, ForceLaw, Particles, PpCoulomb, Precision, Region, Species, Velocities,
     reference_accelerations,
 };
 
@@ -53,6 +57,7 @@ fn l2_relative(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
     (num / den).sqrt()
 }
 
+#[cfg(feature = "gpu")]
 fn accelerations(p: &Particles, law: ForceLaw, prec: Precision, b: Backend<'_>) -> Vec<[f64; 3]> {
     let config = Config::new(0.01, law).with_precision(prec);
     PpCoulomb::new(p.clone(), config, b)
@@ -98,6 +103,7 @@ fn cpu_kernels_match_reference_and_third_law() {
     }
 }
 
+#[cfg(feature = "gpu")]
 #[test]
 fn gpu_matches_cpu_f32_n4096_and_f64() {
     let Some(ctx) = gpu_or_skip("gpu_matches_cpu_f32_n4096_and_f64") else {
@@ -132,6 +138,7 @@ fn gpu_matches_cpu_f32_n4096_and_f64() {
     }
 }
 
+#[cfg(feature = "gpu")]
 #[test]
 fn gpu_and_cpu_trajectories_agree() {
     let Some(ctx) = gpu_or_skip("gpu_and_cpu_trajectories_agree") else {
@@ -164,12 +171,7 @@ fn gpu_and_cpu_trajectories_agree() {
 
 #[test]
 fn zero_and_one_particle_are_fine() {
-    let mut backends = vec![Backend::Cpu];
-    let ctx = gpu_or_skip("zero_and_one_particle_are_fine");
-    if let Some(ctx) = &ctx {
-        backends.push(Backend::Gpu(ctx));
-    }
-    for b in backends {
+    for b in backends("zero_and_one_particle_are_fine") {
         let empty = PpCoulomb::new(Particles::new(), Config::new(0.1, ForceLaw::Exact), b);
         let mut empty = empty.unwrap();
         empty.step(3).unwrap();
@@ -210,12 +212,7 @@ fn bad_input_is_a_clear_error() {
 fn coincident_particles_in_exact_mode_name_the_pair() {
     let mut p = plasma(200, 6);
     p.position[150] = p.position[17];
-    let mut backends = vec![Backend::Cpu];
-    let ctx = gpu_or_skip("coincident_particles_in_exact_mode_name_the_pair");
-    if let Some(ctx) = &ctx {
-        backends.push(Backend::Gpu(ctx));
-    }
-    for b in backends {
+    for b in backends("coincident_particles_in_exact_mode_name_the_pair") {
         let mut sim = PpCoulomb::new(p.clone(), Config::new(0.1, ForceLaw::Exact), b).unwrap();
         let e = sim.step(1).unwrap_err().to_string();
         assert!(
@@ -231,19 +228,20 @@ fn coincident_particles_in_exact_mode_name_the_pair() {
     }
 }
 
+#[cfg(feature = "gpu")]
 #[test]
 fn gpu_refuses_more_particles_than_the_adapter_loops_allow() {
     let Some(ctx) = gpu_or_skip("gpu_refuses_more_particles_than_the_adapter_loops_allow") else {
         return;
     };
-    let max = pp_coulomb::gpu_max_particles(&ctx);
+    let max = simkit_pp_coulomb::gpu_max_particles(&ctx);
     let Some(limit) = ctx.shader_loop_limit() else {
         assert_eq!(max, usize::MAX);
         println!("{}: no shader loop limit, no particle limit", ctx.summary());
         return;
     };
     // llvmpipe: 504 tiles of 128 particles, 130 loop iterations each, fit in 65,535.
-    assert_eq!(limit, backend::gpu::LLVMPIPE_LOOP_LIMIT);
+    assert_eq!(limit, simkit_backend::gpu::LLVMPIPE_LOOP_LIMIT);
     assert_eq!(max, 64_512);
     let config = Config::new(0.01, ForceLaw::Plummer { epsilon: 0.1 });
     // Construction only: one force evaluation at this size takes seconds on llvmpipe.

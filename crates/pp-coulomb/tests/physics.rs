@@ -1,11 +1,12 @@
 //! Physics validation: Rutherford scattering, Coulomb explosion of a cold sphere, energy
 //! conservation of leapfrog with softening.
 
-use backend::testing::gpu_or_skip;
-use backend::{Backend, Simulation};
-use pp_coulomb::analytic::{explosion_omega, explosion_time, rutherford_angle};
-use pp_coulomb::scenes::{Expansion, cold_sphere};
-use pp_coulomb::{
+#[cfg(feature = "gpu")]
+use simkit_backend::testing::gpu_or_skip;
+use simkit_backend::{Backend, Simulation};
+use simkit_pp_coulomb::analytic::{explosion_omega, explosion_time, rutherford_angle};
+use simkit_pp_coulomb::scenes::{Expansion, cold_sphere};
+use simkit_pp_coulomb::{
     Config, ForceLaw, Integrator, Particles, PpCoulomb, Precision, Region, Species, Velocities,
 };
 
@@ -115,6 +116,7 @@ fn coulomb_explosion_n20000_cpu() {
     check_explosion(explosion_times(20_000, Precision::F64, Backend::Cpu));
 }
 
+#[cfg(feature = "gpu")]
 #[test]
 fn coulomb_explosion_gpu() {
     let Some(ctx) = gpu_or_skip("coulomb_explosion_gpu") else {

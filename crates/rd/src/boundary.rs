@@ -9,7 +9,7 @@
 //! - [`Boundary::Periodic`]: ghost = the interior cell on the opposite edge;
 //! - [`Boundary::Dirichlet`]: ghost = `2 g - interior`, so the face value is `g`.
 
-use backend::{Error, Result};
+use simkit_backend::{Error, Result};
 
 use crate::real::Real;
 
@@ -25,6 +25,8 @@ pub enum Boundary {
 }
 
 impl Boundary {
+    /// The boundary kind as the WGSL kernels encode it.
+    #[cfg(feature = "gpu")]
     pub(crate) fn code(&self) -> u32 {
         match self {
             Boundary::NoFlux => 0,

@@ -1,7 +1,7 @@
 //! CPU backend: cache-blocked tiles of the padded grid, processed in parallel with rayon.
 
-use backend::{Error, Result, Simulation};
 use rayon::prelude::*;
+use simkit_backend::{Error, Result, Simulation};
 
 use crate::boundary::fill_ghosts;
 use crate::grid::{Grid, pad};
@@ -294,7 +294,7 @@ impl<T: Real, M: Model> Simulation for CpuRd<T, M> {
             check_dt_with(self.model.name(), d, self.grid.h(), &self.stepping)?;
         }
         // The whole loop on a pool thread: no hand-over to the pool per sweep.
-        backend::pool::on_pool(|| self.advance(steps));
+        simkit_backend::pool::on_pool(|| self.advance(steps));
         if steps > 0 {
             self.snapshot_fresh = false;
         }

@@ -6,8 +6,8 @@
 
 use std::fmt::Write as _;
 
-use backend::gpu::DISPATCH_WGSL;
-use backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Result, Simulation};
+use simkit_backend::gpu::DISPATCH_WGSL;
+use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Result, Simulation};
 
 use crate::boundary::{Boundary, fill_ghosts};
 use crate::grid::{Grid, pad};
@@ -15,11 +15,11 @@ use crate::model::Model;
 use crate::real::Real;
 use crate::stepper::{Integrator, Stepping, check_dt, check_dt_with, check_model};
 
-const COMMON_WGSL: &str = include_str!("../../../shaders/rd/stencil_common.wgsl");
-const TILED_WGSL: &str = include_str!("../../../shaders/rd/stencil_tiled.wgsl");
-const GLOBAL_WGSL: &str = include_str!("../../../shaders/rd/stencil_global.wgsl");
-const GHOSTS_WGSL: &str = include_str!("../../../shaders/rd/ghosts.wgsl");
-const DIFFUSIVITY_WGSL: &str = include_str!("../../../shaders/rd/diffusivity.wgsl");
+const COMMON_WGSL: &str = simkit_backend::wgsl!("stencil_common.wgsl");
+const TILED_WGSL: &str = simkit_backend::wgsl!("stencil_tiled.wgsl");
+const GLOBAL_WGSL: &str = simkit_backend::wgsl!("stencil_global.wgsl");
+const GHOSTS_WGSL: &str = simkit_backend::wgsl!("ghosts.wgsl");
+const DIFFUSIVITY_WGSL: &str = simkit_backend::wgsl!("diffusivity.wgsl");
 /// Index of the first model parameter in the params buffer (see `stencil_common.wgsl`).
 const MODEL_PARAMS_AT: usize = 22;
 /// Species the params layout has room for (Dirichlet values per edge).
@@ -459,7 +459,7 @@ impl<T: Real, M: Model> GpuRd<T, M> {
             self.grid.ny().div_ceil(ty as usize) as u32,
         );
         let bind = if self.cur_is_a { &r.bind_a } else { &r.bind_b };
-        backend::gpu::run_pass(&self.ctx, "rd max diffusivity", |pass| {
+        simkit_backend::gpu::run_pass(&self.ctx, "rd max diffusivity", |pass| {
             r.kernel.dispatch_grid(pass, bind, gx, gy);
             Ok(())
         })?;

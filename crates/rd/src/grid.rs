@@ -1,7 +1,7 @@
 //! The grid: species fields on a square 2D lattice with spacing `h` and edge conditions.
 
-use backend::{Error, Result, require_positive};
 use rayon::prelude::*;
+use simkit_backend::{Error, Result, require_positive};
 
 use crate::boundary::Boundaries;
 use crate::real::Real;
@@ -9,7 +9,7 @@ use crate::real::Real;
 /// One or more species fields on an `nx x ny` grid of square cells of side `h`.
 ///
 /// Field `s` is stored row-major: cell `(i, j)` is `fields[s][j * nx + i]`, `i` along x.
-/// This is also the host-side snapshot ([`backend::Simulation::State`]) of every rd backend.
+/// This is also the host-side snapshot ([`simkit_backend::Simulation::State`]) of every rd backend.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Grid<T: Real> {
     nx: usize,

@@ -7,16 +7,16 @@
 //!   model with a random coefficient `d(x, y)`, in conservative flux form).
 //! - [`Stepping`]: `dt`, [`Integrator`] (Euler or Heun) and the stability [`Guard`]: a `dt`
 //!   above [`stable_dt`] (`h^2 / (4 D_max)` from the current fields) is refused with
-//!   [`backend::Error::Unstable`] unless overridden.
+//!   [`simkit_backend::Error::Unstable`] unless overridden.
 //! - Backends: [`CpuRd`] (cache-blocked tiles in parallel, vectorised with run-time CPU
 //!   feature dispatch, several Euler steps fused per sweep over the grid) and [`GpuRd`] (WGSL; tile + halo in workgroup memory, or a plain
 //!   global-memory kernel; many steps per submission), both behind
-//!   [`backend::Simulation`]; [`Rd`] picks one from a [`backend::Backend`] value.
+//!   [`simkit_backend::Simulation`]; [`Rd`] picks one from a [`simkit_backend::Backend`] value.
 //!
 //! ```
-//! use backend::{Backend, Simulation};
-//! use rd::{Boundaries, Diffusion, Grid, Rd, Stepping};
-//! # fn main() -> backend::Result<()> {
+//! use simkit_backend::{Backend, Simulation};
+//! use simkit_rd::{Boundaries, Diffusion, Grid, Rd, Stepping};
+//! # fn main() -> simkit_backend::Result<()> {
 //! let (nx, ny, h) = (32, 32, 1.0);
 //! let mut u = vec![0.0f64; nx * ny];
 //! u[16 * nx + 16] = 1.0;
@@ -33,6 +33,7 @@
 
 mod boundary;
 mod cpu;
+#[cfg(feature = "gpu")]
 mod gpu;
 mod grid;
 mod model;
@@ -44,6 +45,7 @@ mod sweep;
 
 pub use boundary::{Boundaries, Boundary};
 pub use cpu::{CpuRd, DEFAULT_STEPS_PER_SWEEP};
+#[cfg(feature = "gpu")]
 pub use gpu::{GpuKernel, GpuOptions, GpuRd};
 pub use grid::Grid;
 pub use model::{Model, RowIn, Stencil};
@@ -51,7 +53,7 @@ pub use models::{Colony, Diffusion, GrayScott};
 pub use real::Real;
 pub use stepper::{Guard, Integrator, Stepping, stable_dt};
 
-use backend::{Backend, Result, Simulation};
+use simkit_backend::{Backend, Result, Simulation};
 
 /// A simulation on either backend, chosen at run time.
 // One simulation object per run: the few hundred bytes of difference do not matter.
@@ -61,16 +63,22 @@ pub enum Rd<T: Real, M: Model> {
     /// CPU backend.
     Cpu(CpuRd<T, M>),
     /// GPU backend.
+    #[cfg(feature = "gpu")]
     Gpu(GpuRd<T, M>),
 }
 
 impl<T: Real, M: Model> Rd<T, M> {
     /// Builds the simulation on `backend` (GPU with default [`GpuOptions`]).
     pub fn new(backend: Backend<'_>, grid: Grid<T>, model: M, stepping: Stepping) -> Result<Self> {
-        Self::with_options(backend, grid, model, stepping, GpuOptions::default())
+        match backend {
+            Backend::Cpu => Ok(Rd::Cpu(CpuRd::new(grid, model, stepping)?)),
+            #[cfg(feature = "gpu")]
+            gpu => Self::with_options(gpu, grid, model, stepping, GpuOptions::default()),
+        }
     }
 
     /// Builds the simulation on `backend`; `options` apply to the GPU backend only.
+    #[cfg(feature = "gpu")]
     pub fn with_options(
         backend: Backend<'_>,
         grid: Grid<T>,
@@ -80,6 +88,7 @@ impl<T: Real, M: Model> Rd<T, M> {
     ) -> Result<Self> {
         Ok(match backend {
             Backend::Cpu => Rd::Cpu(CpuRd::new(grid, model, stepping)?),
+            #[cfg(feature = "gpu")]
             Backend::Gpu(ctx) => Rd::Gpu(GpuRd::new(ctx, grid, model, stepping, options)?),
         })
     }
@@ -88,6 +97,7 @@ impl<T: Real, M: Model> Rd<T, M> {
     pub fn set_stepping(&mut self, stepping: Stepping) -> Result<()> {
         match self {
             Rd::Cpu(s) => s.set_stepping(stepping),
+            #[cfg(feature = "gpu")]
             Rd::Gpu(s) => s.set_stepping(stepping),
         }
     }
@@ -96,6 +106,7 @@ impl<T: Real, M: Model> Rd<T, M> {
     pub fn stepping(&self) -> Stepping {
         match self {
             Rd::Cpu(s) => s.stepping(),
+            #[cfg(feature = "gpu")]
             Rd::Gpu(s) => s.stepping(),
         }
     }
@@ -104,6 +115,7 @@ impl<T: Real, M: Model> Rd<T, M> {
     pub fn time(&self) -> f64 {
         match self {
             Rd::Cpu(s) => s.time(),
+            #[cfg(feature = "gpu")]
             Rd::Gpu(s) => s.time(),
         }
     }
@@ -114,24 +126,28 @@ impl<T: Real, M: Model> Simulation for Rd<T, M> {
     fn step(&mut self, steps: u32) -> Result<()> {
         match self {
             Rd::Cpu(s) => s.step(steps),
+            #[cfg(feature = "gpu")]
             Rd::Gpu(s) => s.step(steps),
         }
     }
     fn state(&mut self) -> Result<Grid<T>> {
         match self {
             Rd::Cpu(s) => s.state(),
+            #[cfg(feature = "gpu")]
             Rd::Gpu(s) => s.state(),
         }
     }
     fn steps_done(&self) -> u64 {
         match self {
             Rd::Cpu(s) => s.steps_done(),
+            #[cfg(feature = "gpu")]
             Rd::Gpu(s) => s.steps_done(),
         }
     }
     fn backend_name(&self) -> String {
         match self {
             Rd::Cpu(s) => s.backend_name(),
+            #[cfg(feature = "gpu")]
             Rd::Gpu(s) => s.backend_name(),
         }
     }

@@ -2,7 +2,7 @@
 
 use std::fmt::Debug;
 
-use backend::Result;
+use simkit_backend::Result;
 
 use crate::grid::Grid;
 use crate::real::Real;

@@ -1,7 +1,7 @@
 //! Ready-made scenes and observables: the source's colony scene, a seeded Gray–Scott square,
 //! the colony gap width and a spot counter.
 
-use backend::{Result, rng::rng_uniform};
+use simkit_backend::{Result, rng::rng_uniform};
 
 use crate::boundary::Boundaries;
 use crate::grid::Grid;

@@ -1,6 +1,6 @@
 //! Time integration settings and the stability guard.
 
-use backend::{Error, Result, require_positive};
+use simkit_backend::{Error, Result, require_positive};
 
 use crate::grid::Grid;
 use crate::model::Model;

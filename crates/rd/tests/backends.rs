@@ -1,9 +1,11 @@
 //! CPU and GPU backends against each other, and the GPU-specific options.
+#![cfg(feature = "gpu")]
 
-use backend::testing::gpu_or_skip;
-use backend::{Error, Simulation};
-use rd::scenes::colony_scene;
-use rd::{
+#[cfg(feature = "gpu")]
+use simkit_backend::testing::gpu_or_skip;
+use simkit_backend::{Error, Simulation};
+use simkit_rd::scenes::colony_scene;
+use simkit_rd::{
     Boundaries, Boundary, CpuRd, Diffusion, GpuKernel, GpuOptions, GpuRd, Grid, Integrator,
     Stepping,
 };
@@ -22,6 +24,7 @@ fn max_rel(a: &Grid<f32>, b: &Grid<f32>) -> f64 {
 /// The colony scene on 72 x 60 (not a multiple of the tile), 1000 steps, f32: the CPU
 /// and every GPU kernel variant agree within 1e-5 relative, with each other and with the f64
 /// CPU reference.
+#[cfg(feature = "gpu")]
 #[test]
 fn cpu_and_gpu_agree_after_1000_steps() {
     let Some(ctx) = gpu_or_skip("cpu_and_gpu_agree_after_1000_steps") else {
@@ -76,6 +79,7 @@ fn cpu_and_gpu_agree_after_1000_steps() {
 }
 
 /// f64 on the GPU (lavapipe has SHADER_F64) matches the f64 CPU reference closely.
+#[cfg(feature = "gpu")]
 #[test]
 fn gpu_f64_matches_cpu_f64() {
     let Some(ctx) = gpu_or_skip("gpu_f64_matches_cpu_f64") else {
@@ -102,6 +106,7 @@ fn gpu_f64_matches_cpu_f64() {
 }
 
 /// Tiles over the device's workgroup limits are refused with a clear error.
+#[cfg(feature = "gpu")]
 #[test]
 fn gpu_rejects_bad_tiles() {
     let Some(ctx) = gpu_or_skip("gpu_rejects_bad_tiles") else {
@@ -129,6 +134,7 @@ fn gpu_rejects_bad_tiles() {
 /// species of different diffusivities, Euler and Heun: the GPU ghost kernel and the CPU ghost
 /// fill agree cell by cell (f32, 500 steps), and the wrap-around actually carries mass across
 /// the periodic edges.
+#[cfg(feature = "gpu")]
 #[test]
 fn mixed_boundaries_agree_on_both_backends() {
     let Some(ctx) = gpu_or_skip("mixed_boundaries_agree_on_both_backends") else {

@@ -1,24 +1,22 @@
 //! Gray–Scott at the spots parameter set grows a pattern of separate spots from a seeded
 //! square, on both backends.
 
-use backend::testing::gpu_or_skip;
-use backend::{Backend, Simulation};
-use rd::scenes::{count_spots, gray_scott_square, variance};
-use rd::{GpuKernel, GpuOptions, GrayScott, Rd, Stepping};
+#[cfg(feature = "gpu")]
+use simkit_backend::testing::gpu_or_skip;
+use simkit_backend::{Backend, Simulation};
+use simkit_rd::scenes::{count_spots, gray_scott_square, variance};
+#[cfg(feature = "gpu")]
+use simkit_rd::{GpuKernel, GpuOptions};
+use simkit_rd::{GrayScott, Grid, Rd, Stepping};
 
 const N: usize = 128;
 const STEPS: u32 = 6000;
 
-fn run(backend: Backend<'_>, options: GpuOptions) -> (f64, usize) {
-    let grid = gray_scott_square::<f32>(N, GrayScott::PEARSON_H, 24, 4).unwrap();
-    let mut sim = Rd::with_options(
-        backend,
-        grid,
-        GrayScott::spots(),
-        Stepping::euler(1.0),
-        options,
-    )
-    .unwrap();
+fn square() -> Grid<f32> {
+    gray_scott_square::<f32>(N, GrayScott::PEARSON_H, 24, 4).unwrap()
+}
+
+fn run(mut sim: Rd<f32, GrayScott>) -> (f64, usize) {
     sim.step(STEPS).unwrap();
     let g = sim.state().unwrap();
     let (var, spots) = (variance(&g, 1), count_spots(&g, 1, 0.2));
@@ -38,20 +36,28 @@ fn check((var, spots): (f64, usize)) {
 
 #[test]
 fn spots_on_cpu() {
-    check(run(Backend::Cpu, GpuOptions::default()));
+    let sim = Rd::new(
+        Backend::Cpu,
+        square(),
+        GrayScott::spots(),
+        Stepping::euler(1.0),
+    );
+    check(run(sim.unwrap()));
 }
 
+#[cfg(feature = "gpu")]
 #[test]
 fn spots_on_gpu() {
     let Some(ctx) = gpu_or_skip("spots_on_gpu") else {
         return;
     };
-    check(run(Backend::Gpu(&ctx), GpuOptions::default()));
-    check(run(
-        Backend::Gpu(&ctx),
-        GpuOptions {
-            kernel: GpuKernel::Global,
+    for kernel in [GpuKernel::Tiled, GpuKernel::Global] {
+        let options = GpuOptions {
+            kernel,
             ..GpuOptions::default()
-        },
-    ));
+        };
+        let (grid, model, stepping) = (square(), GrayScott::spots(), Stepping::euler(1.0));
+        let sim = Rd::with_options(Backend::Gpu(&ctx), grid, model, stepping, options);
+        check(run(sim.unwrap()));
+    }
 }

@@ -1,10 +1,10 @@
 //! Temporal blocking (several Euler steps fused into one sweep on the CPU) gives bit-identical
 //! fields to one pass per step, for every fused depth, band layout and edge condition.
 
-use backend::Simulation;
-use backend::rng::rng_uniform;
-use rd::scenes::colony_scene;
-use rd::{Boundaries, Boundary, CpuRd, Diffusion, GrayScott, Grid, Model, Real, Stepping};
+use simkit_backend::Simulation;
+use simkit_backend::rng::rng_uniform;
+use simkit_rd::scenes::colony_scene;
+use simkit_rd::{Boundaries, Boundary, CpuRd, Diffusion, GrayScott, Grid, Model, Real, Stepping};
 
 fn run<T: Real, M: Model>(grid: &Grid<T>, model: &M, dt: f64, k: u32, steps: u32) -> Grid<T> {
     let mut sim = CpuRd::new(grid.clone(), model.clone(), Stepping::euler(dt)).unwrap();
@@ -86,7 +86,7 @@ fn periodic_y_and_bad_depths() {
     let model = Diffusion::new(&[1.0]).unwrap();
     same_for_every_depth(&grid, &model, 0.2, 9);
     let mut sim = CpuRd::new(grid, model, Stepping::euler(0.2)).unwrap();
-    assert_eq!(sim.steps_per_sweep(), rd::DEFAULT_STEPS_PER_SWEEP);
+    assert_eq!(sim.steps_per_sweep(), simkit_rd::DEFAULT_STEPS_PER_SWEEP);
     assert!(sim.set_steps_per_sweep(0).is_err());
     assert!(sim.set_steps_per_sweep(17).is_err());
 }

@@ -1,11 +1,15 @@
 //! Physics validation: heat kernel convergence orders, conservation, stability guard,
 //! Dirichlet profile, colony reaction bookkeeping.
 
-use backend::rng::rng_uniform;
-use backend::testing::gpu_or_skip;
-use backend::{Backend, Error, Simulation};
-use rd::scenes::colony_scene;
-use rd::{
+#[cfg(feature = "gpu")]
+use simkit_backend::Backend;
+use simkit_backend::rng::rng_uniform;
+use simkit_backend::testing::backends;
+#[cfg(feature = "gpu")]
+use simkit_backend::testing::gpu_or_skip;
+use simkit_backend::{Error, Simulation};
+use simkit_rd::scenes::colony_scene;
+use simkit_rd::{
     Boundaries, Boundary, Colony, CpuRd, Diffusion, Grid, Integrator, Rd, Stepping, stable_dt,
 };
 
@@ -126,7 +130,7 @@ fn no_flux_conserves_mass() {
         assert!(rel < 1e-12, "species {s}: {rel:e}");
     }
     // ... and the field has actually diffused towards uniform.
-    assert!(rd::scenes::variance(&g, 0) < 1e-6);
+    assert!(simkit_rd::scenes::variance(&g, 0) < 1e-6);
 }
 
 /// The colony model: total b changes each step by exactly dt * h^2 * sum(reaction) (the flux
@@ -259,6 +263,7 @@ fn colony_step_rechecks_current_fields() {
 
 /// The GPU re-checks from the fields on the device (reduction in f32): same refusal point as
 /// the CPU for the same scene, with a bound within f32 rounding of the CPU's.
+#[cfg(feature = "gpu")]
 #[test]
 fn gpu_colony_step_rechecks_device_fields() {
     let Some(ctx) = gpu_or_skip("gpu_colony_step_rechecks_device_fields") else {
@@ -302,12 +307,7 @@ fn dirichlet_relaxes_to_linear_profile() {
     };
     let grid = Grid::new(nx, ny, 1.0, bc, vec![vec![0.3f32; nx * ny]]).unwrap();
     let model = Diffusion::new(&[1.0]).unwrap();
-    let ctx = gpu_or_skip("dirichlet_relaxes_to_linear_profile");
-    let mut backends = vec![Backend::Cpu];
-    if let Some(c) = ctx.as_ref() {
-        backends.push(Backend::Gpu(c));
-    }
-    for backend in backends {
+    for backend in backends("dirichlet_relaxes_to_linear_profile") {
         let mut sim = Rd::new(backend, grid.clone(), model.clone(), Stepping::euler(0.24)).unwrap();
         sim.step(3000).unwrap();
         let g = sim.state().unwrap();
@@ -329,7 +329,7 @@ fn dirichlet_relaxes_to_linear_profile() {
 #[test]
 fn bad_input_is_refused() {
     let bc = Boundaries::no_flux;
-    let inv = |r: backend::Result<Grid<f64>>| match r {
+    let inv = |r: simkit_backend::Result<Grid<f64>>| match r {
         Err(Error::InvalidParameter { name, .. }) => name,
         other => panic!("expected InvalidParameter, got {other:?}"),
     };
@@ -362,7 +362,7 @@ fn bad_input_is_refused() {
     assert!(Diffusion::new(&[-1.0]).is_err());
     assert!(Diffusion::new(&[f64::NAN]).is_err());
     assert!(Diffusion::new(&[]).is_err());
-    assert!(rd::GrayScott::new(1.0, -0.5, 0.03, 0.06).is_err());
+    assert!(simkit_rd::GrayScott::new(1.0, -0.5, 0.03, 0.06).is_err());
     assert!(Colony::new(-0.5, 2, 2, vec![1.0; 4]).is_err());
     assert!(Colony::new(0.5, 2, 2, vec![1.0; 3]).is_err());
     assert!(Colony::new(0.5, 2, 2, vec![1.0, -1.0, 1.0, 1.0]).is_err());

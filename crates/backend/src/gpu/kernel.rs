@@ -5,7 +5,7 @@ use crate::{Error, Result};
 
 /// WGSL helper shared by kernels dispatched with [`Kernel::dispatch_items`]:
 /// `linear_workgroup(wid, nwg)` turns the 2D workgroup grid back into a linear index.
-pub const DISPATCH_WGSL: &str = include_str!("../../../../shaders/common/dispatch.wgsl");
+pub const DISPATCH_WGSL: &str = crate::wgsl!("dispatch.wgsl");
 
 /// Everything needed to build a [`Kernel`].
 #[derive(Clone, Debug)]

@@ -14,7 +14,7 @@ use crate::Result;
 /// Values scanned by one workgroup.
 pub const SCAN_BLOCK: u32 = 1024;
 
-const SCAN_WGSL: &str = include_str!("../../../../shaders/common/scan.wgsl");
+const SCAN_WGSL: &str = crate::wgsl!("scan.wgsl");
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]

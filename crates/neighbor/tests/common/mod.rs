@@ -4,10 +4,11 @@
 
 use std::collections::BTreeMap;
 
-use neighbor::{
-    BruteForce, CellGrid, GpuCellList, GpuNeighborList, GpuNeighborSearch, Kernel, LinkedCells,
-    ListKind, NeighborLists, NeighborSearch, SortedCells, VerletList,
+use simkit_neighbor::{
+    BruteForce, CellGrid, Kernel, LinkedCells, ListKind, NeighborSearch, SortedCells, VerletList,
 };
+#[cfg(feature = "gpu")]
+use simkit_neighbor::{GpuCellList, GpuNeighborList, GpuNeighborSearch, NeighborLists};
 
 /// Unordered pair -> (separation oriented from the smaller index, r2).
 pub type PairMap<const D: usize> = BTreeMap<(usize, usize), ([f64; D], f64)>;
@@ -119,10 +120,11 @@ pub fn check_cpu<const D: usize>(grid: &CellGrid<D>, p: &[[f64; D]]) -> PairMap<
     reference
 }
 
+#[cfg(feature = "gpu")]
 /// The GPU finds the same pairs as the CPU reference, except pairs whose squared distance
 /// is within a relative `1e-4` of the cutoff squared, which `f32` cannot decide.
 pub fn check_gpu<const D: usize>(
-    ctx: &backend::GpuContext,
+    ctx: &simkit_backend::GpuContext,
     grid: &CellGrid<D>,
     p: &[[f64; D]],
     reference: &PairMap<D>,

@@ -9,7 +9,7 @@ use kernel::{LANES, Sources};
 
 use std::collections::HashMap;
 
-use backend::Result;
+use simkit_backend::Result;
 
 use crate::config::{Config, ForceLaw, Integrator, Precision, coincident_error};
 use crate::particles::Particles;
@@ -152,7 +152,7 @@ impl<T: Real> Engine for CpuEngine<T> {
     fn step(&mut self, steps: u32) -> Result<()> {
         let half = self.dt * T::from_f64(0.5);
         // The whole loop on a pool thread: no hand-over to the pool per pass.
-        backend::pool::on_pool(|| {
+        simkit_backend::pool::on_pool(|| {
             for _ in 0..steps {
                 match self.integrator {
                     Integrator::SymplecticEuler => {

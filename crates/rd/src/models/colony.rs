@@ -1,8 +1,8 @@
 //! The bacterial colony model (after Kawasaki et al.) in conservative flux form.
 
-use backend::{Error, Result, require_non_negative};
 use multiversion::multiversion;
 use rayon::prelude::*;
+use simkit_backend::{Error, Result, require_non_negative};
 
 use crate::grid::Grid;
 use crate::model::{Model, RowIn, Stencil};
@@ -47,7 +47,7 @@ impl Colony {
     pub fn random_d(nx: usize, ny: usize, mean: f64, amplitude: f64, seed: u32) -> Vec<f64> {
         (0..nx * ny)
             .map(|k| {
-                let u = f64::from(backend::rng::rng_uniform(seed, 0, k as u32));
+                let u = f64::from(simkit_backend::rng::rng_uniform(seed, 0, k as u32));
                 mean * (1.0 + amplitude * (2.0 * u - 1.0))
             })
             .collect()
@@ -248,7 +248,7 @@ impl Model for Colony {
         );
     }
     fn wgsl(&self) -> &'static str {
-        include_str!("../../../../shaders/rd/model_colony.wgsl")
+        simkit_backend::wgsl!("model_colony.wgsl")
     }
     fn gpu_params(&self) -> Vec<f64> {
         vec![self.gamma]

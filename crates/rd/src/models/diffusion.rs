@@ -1,7 +1,7 @@
 //! Linear diffusion with a constant diffusivity per species.
 
-use backend::{Error, Result};
 use multiversion::multiversion;
+use simkit_backend::{Error, Result};
 
 use crate::grid::Grid;
 use crate::model::{Model, RowIn, Stencil};
@@ -104,7 +104,7 @@ impl Model for Diffusion {
         }
     }
     fn wgsl(&self) -> &'static str {
-        include_str!("../../../../shaders/rd/model_diffusion.wgsl")
+        simkit_backend::wgsl!("model_diffusion.wgsl")
     }
     fn gpu_params(&self) -> Vec<f64> {
         let mut p = self.diffusivity.clone();

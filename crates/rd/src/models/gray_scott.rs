@@ -1,7 +1,7 @@
 //! The Gray–Scott model (Pearson 1993).
 
-use backend::{Error, Result, require_finite};
 use multiversion::multiversion;
+use simkit_backend::{Error, Result, require_finite};
 
 use crate::grid::Grid;
 use crate::model::{Model, RowIn, Stencil};
@@ -168,7 +168,7 @@ impl Model for GrayScott {
         );
     }
     fn wgsl(&self) -> &'static str {
-        include_str!("../../../../shaders/rd/model_gray_scott.wgsl")
+        simkit_backend::wgsl!("model_gray_scott.wgsl")
     }
     fn gpu_params(&self) -> Vec<f64> {
         vec![self.du, self.dv, self.feed, self.feed + self.kill]

@@ -1,0 +1,123 @@
+//! Law-level and layout checks of WGSL against Rust: run one WGSL function on the GPU for a
+//! sample of inputs ([`eval_wgsl`]), and read a WGSL struct's layout with naga
+//! ([`wgsl_struct`], [`assert_mirrors`]) so that a `#[repr(C)]` mirror cannot drift silently.
+
+use bytemuck::Pod;
+
+use crate::gpu::{GpuBuffer, Kernel, KernelDesc, run_pass};
+use crate::{Error, GpuContext, Result};
+
+/// Size and member offsets of a WGSL struct, as the WGSL rules lay it out.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct WgslStruct {
+    /// Size in bytes (the struct's span, padding included).
+    pub size: u32,
+    /// `(member name, byte offset)` in declaration order.
+    pub members: Vec<(String, u32)>,
+}
+
+/// Reads the layout of struct `name` from WGSL `source` (the pieces a kernel concatenates).
+pub fn wgsl_struct(source: &str, name: &str) -> Result<WgslStruct> {
+    let module = naga::front::wgsl::parse_str(source).map_err(|e| {
+        Error::Gpu(format!(
+            "parsing WGSL for struct {name}: {}",
+            e.emit_to_string(source)
+        ))
+    })?;
+    for (_, ty) in module.types.iter() {
+        if ty.name.as_deref() != Some(name) {
+            continue;
+        }
+        if let naga::TypeInner::Struct { members, span } = &ty.inner {
+            return Ok(WgslStruct {
+                size: *span,
+                members: members
+                    .iter()
+                    .map(|m| (m.name.clone().unwrap_or_default(), m.offset))
+                    .collect(),
+            });
+        }
+    }
+    Err(Error::invalid(
+        "WGSL struct",
+        name,
+        "not declared in the given source",
+    ))
+}
+
+/// One field of a Rust mirror: its name in the WGSL struct and its Rust byte offset
+/// (`std::mem::offset_of!`).
+pub type FieldOffset = (&'static str, usize);
+
+/// Panics with a field-by-field report unless the Rust type `T` (size `size_of::<T>()`) and
+/// the listed field offsets match WGSL struct `name` exactly: same size, same members in
+/// the same order at the same offsets.
+///
+/// ```ignore
+/// assert_mirrors::<Params>(PARAMS_WGSL, "Params", &[("nx", offset_of!(Params, nx)), ...]);
+/// ```
+pub fn assert_mirrors<T: Pod>(source: &str, name: &str, fields: &[FieldOffset]) {
+    let wgsl = wgsl_struct(source, name).unwrap_or_else(|e| panic!("{e}"));
+    let rust: Vec<(String, u32)> = fields
+        .iter()
+        .map(|&(n, o)| (n.to_string(), o as u32))
+        .collect();
+    let size = std::mem::size_of::<T>() as u32;
+    assert!(
+        wgsl.members == rust && wgsl.size == size,
+        "Rust mirror {} of WGSL struct {name} differs:\n  WGSL: size {} members {:?}\n  Rust: size {size} members {rust:?}",
+        std::any::type_name::<T>(),
+        wgsl.size,
+        wgsl.members,
+    );
+}
+
+/// Evaluates a WGSL expression on the GPU for every input and returns the results in order.
+///
+/// `sources` are the WGSL pieces that define the function under test (and the types it
+/// uses); `input_type` and `output_type` name WGSL types whose layouts match `I` and `O`
+/// (a scalar, a vector or a struct declared in `sources`); `expression` computes the output
+/// from the input `x`, e.g. `"normal_force(x.k, x.gamma, x.delta, x.vn)"`.
+pub fn eval_wgsl<I: Pod, O: Pod>(
+    ctx: &GpuContext,
+    sources: &[&str],
+    input_type: &str,
+    output_type: &str,
+    expression: &str,
+    inputs: &[I],
+) -> Result<Vec<O>> {
+    if inputs.is_empty() {
+        return Ok(Vec::new());
+    }
+    let harness = format!(
+        "@group(0) @binding(0) var<storage, read> law_in: array<{input_type}>;\n\
+         @group(0) @binding(1) var<storage, read_write> law_out: array<{output_type}>;\n\
+         @compute @workgroup_size(64)\n\
+         fn law_main(@builtin(global_invocation_id) gid: vec3<u32>, \
+                     @builtin(num_workgroups) nwg: vec3<u32>) {{\n\
+             let i = gid.x + gid.y * nwg.x * 64u;\n\
+             if i >= arrayLength(&law_in) {{ return; }}\n\
+             let x = law_in[i];\n\
+             law_out[i] = {expression};\n\
+         }}\n"
+    );
+    let mut all: Vec<&str> = sources.to_vec();
+    all.push(&harness);
+    let kernel = Kernel::new(
+        ctx,
+        &KernelDesc {
+            label: "law under test",
+            sources: &all,
+            entry: "law_main",
+            workgroup_size: 64,
+            constants: &[],
+        },
+    )?;
+    let input = GpuBuffer::from_slice(ctx, "law inputs", inputs)?;
+    let output = GpuBuffer::<O>::zeroed(ctx, "law outputs", inputs.len())?;
+    let bind = kernel.bind(ctx, &[input.binding(), output.binding()])?;
+    run_pass(ctx, "law under test", |pass| {
+        kernel.dispatch_items(ctx, pass, &bind, inputs.len() as u64)
+    })?;
+    output.download(ctx)
+}
