@@ -1,4 +1,4 @@
-//! Granular DEM throughput in particle-steps per second (issue 4):
+//! Granular DEM throughput in particle-steps per second:
 //!
 //! - `bed2d_2048`: the source's 2D vibrated bed (2048 discs, 64 wide, Gamma = 3 at 20 Hz,
 //!   friction, vibrating floor and lid), dt = t_c / 30, 200 steps per iteration, starting

@@ -3,7 +3,7 @@
 //! k-d tree (its fastest path: per-point `within().unsorted().visit()` queries issued in the
 //! tree's own order, rayon-parallel).
 //!
-//! Workload (issue 3): N uniform random points at number density 1 in a cube (square in
+//! Workload: N uniform random points at number density 1 in a cube (square in
 //! 2D), closed box, cutoff 2.5 (about 65 neighbours per point in 3D, 20 in 2D),
 //! N = 1e4, 1e5, 1e6. Run: `cargo bench --bench neighbor`. Before the criterion groups it
 //! prints a side-by-side summary (sorted cells and kiddo timed alternately, medians of 7)
@@ -18,7 +18,7 @@ use rand::{RngExt, SeedableRng};
 use rayon::prelude::*;
 use simkit::backend::{GpuBuffer, GpuContext};
 use simkit::neighbor::{
-    BruteForce, CellGrid, GpuCellList, GpuNeighborList, Kernel, LinkedCells, ListKind,
+    BruteForce, CellGrid, GpuCellList, GpuNeighborList, TraversalKernel, LinkedCells, ListKind,
     NeighborSearch, SortedCells, VerletList, positions_to_f32,
 };
 
@@ -87,8 +87,8 @@ fn cpu_methods(c: &mut Criterion) {
             b.iter(|| black_box(sorted_par(&mut cells, &p)))
         });
         // The same with each other kernel this CPU runs (docs/neighbor.md compares them).
-        for kernel in [Kernel::PackedAvx2, Kernel::Portable] {
-            if kernel.is_supported() && kernel != Kernel::best() {
+        for kernel in [TraversalKernel::PackedAvx2, TraversalKernel::Portable] {
+            if kernel.is_supported() && kernel != TraversalKernel::best() {
                 let mut forced = SortedCells::new(&grid).with_kernel(kernel).expect("kernel");
                 let id = format!("sorted_cells_rayon_{kernel:?}");
                 g.bench_with_input(BenchmarkId::new(id, n), &n, |b, _| {

@@ -1,4 +1,4 @@
-//! Times one long run of the LAMMPS comparison box (issue 4): the 3D granular box of
+//! Times one long run of the LAMMPS comparison box: the 3D granular box of
 //! `benches/peers/dem_gran3d.lmp` (N = 20,000) on the CPU backend (f64), one `step(n)`
 //! call from the initial state, construction not timed. The criterion bench times the
 //! deck's 2000 steps; this covers longer windows, where the pile has settled and every

@@ -1,4 +1,4 @@
-//! DEM trade-off sweep (issue 4): time step `dt = t_c / div` for div in {5, 10, 20, 30, 50,
+//! DEM trade-off sweep: time step `dt = t_c / div` for div in {5, 10, 20, 30, 50,
 //! 100}, velocity vs position Verlet, f64 vs f32 (CPU backend), measuring
 //!
 //! - the restitution error of a head-on binary collision (requested e = 0.5, mass ratio 3,

@@ -12,7 +12,23 @@
 //! | [`backend`] | GPU context, buffers, kernels, scan, shared RNG, common trait and error |
 //! | [`output`] | PNG heat maps and plots, GIF, VTK, extended XYZ, CSV (atomic writes) |
 //!
-//! This facade re-exports the crates and owns the workspace's `examples/` and `benches/`.
+//! This facade re-exports the crates (each is also a package of its own: `simkit-dem`,
+//! `simkit-rd`, ...) and owns the workspace's `examples/` and `benches/`. The GPU backends
+//! are the `gpu` feature, on by default; `default-features = false` builds the CPU backends
+//! without compiling wgpu.
+//!
+//! ```
+//! use simkit::prelude::*;
+//! use simkit::rd::{Boundaries, Diffusion, Grid, Stepping};
+//! # fn main() -> Result<()> {
+//! let grid = Grid::new(16, 16, 1.0, Boundaries::no_flux(), vec![vec![1.0f64; 256]])?;
+//! let model = Diffusion::new(&[1.0])?;
+//! let mut sim = Rd::new(Backend::Cpu, grid, model, Stepping::euler(0.2))?;
+//! sim.step(10)?;
+//! assert_eq!(sim.steps_done(), 10);
+//! # Ok(())
+//! # }
+//! ```
 
 pub use simkit_backend as backend;
 pub use simkit_dem as dem;
@@ -23,3 +39,19 @@ pub use simkit_pp_coulomb as pp_coulomb;
 pub use simkit_rd as rd;
 
 pub mod cli;
+
+/// The names almost every program needs: `use simkit::prelude::*;`.
+///
+/// The common trait and backend selector, the error type, the precision choice, and each
+/// crate's simulation type. Everything else is reached through its crate, e.g.
+/// `simkit::dem::Scene`.
+pub mod prelude {
+    #[cfg(feature = "gpu")]
+    pub use crate::backend::GpuContext;
+    pub use crate::backend::{Backend, Error, Precision, Real, Result, Simulation};
+    pub use crate::dem::Dem;
+    pub use crate::lattice_gas::Lattice;
+    pub use crate::neighbor::{CellGrid, NeighborSearch, SortedCells};
+    pub use crate::pp_coulomb::PpCoulomb;
+    pub use crate::rd::Rd;
+}

@@ -1,19 +1,9 @@
 // One FHP step (pull streaming + collision + optional force, inflow, outflow) for 4 sites
-// packed in one u32 word. Include after common/rng.wgsl and common/dispatch.wgsl.
+// packed in one u32 word. Include after the backend's rng.wgsl and dispatch.wgsl and this
+// crate's params.wgsl and random.wgsl.
 // FLAGS (override): bit 0 periodic x, 1 periodic y, 2 inflow, 3 outflow, 4 body force.
 
 override FLAGS: u32 = 0u;
-
-struct Params {
-    width: u32,
-    height: u32,
-    n_sites: u32,
-    n_words: u32,
-    seed: u32,
-    force_seed: u32,
-    threshold: u32,
-    pad: u32,
-}
 
 @group(0) @binding(0) var<storage, read> src: array<u32>;
 @group(0) @binding(1) var<storage, read_write> dst: array<u32>;
@@ -53,8 +43,8 @@ fn fhp_step(@builtin(local_invocation_id) lid: vec3<u32>,
     let word = linear_workgroup(wid, nwg) * WG + lid.x;
     if (word >= P.n_words) { return; }
     let t = counter[0];
-    let key = pcg_hash(t ^ pcg_hash(P.seed));
-    let fkey = pcg_hash(t ^ pcg_hash(P.force_seed));
+    let key = fhp_step_key(P.seed, t);
+    let fkey = fhp_step_key(P.force_seed, t);
     var out = 0u;
     for (var b = 0u; b < 4u; b++) {
         let s = word * 4u + b;
@@ -70,10 +60,10 @@ fn fhp_step(@builtin(local_invocation_id) lid: vec3<u32>,
             n |= (site_byte(i - 1, j + 1) & 2u) | (site_byte(i, j + 1) & 4u)
                | (site_byte(i, j - 1) & 16u) | (site_byte(i - 1, j - 1) & 32u);
         }
-        let r = (pcg_hash((s >> 5u) ^ key) >> (s & 31u)) & 1u;
+        let r = fhp_chirality(key, s);
         var v = lut[(n << 1u) | r];
         if ((FLAGS & 16u) != 0u) {
-            if ((v & 137u) == 8u && (pcg_hash(s ^ fkey) >> 8u) < P.threshold) {
+            if ((v & 137u) == 8u && fhp_force_hit(fkey, s, P.threshold)) {
                 v = v ^ 9u;
             }
         }

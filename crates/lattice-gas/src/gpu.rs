@@ -14,9 +14,12 @@ use simkit_backend::gpu::{DISPATCH_WGSL, Uniform};
 use simkit_backend::rng::RNG_WGSL;
 use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Result, Simulation};
 
-use crate::random::{FORCE_STREAM, force_threshold};
+use crate::random::{FORCE_STREAM, RANDOM_WGSL, force_threshold};
+use crate::rules::COLLIDE_WGSL;
 use crate::{CollisionTable, Lattice, Params, RuleSet, WALL};
 
+/// The `Params` struct of both step kernels (mirrored by [`GpuParams`]).
+const PARAMS_WGSL: &str = simkit_backend::wgsl!("params.wgsl");
 const STEP_WGSL: &str = simkit_backend::wgsl!("step.wgsl");
 const PLANES_WGSL: &str = simkit_backend::wgsl!("planes.wgsl");
 const COUNTER_WGSL: &str = simkit_backend::wgsl!("counter.wgsl");
@@ -44,19 +47,19 @@ impl GpuLayout {
     }
 }
 
-/// Shader parameters (the same 32-byte block for both layouts).
+/// Shader parameters of both layouts: the Rust mirror of `Params` in `shaders/params.wgsl`
+/// (field meanings there).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct GpuParams {
     width: u32,
     height: u32,
-    /// Byte layout: sites; bit-planes: words per row.
-    n_sites_or_nw: u32,
+    n_sites: u32,
+    nw: u32,
     n_words: u32,
     seed: u32,
     force_seed: u32,
     threshold: u32,
-    pad: u32,
 }
 
 /// The GPU backend.
@@ -101,14 +104,14 @@ impl GpuLattice {
         params.validate(&lattice)?;
         let (w, h) = (lattice.width(), lattice.height());
         let n_sites = w * h;
-        let (words, walls, n_items, size_field) = match layout {
+        let (words, walls, n_items) = match layout {
             GpuLayout::Bytes => {
                 let n_words = n_sites.div_ceil(4);
                 let mut words = vec![0u32; n_words];
                 for (s, &c) in lattice.cells().iter().enumerate() {
                     words[s / 4] |= u32::from(c) << (8 * (s % 4));
                 }
-                (words, vec![0u32], n_words, n_sites)
+                (words, vec![0u32], n_words)
             }
             GpuLayout::BitPlanes => {
                 if !w.is_multiple_of(32) {
@@ -119,7 +122,7 @@ impl GpuLattice {
                     ));
                 }
                 let (planes, walls) = to_planes(&lattice);
-                (planes, walls, n_sites / 32, w / 32)
+                (planes, walls, n_sites / 32)
             }
         };
         let a = GpuBuffer::from_slice(ctx, "fhp lattice A", &words)?;
@@ -136,12 +139,12 @@ impl GpuLattice {
         let gp = GpuParams {
             width: w as u32,
             height: h as u32,
-            n_sites_or_nw: size_field as u32,
+            n_sites: n_sites as u32,
+            nw: (w / 32) as u32,
             n_words: n_items as u32,
             seed: params.seed,
             force_seed: params.seed ^ FORCE_STREAM,
             threshold: force_threshold(params.body_force),
-            pad: 0,
         };
         let uniform = Uniform::new(ctx, "fhp params", &gp);
         let counter = GpuBuffer::from_slice(ctx, "fhp step counter", &[0u32])?;
@@ -152,7 +155,7 @@ impl GpuLattice {
                 ctx,
                 &KernelDesc {
                     label: "fhp_step",
-                    sources: &[RNG_WGSL, DISPATCH_WGSL, STEP_WGSL],
+                    sources: &[RNG_WGSL, DISPATCH_WGSL, PARAMS_WGSL, RANDOM_WGSL, STEP_WGSL],
                     entry: "fhp_step",
                     workgroup_size: 64,
                     constants: &[("FLAGS", flags)],
@@ -162,7 +165,14 @@ impl GpuLattice {
                 ctx,
                 &KernelDesc {
                     label: "fhp_planes",
-                    sources: &[RNG_WGSL, DISPATCH_WGSL, PLANES_WGSL],
+                    sources: &[
+                        RNG_WGSL,
+                        DISPATCH_WGSL,
+                        PARAMS_WGSL,
+                        RANDOM_WGSL,
+                        COLLIDE_WGSL,
+                        PLANES_WGSL,
+                    ],
                     entry: "fhp_planes",
                     workgroup_size: 64,
                     constants: &[("FLAGS", flags), ("FULL", full)],
@@ -306,4 +316,31 @@ fn to_planes(lattice: &Lattice) -> (Vec<u32>, Vec<u32>) {
         }
     }
     (planes, walls)
+}
+
+#[cfg(test)]
+mod tests {
+    use std::mem::offset_of;
+
+    use simkit_backend::testing::assert_mirrors;
+
+    use super::*;
+
+    #[test]
+    fn gpu_params_mirror_the_wgsl_struct() {
+        assert_mirrors::<GpuParams>(
+            PARAMS_WGSL,
+            "Params",
+            &[
+                ("width", offset_of!(GpuParams, width)),
+                ("height", offset_of!(GpuParams, height)),
+                ("n_sites", offset_of!(GpuParams, n_sites)),
+                ("nw", offset_of!(GpuParams, nw)),
+                ("n_words", offset_of!(GpuParams, n_words)),
+                ("seed", offset_of!(GpuParams, seed)),
+                ("force_seed", offset_of!(GpuParams, force_seed)),
+                ("threshold", offset_of!(GpuParams, threshold)),
+            ],
+        );
+    }
 }

@@ -221,7 +221,10 @@ pub enum Obstacle {
         /// Radius.
         radius: f64,
     },
-    /// A bitmap of the lattice's size, row-major, `true` = wall.
+    /// A bitmap of the lattice's size, `true` = wall, row-major in lattice order:
+    /// `data[j * width + i]` is site `(i, j)`, so the first `width` flags are the bottom
+    /// (south) row `j = 0` and the last `width` flags the top row. (An image, whose row 0 is
+    /// usually the top, must be flipped vertically.)
     Mask {
         /// Width of the bitmap (must equal the lattice width).
         width: usize,
@@ -233,25 +236,6 @@ pub enum Obstacle {
 }
 
 impl Obstacle {
-    /// A bitmap obstacle from a PNG: dark pixels (luminance below one half) are walls; row 0
-    /// of the image is the top of the lattice.
-    pub fn from_png(path: impl AsRef<std::path::Path>) -> Result<Self> {
-        let path = path.as_ref();
-        let img = image_luma(path)?;
-        let (w, h) = (img.0, img.1);
-        let mut data = vec![false; w * h];
-        for j in 0..h {
-            for i in 0..w {
-                data[j * w + i] = img.2[(h - 1 - j) * w + i] < 128;
-            }
-        }
-        Ok(Obstacle::Mask {
-            width: w,
-            height: h,
-            data,
-        })
-    }
-
     /// The wall flags of this obstacle on a `width x height` lattice.
     pub fn mask(&self, width: usize, height: usize) -> Result<Vec<bool>> {
         match self {
@@ -301,18 +285,6 @@ impl Obstacle {
             }
         }
     }
-}
-
-fn image_luma(path: &std::path::Path) -> Result<(usize, usize, Vec<u8>)> {
-    let bytes = std::fs::read(path).map_err(|e| Error::Io {
-        path: path.display().to_string(),
-        message: e.to_string(),
-    })?;
-    let img = image::load_from_memory(&bytes)
-        .map_err(|e| Error::invalid("obstacle PNG", path.display(), e.to_string()))?
-        .to_luma8();
-    let (w, h) = (img.width() as usize, img.height() as usize);
-    Ok((w, h, img.into_raw()))
 }
 
 /// How the lattice evolves: boundaries, rule set, random seed and optional forcing.

@@ -2,7 +2,8 @@
 //! that give bit-identical lattices, with boundaries, forcing and observables.
 //!
 //! - [`Lattice`]: one byte per site (six direction bits, bit 7 = wall), odd rows shifted half
-//!   a site; [`Obstacle`] masks (rectangle, disc, bitmap/PNG).
+//!   a site; [`Obstacle`] masks (rectangle, disc, bitmap given as
+//!   data, row 0 the bottom).
 //! - [`RuleSet`]: FHP-I or the full conservation-law table ([`CollisionTable`] generates both).
 //! - [`Params`]: seed, periodic axes, inflow/outflow columns, body force.
 //! - Backends implementing [`simkit_backend::Simulation`] with `State = Lattice`, bit-identical for
@@ -12,7 +13,10 @@
 //!   (WGSL, [`GpuLayout::BitPlanes`] or [`GpuLayout::Bytes`]); [`simulation`] picks one from
 //!   an [`Engine`].
 //! - [`viscosity`]: the shear-wave viscosity measurement and the FHP-I theory.
-//! - [`observables`]: block-averaged density and velocity, time averages, PNG and VTK output.
+//! - [`field`]: the lattice vectors and [`field::BlockField`], block sums of density and
+//!   momentum (filled from site bytes or straight from the multi-spin bit-planes).
+//! - [`observables`]: block-averaged density and velocity and time averages, returned as
+//!   data (files are written by the caller, e.g. with `simkit-output`).
 //! - [`random`]: the exact use of the counter-based random bits shared by all backends.
 //!
 //! ```
@@ -29,6 +33,7 @@
 //! # }
 //! ```
 
+pub mod field;
 #[cfg(feature = "gpu")]
 pub mod gpu;
 pub mod lattice;

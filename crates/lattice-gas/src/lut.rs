@@ -11,9 +11,8 @@
 use rayon::prelude::*;
 use simkit_backend::{Result, Simulation};
 
-use crate::random::{FORCE_STREAM, force_threshold, step_key};
+use crate::random::{FORCE_STREAM, chirality_word, force_hit, force_threshold, step_key};
 use crate::{CollisionTable, EAST, Lattice, Params, REST, WALL, WEST};
-use simkit_backend::rng::pcg_hash;
 
 /// The lookup-table CPU backend.
 pub struct LutCpu {
@@ -183,7 +182,7 @@ impl RowCtx<'_> {
         if FORCE {
             for (q, o) in out[..done].iter_mut().enumerate() {
                 if *o & (WALL | EAST | WEST) == WEST
-                    && (pcg_hash((first + q as u32) ^ self.force_key) >> 8) < self.threshold
+                    && force_hit(self.force_key, first + q as u32, self.threshold)
                 {
                     *o ^= EAST | WEST;
                 }
@@ -241,13 +240,13 @@ impl RowCtx<'_> {
         while i < w {
             let s0 = base + i as u32;
             let run = (32 - (s0 & 31) as usize).min(w - i);
-            let word = pcg_hash((s0 >> 5) ^ self.key) >> (s0 & 31);
+            let word = chirality_word(self.key, s0 >> 5) >> (s0 & 31);
             for (q, o) in out[i..i + run].iter_mut().enumerate() {
                 let r = ((word >> q) & 1) as u8;
                 let mut v = self.table[usize::from(*o | (r << 6))];
                 if FORCE
                     && v & (WALL | EAST | WEST) == WEST
-                    && (pcg_hash((s0 + q as u32) ^ self.force_key) >> 8) < self.threshold
+                    && force_hit(self.force_key, s0 + q as u32, self.threshold)
                 {
                     v ^= EAST | WEST;
                 }

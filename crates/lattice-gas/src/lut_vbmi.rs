@@ -8,8 +8,6 @@
 
 use std::arch::x86_64::*;
 
-use simkit_backend::rng::pcg_hash;
-
 use crate::REST;
 
 /// Whether this CPU runs the VBMI path (checked once, when a backend is built).
@@ -20,11 +18,11 @@ pub(crate) fn available() -> bool {
 }
 
 /// Chirality bits of the 64 sites `site, site + 1, ...` (bit b for site `site + b`), from the
-/// hashes of [`crate::random`]: bit `s % 32` of `pcg_hash((s / 32) ^ key)`.
+/// hashes of [`crate::random`]: bit `s % 32` of [`crate::random::chirality_word`]`(key, s / 32)`.
 #[inline(always)]
 pub(crate) fn chirality_mask(key: u32, site: u32) -> u64 {
     let (k, off) = (site >> 5, site & 31);
-    let h = |x: u32| u128::from(pcg_hash(x ^ key));
+    let h = |x: u32| u128::from(crate::random::chirality_word(key, x));
     let mut bits = h(k) | h(k.wrapping_add(1)) << 32;
     if off != 0 {
         bits |= h(k.wrapping_add(2)) << 64;

@@ -7,11 +7,11 @@
 
 use multiversion::multiversion;
 use rayon::prelude::*;
-use simkit_backend::rng::pcg_hash;
 use simkit_backend::{Error, Result, Simulation};
 
-use crate::observables::{BlockField, CX, CY};
-use crate::random::{FORCE_STREAM, force_threshold, step_key};
+use crate::field::{BlockField, CX, CY};
+use crate::random::{FORCE_STREAM, chirality_word, force_hit, force_threshold, step_key};
+use crate::rules::collide_bits;
 use crate::{Lattice, Params, RuleSet, WALL};
 
 /// The multi-spin CPU backend.
@@ -87,18 +87,9 @@ impl MultiSpinCpu {
     /// [`BlockField::from_lattice`] on [`Simulation::state`], without building the bytes.
     pub fn block_field(&self, block: usize) -> Result<BlockField> {
         let (w, h, nw) = (self.width, self.height, self.nw);
-        if block == 0 || block > w.max(h) {
-            return Err(Error::invalid(
-                "block",
-                block,
-                format!(
-                    "must be between 1 and the larger lattice side ({})",
-                    w.max(h)
-                ),
-            ));
-        }
-        let (nx, ny) = (w.div_ceil(block), h.div_ceil(block));
-        let mut counts = vec![[0u64; 7]; nx * ny];
+        let mut f = BlockField::zeros(w, h, block)?;
+        let nx = f.nx;
+        let mut counts = vec![[0u64; 7]; nx * f.ny];
         for j in 0..h {
             let row = &mut counts[(j / block) * nx..(j / block + 1) * nx];
             for (bx, c) in row.iter_mut().enumerate() {
@@ -115,16 +106,6 @@ impl MultiSpinCpu {
                 }
             }
         }
-        let mut f = BlockField {
-            nx,
-            ny,
-            block,
-            sites: vec![0.0; nx * ny],
-            particles: vec![0.0; nx * ny],
-            px: vec![0.0; nx * ny],
-            py: vec![0.0; nx * ny],
-            samples: 1,
-        };
         for (b, c) in counts.iter().enumerate() {
             f.sites[b] = c[6] as f64;
             f.particles[b] = c[..6].iter().sum::<u64>() as f64;
@@ -291,7 +272,8 @@ pub fn simd_target() -> &'static str {
 fn random_words(dst: &mut [u64], first: u32, key: u32) {
     for (k, d) in dst.iter_mut().enumerate() {
         let lo = first.wrapping_add(2 * k as u32);
-        *d = u64::from(pcg_hash(lo ^ key)) | u64::from(pcg_hash(lo.wrapping_add(1) ^ key)) << 32;
+        *d = u64::from(chirality_word(key, lo))
+            | u64::from(chirality_word(key, lo.wrapping_add(1))) << 32;
     }
 }
 
@@ -302,43 +284,11 @@ fn force_words(dst: &mut [u64], first: u32, key: u32, threshold: u32) {
         let base = first.wrapping_add(64 * k as u32);
         let mut word = 0u64;
         for b in 0..64u32 {
-            let hit = (pcg_hash(base.wrapping_add(b) ^ key) >> 8) < threshold;
+            let hit = force_hit(key, base.wrapping_add(b), threshold);
             word |= u64::from(hit) << b;
         }
         *d = word;
     }
-}
-
-/// The collision of one word of 64 sites as boolean logic; `FULL` selects the full rule set.
-#[inline(always)]
-pub(crate) fn collide_word<const FULL: bool>(s: [u64; 6], r: u64, wall: u64) -> [u64; 6] {
-    let [a, b, c, d, e, f] = s;
-    let (p1, p2, p3) = (a & d, b & e, c & f);
-    let (z1, z2, z3) = (!(a | d), !(b | e), !(c | f));
-    let two = (p1 & z2 & z3) | (p2 & z1 & z3) | (p3 & z1 & z2);
-    let tri = (a ^ b) & (b ^ c) & (c ^ d) & (d ^ e) & (e ^ f);
-    let (rot, flip1, flip2, flip3) = if FULL {
-        let four = (p1 & p2 & z3) | (p1 & p3 & z2) | (p2 & p3 & z1);
-        // A head-on pair with a spectator on axis X moves to the third axis.
-        let s1 = (a ^ d) & ((p2 & z3) | (p3 & z2));
-        let s2 = (b ^ e) & ((p1 & z3) | (p3 & z1));
-        let s3 = (c ^ f) & ((p1 & z2) | (p2 & z1));
-        (two | tri | four, s2 | s3, s1 | s3, s1 | s2)
-    } else {
-        (two | tri, 0, 0, 0)
-    };
-    // Rotation clockwise (chirality 1): new direction k holds old k - 1.
-    let cw = [f, a, b, c, d, e];
-    let ccw = [b, c, d, e, f, a];
-    let flips = [flip1, flip2, flip3, flip1, flip2, flip3];
-    let rev = [d, e, f, a, b, c];
-    let mut out = [0u64; 6];
-    for k in 0..6 {
-        let rotated = (r & cw[k]) | (!r & ccw[k]);
-        let fluid = (rot & rotated) | (!rot & (s[k] ^ flips[k]));
-        out[k] = (wall & rev[k]) | (!wall & fluid);
-    }
-    out
 }
 
 macro_rules! collide_rows {
@@ -359,7 +309,7 @@ macro_rules! collide_rows {
                     inc[4 * nw + k],
                     inc[5 * nw + k],
                 ];
-                let o = collide_word::<$full>(s, rnd[k], walls[k]);
+                let o = collide_bits::<u64, $full>(s, rnd[k], walls[k]);
                 o0[k] = o[0];
                 o1[k] = o[1];
                 o2[k] = o[2];
@@ -469,10 +419,10 @@ mod tests {
                         let s: [u64; 6] = std::array::from_fn(|d| u64::from((st >> d) & 1));
                         let o = match rules {
                             RuleSet::FhpI => {
-                                collide_word::<false>(s, r.into(), u64::from(wall >> 7))
+                                collide_bits::<u64, false>(s, r.into(), u64::from(wall >> 7))
                             }
                             RuleSet::Full => {
-                                collide_word::<true>(s, r.into(), u64::from(wall >> 7))
+                                collide_bits::<u64, true>(s, r.into(), u64::from(wall >> 7))
                             }
                         };
                         let got = (0..6).fold(wall, |acc, d| acc | (((o[d] & 1) as u8) << d));

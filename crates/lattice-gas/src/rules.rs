@@ -7,6 +7,8 @@
 //! rotation by +60 or -60 degrees). [`RuleSet::Full`] uses every group; [`RuleSet::FhpI`] only
 //! the zero-momentum two- and three-particle groups (head-on pairs, symmetric triples).
 
+use std::ops::{BitAnd, BitOr, BitXor, Not};
+
 use crate::WALL;
 
 /// Integer momentum of each direction in units (x/2, y*sqrt(3)/2 ... scaled): direction k
@@ -119,6 +121,56 @@ fn collide_state(rules: RuleSet, s: u8, r: u8) -> u8 {
             out
         }
     }
+}
+
+/// WGSL `fhp_collide(s: array<u32, 6>, r: u32, wall: u32, full: bool) -> array<u32, 6>`: the
+/// GPU twin of [`collide_bits`] on `u32` words (`full` selects the full rule set), used by
+/// the bit-plane step kernel.
+pub const COLLIDE_WGSL: &str = simkit_backend::wgsl!("collide.wgsl");
+
+/// The collision of one word of sites as boolean logic, bit-parallel: bit `b` of `s[d]` is
+/// direction `d + 1` of site `b`, of `r` its chirality bit, of `wall` its wall flag. `FULL`
+/// selects [`RuleSet::Full`], else [`RuleSet::FhpI`]. Site by site it equals the
+/// [`CollisionTable`] of the rule set (the multi-spin backend uses `u64` words, the GPU
+/// twin `fhp_collide` of `shaders/collide.wgsl` `u32` words).
+#[inline(always)]
+pub fn collide_bits<W, const FULL: bool>(s: [W; 6], r: W, wall: W) -> [W; 6]
+where
+    W: Copy
+        + Default
+        + BitAnd<Output = W>
+        + BitOr<Output = W>
+        + BitXor<Output = W>
+        + Not<Output = W>,
+{
+    let [a, b, c, d, e, f] = s;
+    let (p1, p2, p3) = (a & d, b & e, c & f);
+    let (z1, z2, z3) = (!(a | d), !(b | e), !(c | f));
+    let two = (p1 & z2 & z3) | (p2 & z1 & z3) | (p3 & z1 & z2);
+    let tri = (a ^ b) & (b ^ c) & (c ^ d) & (d ^ e) & (e ^ f);
+    let zero = W::default();
+    let (rot, flip1, flip2, flip3) = if FULL {
+        let four = (p1 & p2 & z3) | (p1 & p3 & z2) | (p2 & p3 & z1);
+        // A head-on pair with a spectator on axis X moves to the third axis.
+        let s1 = (a ^ d) & ((p2 & z3) | (p3 & z2));
+        let s2 = (b ^ e) & ((p1 & z3) | (p3 & z1));
+        let s3 = (c ^ f) & ((p1 & z2) | (p2 & z1));
+        (two | tri | four, s2 | s3, s1 | s3, s1 | s2)
+    } else {
+        (two | tri, zero, zero, zero)
+    };
+    // Rotation clockwise (chirality 1): new direction k holds old k - 1.
+    let cw = [f, a, b, c, d, e];
+    let ccw = [b, c, d, e, f, a];
+    let flips = [flip1, flip2, flip3, flip1, flip2, flip3];
+    let rev = [d, e, f, a, b, c];
+    let mut out = [zero; 6];
+    for k in 0..6 {
+        let rotated = (r & cw[k]) | (!r & ccw[k]);
+        let fluid = (rot & rotated) | (!rot & (s[k] ^ flips[k]));
+        out[k] = (wall & rev[k]) | (!wall & fluid);
+    }
+    out
 }
 
 #[cfg(test)]

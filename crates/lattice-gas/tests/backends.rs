@@ -305,25 +305,33 @@ fn gpu_matches_lut_on_odd_sizes() {
 }
 
 #[test]
-fn obstacle_from_png_mask() {
-    // 8 x 6 image, a dark 2 x 2 square at image columns 2..4, image rows 0..2 (the top).
-    let mut img = image::GrayImage::from_pixel(8, 6, image::Luma([255u8]));
-    for (x, y) in [(2, 0), (3, 0), (2, 1), (3, 1)] {
-        img.put_pixel(x, y, image::Luma([10u8]));
+fn obstacle_from_data_mask() {
+    // 8 x 6 mask, a 2 x 2 wall square at columns 2..4 of the two top rows. Mask rows are
+    // lattice rows: data[j * 8 + i] is site (i, j), row 0 the bottom.
+    let (w, h) = (8usize, 6usize);
+    let mut data = vec![false; w * h];
+    for (i, j) in [(2, 4), (3, 4), (2, 5), (3, 5)] {
+        data[j * w + i] = true;
     }
-    let path = std::env::temp_dir().join(format!("lattice_gas_mask_{}.png", std::process::id()));
-    img.save(&path).unwrap();
-    let obstacle = Obstacle::from_png(&path).unwrap();
-    std::fs::remove_file(&path).unwrap();
-    let mut l = Lattice::new(8, 6).unwrap();
+    let obstacle = Obstacle::Mask {
+        width: w,
+        height: h,
+        data,
+    };
+    let mut l = Lattice::new(w, h).unwrap();
     l.add_obstacle(&obstacle).unwrap();
-    let walls: Vec<(usize, usize)> = (0..6)
-        .flat_map(|j| (0..8).map(move |i| (i, j)))
+    let walls: Vec<(usize, usize)> = (0..h)
+        .flat_map(|j| (0..w).map(move |i| (i, j)))
         .filter(|&(i, j)| l.get(i, j).unwrap() & simkit_lattice_gas::WALL != 0)
         .collect();
-    // Image row 0 is the top row of the lattice (j = 5).
+    // The last mask row is the top row of the lattice (j = 5).
     assert_eq!(walls, vec![(2, 4), (3, 4), (2, 5), (3, 5)]);
-    // A mask of another size is refused, and so is a missing file.
+    // A mask of another size is refused, and so is one whose data does not fill it.
     assert!(Lattice::new(8, 8).unwrap().add_obstacle(&obstacle).is_err());
-    assert!(Obstacle::from_png(std::env::temp_dir().join("no_such_lattice_gas_mask.png")).is_err());
+    let short = Obstacle::Mask {
+        width: w,
+        height: h,
+        data: vec![true; w * h - 1],
+    };
+    assert!(Lattice::new(w, h).unwrap().add_obstacle(&short).is_err());
 }

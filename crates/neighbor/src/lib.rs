@@ -21,7 +21,9 @@
 //!   plus [`CELLS_WGSL`] helper functions), [`GpuNeighborList`] (CSR count-then-fill) and
 //!   [`GpuNeighborSearch`] (the [`NeighborSearch`] trait on the GPU).
 //!
-//! All of them implement [`NeighborSearch`].
+//! All of them implement [`NeighborSearch`]. [`Neighbors`] picks the recommended one (sorted
+//! cells, or the GPU search) from a [`simkit_backend::Backend`] value, built like every simkit
+//! simulation: `Neighbors::new(&grid, &Config::default(), backend)`.
 //!
 //! # Conventions
 //! Pairs are reported as `(i, j, sep, r2)` with original particle indices, the minimum image
@@ -46,10 +48,12 @@
 //! ```
 
 mod brute;
+mod config;
 #[cfg(feature = "gpu")]
 mod gpu;
 mod grid;
 mod linked;
+mod neighbors;
 mod search;
 mod sorted;
 mod stencil;
@@ -57,6 +61,7 @@ mod traverse;
 mod verlet;
 
 pub use brute::BruteForce;
+pub use config::Config;
 #[cfg(feature = "gpu")]
 pub use gpu::{
     CELLS_WGSL, GPU_LOOP_RESERVE, GPU_MAX_CELLS_PER_AXIS, GPU_MAX_PER_CELL, GpuCellList,
@@ -64,8 +69,9 @@ pub use gpu::{
 };
 pub use grid::{CELL_MARGIN, CellGrid, MAX_CELLS, OutOfBox};
 pub use linked::{EMPTY, LinkedCells};
+pub use neighbors::Neighbors;
 pub use search::{NeighborLists, NeighborSearch};
 pub use sorted::SortedCells;
 pub use stencil::{HALF_SHELL_2D, HALF_SHELL_3D};
-pub use traverse::Kernel;
+pub use traverse::TraversalKernel;
 pub use verlet::{ListKind, VerletList};

@@ -5,7 +5,7 @@ use rayon::prelude::*;
 use simkit_backend::{Error, Result};
 
 use crate::CellGrid;
-use crate::traverse::{COORD_PAD, Kernel, Scratch, View, visit_cells, visit_particle};
+use crate::traverse::{COORD_PAD, TraversalKernel, Scratch, View, visit_cells, visit_particle};
 
 /// Cells handed to one rayon task in parallel traversals.
 const CELLS_PER_TASK: usize = 64;
@@ -62,7 +62,7 @@ pub struct SortedCells<const D: usize> {
     cell_start: Vec<u32>,
     order: Vec<u32>,
     rank: Vec<u32>,
-    kernel: Kernel,
+    kernel: TraversalKernel,
     coords: [Vec<f64>; D],
     wrapped: Vec<[f64; D]>,
 }
@@ -76,7 +76,7 @@ impl<const D: usize> SortedCells<D> {
             cell_start: vec![0; grid.n_cells() + 1],
             order: Vec::new(),
             rank: Vec::new(),
-            kernel: Kernel::Auto,
+            kernel: TraversalKernel::Auto,
             coords: std::array::from_fn(|_| Vec::new()),
             wrapped: Vec::new(),
         }
@@ -185,18 +185,18 @@ impl<const D: usize> SortedCells<D> {
         Ok(())
     }
 
-    /// The same cell list with another traversal kernel (default [`Kernel::Auto`]: the
+    /// The same cell list with another traversal kernel (default [`TraversalKernel::Auto`]: the
     /// fastest this CPU supports). All kernels report the same pairs bit for bit; choosing one
     /// is for measuring or for ruling a kernel out while debugging. Above 2^27 particles the
     /// packed kernels step aside for the portable one.
     ///
     /// Errors: a kernel this CPU cannot run.
-    pub fn with_kernel(mut self, kernel: Kernel) -> Result<Self> {
+    pub fn with_kernel(mut self, kernel: TraversalKernel) -> Result<Self> {
         if !kernel.is_supported() {
             return Err(Error::Unsupported(format!(
                 "traversal kernel {kernel:?}: this CPU lacks its instruction set; use \
-                 Kernel::Auto (picks {:?} here)",
-                Kernel::best()
+                 TraversalKernel::Auto (picks {:?} here)",
+                TraversalKernel::best()
             )));
         }
         self.kernel = kernel;
@@ -204,7 +204,7 @@ impl<const D: usize> SortedCells<D> {
     }
 
     /// The traversal kernel (see [`with_kernel`](Self::with_kernel)).
-    pub fn kernel(&self) -> Kernel {
+    pub fn kernel(&self) -> TraversalKernel {
         self.kernel
     }
 

@@ -1,5 +1,5 @@
 //! The hot loop: one particle against runs of sorted neighbour cells, three kernels (see
-//! [`Kernel`]), all evaluating every candidate with the same operations in the same order,
+//! [`TraversalKernel`]), all evaluating every candidate with the same operations in the same order,
 //! so they report the same pairs bit for bit (tested).
 //!
 //! - Packed (AVX-512F or AVX2, explicit intrinsics): all runs of a particle's shell in one
@@ -11,7 +11,7 @@
 //! - Portable (`multiversion`: AVX2+FMA clone and baseline): the squared distances of a run
 //!   into a buffer (a loop the compiler vectorises), then 64-bit hit masks, one step per hit.
 //!
-//! The kernel is picked at run time ([`Kernel::Auto`]), so no `-C target-cpu=native` is
+//! The kernel is picked at run time ([`TraversalKernel::Auto`]), so no `-C target-cpu=native` is
 //! needed.
 
 use std::ops::Range;
@@ -50,7 +50,7 @@ pub(crate) struct View<'a, const D: usize> {
     pub cell_start: &'a [u32],
     pub order: &'a [u32],
     /// The kernel to run.
-    pub kernel: Kernel,
+    pub kernel: TraversalKernel,
     /// Sorted coordinates, each followed by [`COORD_PAD`] padding values.
     pub coords: [&'a [f64]; D],
 }
@@ -331,7 +331,7 @@ fn visit_impl<
 /// it. Every kernel reports the same pairs with the same bits in the same order (tested);
 /// they differ in speed only (figures in `docs/neighbor.md`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Kernel {
+pub enum TraversalKernel {
     /// The fastest kernel the CPU supports: packed AVX-512, else packed AVX2, else portable.
     #[default]
     Auto,
@@ -344,53 +344,53 @@ pub enum Kernel {
     PackedAvx512,
 }
 
-impl Kernel {
+impl TraversalKernel {
     /// Whether this CPU can run the kernel.
     pub fn is_supported(self) -> bool {
         match self {
-            Kernel::Auto | Kernel::Portable => true,
+            TraversalKernel::Auto | TraversalKernel::Portable => true,
             // Every feature the kernel's functions are compiled with (`target_feature`).
             #[cfg(target_arch = "x86_64")]
-            Kernel::PackedAvx2 => {
+            TraversalKernel::PackedAvx2 => {
                 std::arch::is_x86_feature_detected!("avx2")
                     && std::arch::is_x86_feature_detected!("fma")
             }
             #[cfg(target_arch = "x86_64")]
-            Kernel::PackedAvx512 => {
+            TraversalKernel::PackedAvx512 => {
                 std::arch::is_x86_feature_detected!("avx512f")
                     && std::arch::is_x86_feature_detected!("avx512vl")
                     && std::arch::is_x86_feature_detected!("avx2")
                     && std::arch::is_x86_feature_detected!("fma")
             }
             #[cfg(not(target_arch = "x86_64"))]
-            Kernel::PackedAvx2 | Kernel::PackedAvx512 => false,
+            TraversalKernel::PackedAvx2 | TraversalKernel::PackedAvx512 => false,
         }
     }
 
-    /// The kernel [`Kernel::Auto`] picks on this CPU.
-    pub fn best() -> Kernel {
-        [Kernel::PackedAvx512, Kernel::PackedAvx2]
+    /// The kernel [`TraversalKernel::Auto`] picks on this CPU.
+    pub fn best() -> TraversalKernel {
+        [TraversalKernel::PackedAvx512, TraversalKernel::PackedAvx2]
             .into_iter()
             .find(|k| k.is_supported())
-            .unwrap_or(Kernel::Portable)
+            .unwrap_or(TraversalKernel::Portable)
     }
 }
 
-/// Which kernel a traversal runs: the view's choice ([`Kernel::best`] for `Auto`), as long
+/// Which kernel a traversal runs: the view's choice ([`TraversalKernel::best`] for `Auto`), as long
 /// as the CPU supports it and every sorted position fits the packed hit format (at most
 /// `1 << RUN_SHIFT`, 134 million particles); the portable kernel otherwise.
 #[cfg(target_arch = "x86_64")]
 fn packed_kernel<const D: usize>(v: &View<'_, D>) -> u8 {
     let k = match v.kernel {
-        Kernel::Auto => Kernel::best(),
+        TraversalKernel::Auto => TraversalKernel::best(),
         k => k,
     };
     if v.order.len() > 1 << RUN_SHIFT || !k.is_supported() {
         return PORTABLE;
     }
     match k {
-        Kernel::PackedAvx512 => PACKED_AVX512,
-        Kernel::PackedAvx2 => PACKED_AVX2,
+        TraversalKernel::PackedAvx512 => PACKED_AVX512,
+        TraversalKernel::PackedAvx2 => PACKED_AVX2,
         _ => PORTABLE,
     }
 }
@@ -827,10 +827,10 @@ mod tests {
     /// The packed kernels this CPU can run (the portable one always runs).
     fn packed_kernels() -> Vec<u8> {
         let mut k = Vec::new();
-        if Kernel::PackedAvx2.is_supported() {
+        if TraversalKernel::PackedAvx2.is_supported() {
             k.push(PACKED_AVX2);
         }
-        if Kernel::PackedAvx512.is_supported() {
+        if TraversalKernel::PackedAvx512.is_supported() {
             k.push(PACKED_AVX512);
         }
         k

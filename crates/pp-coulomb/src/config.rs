@@ -1,6 +1,8 @@
 //! Run configuration: force law, integrator, precision and time step.
 
-use simkit_backend::{Error, Result, require_positive};
+use simkit_backend::{Error, Precision, Result, require_positive};
+
+use crate::laws;
 
 /// How the pair force is evaluated. Each law is a separate compiled kernel: the choice is made
 /// once per force evaluation, never per pair.
@@ -46,18 +48,24 @@ impl ForceLaw {
         }
     }
 
-    /// Pair potential per unit `q_i q_j` at distance `r` (consistent with the force law).
+    /// Pair force weight `w(r^2)` (the pair field is `q_j w r`): [`laws::exact_weight`],
+    /// [`laws::exclusion_weight`] or [`laws::plummer_weight`] with this law's parameter.
+    pub(crate) fn weight(&self, r2: f64) -> f64 {
+        match *self {
+            ForceLaw::Exact => laws::exact_weight(r2),
+            ForceLaw::Exclusion { .. } => laws::exclusion_weight(r2, self.squared_parameter()),
+            ForceLaw::Plummer { .. } => laws::plummer_weight(r2, self.squared_parameter()),
+        }
+    }
+
+    /// Pair potential per unit `q_i q_j` at distance `r` (consistent with the force law):
+    /// [`laws::exact_potential`], [`laws::exclusion_potential`] or
+    /// [`laws::plummer_potential`].
     pub fn potential(&self, r: f64) -> f64 {
         match *self {
-            ForceLaw::Exact => 1.0 / r,
-            ForceLaw::Exclusion { radius } => {
-                if r > radius {
-                    1.0 / r
-                } else {
-                    0.0
-                }
-            }
-            ForceLaw::Plummer { epsilon } => 1.0 / (r * r + epsilon * epsilon).sqrt(),
+            ForceLaw::Exact => laws::exact_potential(r),
+            ForceLaw::Exclusion { radius } => laws::exclusion_potential(r, radius),
+            ForceLaw::Plummer { .. } => laws::plummer_potential(r, self.squared_parameter()),
         }
     }
 }
@@ -71,15 +79,6 @@ pub enum Integrator {
     Leapfrog,
 }
 
-/// Floating-point precision of the force evaluation and the particle state on the backend.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Precision {
-    /// Single precision (fastest; ~1e-6 relative force error).
-    F32,
-    /// Double precision (GPU: needs `SHADER_F64`).
-    F64,
-}
-
 /// Everything a run needs besides the particles.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Config {
@@ -89,7 +88,9 @@ pub struct Config {
     pub force: ForceLaw,
     /// Integrator.
     pub integrator: Integrator,
-    /// Precision.
+    /// Floating-point precision of the force evaluation and the particle state on the
+    /// backend: f64 (the default of [`Config::new`]) or f32 (fastest; about 1e-6 relative
+    /// force error). On the GPU, f64 needs `SHADER_F64`.
     pub precision: Precision,
     /// CPU backend: use the AVX-512 path (`vrsqrt14` plus Newton steps: one in f32, two in
     /// f64) instead of square root and division when the CPU has AVX-512F. Default `true`;

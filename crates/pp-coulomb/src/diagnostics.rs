@@ -1,4 +1,5 @@
-//! Conserved quantities and reference sums (plain f64, independent of the fast kernels).
+//! Conserved quantities and reference sums (plain f64, independent of the fast kernels; the
+//! pair laws are those of [`crate::laws`]).
 
 use rayon::prelude::*;
 
@@ -41,7 +42,9 @@ pub fn potential_energy(p: &Particles, law: ForceLaw) -> f64 {
         .sum()
 }
 
-/// Accelerations by a plain scalar f64 double loop (a reference for tests).
+/// Accelerations by a plain scalar f64 double loop (a reference for tests): the pair
+/// weights of [`crate::laws`], without SIMD, blocking or reciprocal square-root estimates.
+/// Under the exact law a coincident pair contributes nothing (as the kernels' self pair).
 pub fn reference_accelerations(p: &Particles, law: ForceLaw) -> Vec<[f64; 3]> {
     let x = &p.position;
     (0..p.len())
@@ -54,12 +57,7 @@ pub fn reference_accelerations(p: &Particles, law: ForceLaw) -> Vec<[f64; 3]> {
                 }
                 let d = [0, 1, 2].map(|k| x[i][k] - x[j][k]);
                 let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-                let w = match law {
-                    ForceLaw::Exact => r2.powf(-1.5),
-                    ForceLaw::Exclusion { radius } if r2 > radius * radius => r2.powf(-1.5),
-                    ForceLaw::Exclusion { .. } => 0.0,
-                    ForceLaw::Plummer { epsilon } => (r2 + epsilon * epsilon).powf(-1.5),
-                };
+                let w = law.weight(r2);
                 for k in 0..3 {
                     e[k] += p.charge[j] * w * d[k];
                 }

@@ -1,27 +1,18 @@
 //! The GPU backend: tiled all-pairs field kernel and integrator passes, all on the device.
 
-use bytemuck::Pod;
 use simkit_backend::gpu::DISPATCH_WGSL;
-use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Result};
+use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Precision, Real, Result};
 
-use crate::config::{Config, ForceLaw, Integrator, Precision, coincident_error};
-use crate::cpu::Real;
+use crate::config::{Config, ForceLaw, Integrator, coincident_error};
+use crate::engine::{Engine, PositionsVelocities, pad_coordinate};
+use crate::laws;
 use crate::particles::Particles;
-use crate::sim::{Engine, PositionsVelocities};
 
 const ACCEL_WGSL: &str = simkit_backend::wgsl!("accel.wgsl");
 const UPDATE_WGSL: &str = simkit_backend::wgsl!("update.wgsl");
 const KICK_WGSL: &str = simkit_backend::wgsl!("kick.wgsl");
-const LAW_EXACT_WGSL: &str = simkit_backend::wgsl!("law_exact.wgsl");
-const LAW_EXCLUSION_WGSL: &str = simkit_backend::wgsl!("law_exclusion.wgsl");
-const LAW_PLUMMER_WGSL: &str = simkit_backend::wgsl!("law_plummer.wgsl");
 /// Workgroup size and tile length (the `WG` constant of the shaders).
 const WG: usize = 128;
-
-const PRELUDE_F32: &str =
-    "alias REAL = f32;\nfn rsqrt_real(x: REAL) -> REAL { return inverseSqrt(x); }\n";
-const PRELUDE_F64: &str =
-    "alias REAL = f64;\nfn rsqrt_real(x: REAL) -> REAL { return 1.0 / sqrt(x); }\n";
 
 /// The most particles the GPU backend takes on `ctx`'s adapter: unlimited (`usize::MAX`)
 /// except where the driver ends shader loops early ([`GpuContext::shader_loop_limit`]):
@@ -49,7 +40,7 @@ pub(crate) fn engine(ctx: &GpuContext, p: &Particles, c: &Config) -> Result<Box<
         )));
     }
     Ok(match c.precision {
-        Precision::F32 => Box::new(GpuEngine::<f32>::new(ctx, p, c, PRELUDE_F32)?),
+        Precision::F32 => Box::new(GpuEngine::<f32>::new(ctx, p, c)?),
         Precision::F64 => {
             if !ctx.has_f64() {
                 return Err(Error::Unsupported(format!(
@@ -58,14 +49,14 @@ pub(crate) fn engine(ctx: &GpuContext, p: &Particles, c: &Config) -> Result<Box<
                     ctx.adapter_info().name
                 )));
             }
-            Box::new(GpuEngine::<f64>::new(ctx, p, c, PRELUDE_F64)?)
+            Box::new(GpuEngine::<f64>::new(ctx, p, c)?)
         }
     })
 }
 
 /// Device state in precision `T`: positions (x, y, z, charge) double-buffered, velocities
 /// (vx, vy, vz, q/m), accelerations, and the coincident-partner flags of the exact law.
-struct GpuEngine<T: Real + Pod> {
+struct GpuEngine<T: Real> {
     ctx: GpuContext,
     n: usize,
     npad: usize,
@@ -90,8 +81,9 @@ struct GpuEngine<T: Real + Pod> {
     a_valid: bool,
 }
 
-impl<T: Real + Pod> GpuEngine<T> {
-    fn new(ctx: &GpuContext, p: &Particles, c: &Config, prelude: &str) -> Result<Self> {
+impl<T: Real> GpuEngine<T> {
+    fn new(ctx: &GpuContext, p: &Particles, c: &Config) -> Result<Self> {
+        let prelude = laws::wgsl_prelude(T::PRECISION);
         let n = p.len();
         let npad = n.next_multiple_of(WG).max(WG);
         let mut pos: Vec<[T; 4]> = (0..n)
@@ -100,7 +92,8 @@ impl<T: Real + Pod> GpuEngine<T> {
                 [x[0], x[1], x[2], p.charge[i]].map(T::from_f64)
             })
             .collect();
-        pos.resize(npad, [T::PAD, T::PAD, T::PAD, T::ZERO]);
+        let pad = pad_coordinate();
+        pos.resize(npad, [pad, pad, pad, T::ZERO]);
         let mut vel: Vec<[T; 4]> = (0..n)
             .map(|i| {
                 let v = p.velocity[i];
@@ -124,9 +117,9 @@ impl<T: Real + Pod> GpuEngine<T> {
         let drift_coef = GpuBuffer::<T>::zeroed(ctx, "pp-coulomb drift coefficients", 2)?;
         let kick_coef = GpuBuffer::<T>::zeroed(ctx, "pp-coulomb kick coefficient", 1)?;
         let law_wgsl = match c.force {
-            ForceLaw::Exact => LAW_EXACT_WGSL,
-            ForceLaw::Exclusion { .. } => LAW_EXCLUSION_WGSL,
-            ForceLaw::Plummer { .. } => LAW_PLUMMER_WGSL,
+            ForceLaw::Exact => laws::EXACT_WGSL,
+            ForceLaw::Exclusion { .. } => laws::EXCLUSION_WGSL,
+            ForceLaw::Plummer { .. } => laws::PLUMMER_WGSL,
         };
         let exact = if c.force == ForceLaw::Exact { 1.0 } else { 0.0 };
         let accel = Kernel::new(
@@ -254,7 +247,7 @@ impl<T: Real + Pod> GpuEngine<T> {
     }
 }
 
-impl<T: Real + Pod> Engine for GpuEngine<T> {
+impl<T: Real> Engine for GpuEngine<T> {
     fn step(&mut self, steps: u32) -> Result<()> {
         let mut cur = self.cur;
         let mut a_valid = self.a_valid;
@@ -290,7 +283,7 @@ impl<T: Real + Pod> Engine for GpuEngine<T> {
         self.check_coincident()
     }
 
-    fn positions_velocities(&mut self) -> Result<PositionsVelocities> {
+    fn state(&mut self) -> Result<PositionsVelocities> {
         let mut encoder = self.ctx.encoder("pp-coulomb state");
         let x = self.pos[self.cur].encode_download(&self.ctx, &mut encoder);
         let v = self.vel.encode_download(&self.ctx, &mut encoder);

@@ -6,6 +6,8 @@
 //!   positions and zero-mean Maxwellian or uniform velocities.
 //! - [`ForceLaw`]: exact 1/r^2 (coincident particles are an error naming the pair), the
 //!   source's exclusion radius, or Plummer softening; each law is its own compiled kernel.
+//! - [`laws`]: each law's force weight and potential written once (called by every CPU path),
+//!   beside its WGSL twin.
 //! - [`Integrator`]: the source's symplectic Euler or leapfrog kick–drift–kick; positions are
 //!   double-buffered (never written while another thread reads them).
 //! - [`PpCoulomb`]: the simulation on [`Backend::Cpu`] (rayon over targets, structure of
@@ -26,7 +28,7 @@
 //! let cube = Region::Cube { min: [0.0; 3], length: 20.0 };
 //! p.fill(e, 500, cube, Velocities::Maxwellian { thermal_speed: 0.5 }, 42)?;
 //! let config = Config::new(0.05, ForceLaw::Plummer { epsilon: 0.5 });
-//! let mut sim = PpCoulomb::new(p, config, Backend::Cpu)?;
+//! let mut sim = PpCoulomb::new(p, &config, Backend::Cpu)?;
 //! let before = sim.diagnostics()?;
 //! sim.step(20)?;
 //! let after = sim.diagnostics()?;
@@ -39,17 +41,19 @@ pub mod analytic;
 mod config;
 mod cpu;
 mod diagnostics;
+mod engine;
 #[cfg(feature = "gpu")]
 mod gpu;
+pub mod laws;
 mod particles;
 pub mod scenes;
 mod sim;
 pub mod units;
 
-pub use config::{Config, ForceLaw, Integrator, Precision};
+pub use config::{Config, ForceLaw, Integrator};
 pub use diagnostics::{Diagnostics, diagnostics, potential_energy, reference_accelerations};
 #[cfg(feature = "gpu")]
 pub use gpu::gpu_max_particles;
 pub use particles::{Particles, Region, Species, Velocities};
 pub use sim::PpCoulomb;
-pub use simkit_backend::{Backend, Simulation};
+pub use simkit_backend::{Backend, Precision, Simulation};

@@ -5,26 +5,10 @@ use simkit_backend::{Backend, Result, Simulation};
 use crate::config::Config;
 use crate::cpu;
 use crate::diagnostics::{Diagnostics, diagnostics};
+use crate::engine::Engine;
 #[cfg(feature = "gpu")]
 use crate::gpu;
 use crate::particles::Particles;
-
-/// Positions and velocities of a state, in f64.
-pub(crate) type PositionsVelocities = (Vec<[f64; 3]>, Vec<[f64; 3]>);
-
-/// What a backend implements.
-pub(crate) trait Engine: Send {
-    /// Advances `steps` steps.
-    fn step(&mut self, steps: u32) -> Result<()>;
-    /// Current positions and velocities (f64).
-    fn positions_velocities(&mut self) -> Result<PositionsVelocities>;
-    /// Accelerations at the current positions.
-    fn accelerations(&mut self) -> Result<Vec<[f64; 3]>>;
-    /// Changes the time step for the following steps.
-    fn set_dt(&mut self, dt: f64) -> Result<()>;
-    /// Backend name.
-    fn name(&self) -> String;
-}
 
 /// Direct-sum (particle–particle) Coulomb dynamics in normalised units (k_e = 1).
 ///
@@ -51,23 +35,24 @@ impl std::fmt::Debug for PpCoulomb {
 }
 
 impl PpCoulomb {
-    /// Validates the particles and the configuration and builds the backend.
+    /// Validates the particles and the configuration and builds the backend chosen by
+    /// `backend` (the configuration is copied).
     ///
     /// Errors: NaN/infinite positions, velocities or charges, zero or negative masses, a bad
     /// time step or force parameter, a GPU without `SHADER_F64` for [`crate::Precision::F64`].
     /// Zero or one particle is fine (no force).
-    pub fn new(particles: Particles, config: Config, backend: Backend<'_>) -> Result<Self> {
+    pub fn new(particles: Particles, config: &Config, backend: Backend<'_>) -> Result<Self> {
         particles.validate()?;
         config.validate()?;
         let engine = match backend {
-            Backend::Cpu => cpu::engine(&particles, &config),
+            Backend::Cpu => cpu::engine(&particles, config),
             #[cfg(feature = "gpu")]
-            Backend::Gpu(ctx) => gpu::engine(ctx, &particles, &config)?,
+            Backend::Gpu(ctx) => gpu::engine(ctx, &particles, config)?,
         };
         Ok(Self {
             engine,
             particles,
-            config,
+            config: *config,
             steps: 0,
             time: 0.0,
         })
@@ -139,7 +124,7 @@ impl Simulation for PpCoulomb {
     }
 
     fn state(&mut self) -> Result<Particles> {
-        let (position, velocity) = self.engine.positions_velocities()?;
+        let (position, velocity) = self.engine.state()?;
         let mut p = self.particles.clone();
         p.position = position;
         p.velocity = velocity;

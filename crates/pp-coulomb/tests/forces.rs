@@ -60,7 +60,7 @@ fn l2_relative(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
 #[cfg(feature = "gpu")]
 fn accelerations(p: &Particles, law: ForceLaw, prec: Precision, b: Backend<'_>) -> Vec<[f64; 3]> {
     let config = Config::new(0.01, law).with_precision(prec);
-    PpCoulomb::new(p.clone(), config, b)
+    PpCoulomb::new(p.clone(), &config, b)
         .unwrap()
         .accelerations()
         .unwrap()
@@ -77,7 +77,7 @@ fn cpu_kernels_match_reference_and_third_law() {
                 let config = Config::new(0.01, law)
                     .with_precision(prec)
                     .with_rsqrt(rsqrt);
-                let mut sim = PpCoulomb::new(p.clone(), config, Backend::Cpu).unwrap();
+                let mut sim = PpCoulomb::new(p.clone(), &config, Backend::Cpu).unwrap();
                 (sim.accelerations().unwrap(), sim.backend_name())
             };
             let (f64_acc, name64) = cpu(Precision::F64);
@@ -95,7 +95,7 @@ fn cpu_kernels_match_reference_and_third_law() {
                 "{law:?} {name32}: {e32:e} {l32:e}"
             );
         }
-        let mut sim = PpCoulomb::new(p.clone(), Config::new(0.01, law), Backend::Cpu).unwrap();
+        let mut sim = PpCoulomb::new(p.clone(), &Config::new(0.01, law), Backend::Cpu).unwrap();
         let d = sim.diagnostics().unwrap();
         let third = norm(d.force_sum) / d.force_magnitude_sum;
         println!("{law:?}: |sum F| / sum |F| = {third:.2e}");
@@ -155,8 +155,8 @@ fn gpu_and_cpu_trajectories_agree() {
         let config = Config::new(0.05, ForceLaw::Plummer { epsilon: 0.5 })
             .with_integrator(integrator)
             .with_precision(prec);
-        let mut cpu = PpCoulomb::new(p.clone(), config, Backend::Cpu).unwrap();
-        let mut gpu = PpCoulomb::new(p, config, Backend::Gpu(&ctx)).unwrap();
+        let mut cpu = PpCoulomb::new(p.clone(), &config, Backend::Cpu).unwrap();
+        let mut gpu = PpCoulomb::new(p, &config, Backend::Gpu(&ctx)).unwrap();
         cpu.step(10).unwrap();
         gpu.step(7).unwrap();
         gpu.step(3).unwrap();
@@ -172,7 +172,7 @@ fn gpu_and_cpu_trajectories_agree() {
 #[test]
 fn zero_and_one_particle_are_fine() {
     for b in backends("zero_and_one_particle_are_fine") {
-        let empty = PpCoulomb::new(Particles::new(), Config::new(0.1, ForceLaw::Exact), b);
+        let empty = PpCoulomb::new(Particles::new(), &Config::new(0.1, ForceLaw::Exact), b);
         let mut empty = empty.unwrap();
         empty.step(3).unwrap();
         assert!(empty.accelerations().unwrap().is_empty());
@@ -180,7 +180,7 @@ fn zero_and_one_particle_are_fine() {
         let mut p = Particles::new();
         let s = p.add_species(Species::new("e", -1.0, 1.0)).unwrap();
         p.push(s, [1.0, 2.0, 3.0], [0.5, 0.0, 0.0]).unwrap();
-        let mut one = PpCoulomb::new(p, Config::new(0.1, ForceLaw::Exact), b).unwrap();
+        let mut one = PpCoulomb::new(p, &Config::new(0.1, ForceLaw::Exact), b).unwrap();
         assert_eq!(one.accelerations().unwrap(), vec![[0.0; 3]]);
         one.step(10).unwrap();
         let x = one.state().unwrap().position[0];
@@ -192,11 +192,11 @@ fn zero_and_one_particle_are_fine() {
 fn bad_input_is_a_clear_error() {
     let mut p = plasma(10, 5);
     p.position[3][1] = f64::NAN;
-    let e = PpCoulomb::new(p, Config::new(0.1, ForceLaw::Exact), Backend::Cpu).unwrap_err();
+    let e = PpCoulomb::new(p, &Config::new(0.1, ForceLaw::Exact), Backend::Cpu).unwrap_err();
     assert!(e.to_string().contains("position[3][1]"), "{e}");
     let mut p = plasma(10, 5);
     p.mass[4] = 0.0;
-    let e = PpCoulomb::new(p, Config::new(0.1, ForceLaw::Exact), Backend::Cpu).unwrap_err();
+    let e = PpCoulomb::new(p, &Config::new(0.1, ForceLaw::Exact), Backend::Cpu).unwrap_err();
     assert!(e.to_string().contains("mass[4]"), "{e}");
     let p = plasma(10, 5);
     for bad in [
@@ -204,7 +204,7 @@ fn bad_input_is_a_clear_error() {
         Config::new(0.1, ForceLaw::Plummer { epsilon: 0.0 }),
         Config::new(0.1, ForceLaw::Exclusion { radius: -1.0 }),
     ] {
-        assert!(PpCoulomb::new(p.clone(), bad, Backend::Cpu).is_err());
+        assert!(PpCoulomb::new(p.clone(), &bad, Backend::Cpu).is_err());
     }
 }
 
@@ -213,7 +213,7 @@ fn coincident_particles_in_exact_mode_name_the_pair() {
     let mut p = plasma(200, 6);
     p.position[150] = p.position[17];
     for b in backends("coincident_particles_in_exact_mode_name_the_pair") {
-        let mut sim = PpCoulomb::new(p.clone(), Config::new(0.1, ForceLaw::Exact), b).unwrap();
+        let mut sim = PpCoulomb::new(p.clone(), &Config::new(0.1, ForceLaw::Exact), b).unwrap();
         let e = sim.step(1).unwrap_err().to_string();
         assert!(
             e.contains("17") && e.contains("150") && e.contains("coincident"),
@@ -221,7 +221,7 @@ fn coincident_particles_in_exact_mode_name_the_pair() {
         );
         // Softened or excluded laws handle the same configuration.
         let soft = Config::new(0.1, ForceLaw::Plummer { epsilon: 0.1 });
-        let mut sim = PpCoulomb::new(p.clone(), soft, b).unwrap();
+        let mut sim = PpCoulomb::new(p.clone(), &soft, b).unwrap();
         sim.step(1).unwrap();
         let acc = sim.accelerations().unwrap();
         assert!(acc.iter().flatten().all(|c| c.is_finite()));

@@ -43,7 +43,7 @@ fn rutherford_deflection() {
     let b_inf = mu * v0 * b / (mu * v_inf);
     let theta = rutherford_angle(q * q, mu, v_inf, b_inf);
     let dt = 0.02;
-    let mut sim = PpCoulomb::new(p, Config::new(dt, ForceLaw::Exact), Backend::Cpu).unwrap();
+    let mut sim = PpCoulomb::new(p, &Config::new(dt, ForceLaw::Exact), Backend::Cpu).unwrap();
     let d0 = sim.diagnostics().unwrap();
     sim.step((2.0 * d / v0 / dt) as u32).unwrap();
     let st = sim.state().unwrap();
@@ -77,7 +77,7 @@ fn explosion_times(n: usize, precision: Precision, backend: Backend<'_>) -> [f64
     let omega = explosion_omega(1.0 / n as f64, 1.0, 1.0 / n as f64, radius);
     assert!((omega - 1.0).abs() < 1e-12);
     let config = Config::new(0.05, ForceLaw::Exact).with_precision(precision);
-    let mut sim = PpCoulomb::new(p, config, backend).unwrap();
+    let mut sim = PpCoulomb::new(p, &config, backend).unwrap();
     let (mut t_prev, mut xi_prev) = (0.0, 1.0_f64);
     let mut found = [f64::NAN; 2];
     while found[1].is_nan() && sim.time() < 10.0 {
@@ -156,7 +156,7 @@ fn energy_error_scales_as_dt_squared() {
     let law = ForceLaw::Plummer { epsilon: 0.5 };
     let max_error = |integrator: Integrator, dt: f64| {
         let config = Config::new(dt, law).with_integrator(integrator);
-        let mut sim = PpCoulomb::new(p.clone(), config, Backend::Cpu).unwrap();
+        let mut sim = PpCoulomb::new(p.clone(), &config, Backend::Cpu).unwrap();
         let e0 = sim.diagnostics().unwrap().total;
         let steps = (4.0 / dt).round() as u32;
         // Worst relative energy error over the first and the second half of the run.
@@ -209,7 +209,7 @@ fn angular_momentum_conserved_in_a_plasma() {
         .unwrap();
     p.fill(ion, 150, sphere, Velocities::Cold, 4).unwrap();
     let config = Config::new(0.02, ForceLaw::Plummer { epsilon: 0.3 });
-    let mut sim = PpCoulomb::new(p, config, Backend::Cpu).unwrap();
+    let mut sim = PpCoulomb::new(p, &config, Backend::Cpu).unwrap();
     let d0 = sim.diagnostics().unwrap();
     sim.step(100).unwrap();
     let d1 = sim.diagnostics().unwrap();

@@ -26,7 +26,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
     if li == 0u {
         // `params` is referenced so that the layout derived from this shader keeps its
         // binding (model_diffusivity() may not read it); the host binds it like the stencil.
-        _ = params[0];
+        _ = param_dt();
         atomicMax(&dmax, atomicLoad(&wmax));
     }
 }

@@ -1,6 +1,6 @@
-// Fills the ghost layer of one species plane (species S, for its Dirichlet values) from the
-// boundary codes in params: 0 no-flux (copy the adjacent cell), 1 periodic (copy the
-// opposite cell), 2 Dirichlet (2 g - adjacent, so the face value is g). Corners are never read.
+// Fills the ghost layer of one species plane (species S, for its Dirichlet values) with the
+// boundary rule `ghost_value` and the boundary codes and Dirichlet values in params.
+// Corners are never read.
 
 override NX: u32;
 override NY: u32;
@@ -10,14 +10,7 @@ override S: u32;
 @group(0) @binding(1) var<storage, read> params: array<real>;
 
 fn ghost(edge: u32, inner: real, opposite: real) -> real {
-    let code = u32(params[2u + edge]);
-    if code == 1u {
-        return opposite;
-    }
-    if code == 2u {
-        return real(2.0) * params[6u + edge * 4u + S] - inner;
-    }
-    return inner;
+    return ghost_value(boundary_code(edge), dirichlet_value(edge, S), inner, opposite);
 }
 
 @compute @workgroup_size(64)

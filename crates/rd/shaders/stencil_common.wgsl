@@ -2,7 +2,7 @@
 // the generated bindings (one storage buffer per species for the source `src<s>` and the
 // destination `dst<s>`, then `coef` and `params`) with `load_global(f, idx)` and `put(s, v)`.
 // Storage is padded with one ghost layer: plane = (NX + 2) * (NY + 2) values per field.
-// params: [0] dt, [1] 1/h^2, [2..6] boundary codes, [6..22] Dirichlet values, [22..] model.
+// params: read through the accessors of params.wgsl (dt, 1/h^2, boundaries, model `mp(k)`).
 
 override NX: u32;
 override NY: u32;
@@ -11,8 +11,6 @@ override NF: u32;          // species + coefficient fields read by the stencil
 override TX: u32 = 16u;    // tile width (threads per workgroup along x)
 override TY: u32 = 16u;    // tile height
 override AVERAGE: bool = false; // Heun second stage: dst = (dst + new) / 2
-
-const MP0: u32 = 22u;
 
 // Padded index of the cell being updated by this invocation.
 var<private> cell: u32;
@@ -23,8 +21,4 @@ fn row_width() -> u32 {
 
 fn plane() -> u32 {
     return (NX + 2u) * (NY + 2u);
-}
-
-fn mp(k: u32) -> real {
-    return params[MP0 + k];
 }

@@ -8,6 +8,6 @@ fn ld(f: u32, dx: i32, dy: i32) -> real {
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x < NX && gid.y < NY {
         cell = (gid.y + 1u) * row_width() + gid.x + 1u;
-        model_update(params[0], params[1]);
+        model_update(param_dt(), param_inv_h2());
     }
 }

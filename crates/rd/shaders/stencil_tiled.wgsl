@@ -31,6 +31,6 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) lid
     if i < NX && j < NY {
         tpos = (lid.y + 1u) * tw + lid.x + 1u;
         cell = (j + 1u) * row_width() + i + 1u;
-        model_update(params[0], params[1]);
+        model_update(param_dt(), param_inv_h2());
     }
 }

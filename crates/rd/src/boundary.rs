@@ -9,9 +9,7 @@
 //! - [`Boundary::Periodic`]: ghost = the interior cell on the opposite edge;
 //! - [`Boundary::Dirichlet`]: ghost = `2 g - interior`, so the face value is `g`.
 
-use simkit_backend::{Error, Result};
-
-use crate::real::Real;
+use simkit_backend::{Error, Real, Result};
 
 /// The condition on one edge of the grid.
 #[derive(Clone, Debug, PartialEq)]
@@ -128,8 +126,9 @@ impl Boundaries {
     }
 }
 
-/// The ghost value of species `s` outside an edge with condition `b`, from the adjacent
-/// interior cell and the interior cell on the opposite edge.
+/// The boundary rule: the ghost value of species `s` outside an edge with condition `b`, from
+/// the adjacent interior cell and the interior cell on the opposite edge. Used by every CPU
+/// path through [`fill_ghosts`]; its WGSL twin is `ghost_value` in `shaders/boundary.wgsl`.
 #[inline]
 pub(crate) fn ghost_value<T: Real>(b: &Boundary, s: usize, inner: T, opposite: T) -> T {
     match b {

@@ -1,13 +1,12 @@
 //! CPU backend: cache-blocked tiles of the padded grid, processed in parallel with rayon.
 
 use rayon::prelude::*;
-use simkit_backend::{Error, Result, Simulation};
+use simkit_backend::{Error, Real, Result, Simulation};
 
 use crate::boundary::fill_ghosts;
 use crate::grid::{Grid, pad};
 use crate::model::{Model, RowIn};
-use crate::real::Real;
-use crate::stepper::{Integrator, Stepping, check_dt, check_dt_with, check_model};
+use crate::stepper::{Integrator, Stepping, check_dt, check_dt_with, check_model, dt_bound};
 use crate::sweep::{ScratchPool, Sweep, can_fuse};
 
 /// Rows per band (the unit of parallel work).
@@ -133,12 +132,7 @@ impl<T: Real, M: Model> CpuRd<T, M> {
 
     /// Largest stable `dt` for the current fields.
     pub fn stable_dt(&self) -> f64 {
-        let d = self.max_diffusivity();
-        if d > 0.0 {
-            self.grid.h() * self.grid.h() / (4.0 * d)
-        } else {
-            f64::INFINITY
-        }
+        dt_bound(self.max_diffusivity(), self.grid.h())
     }
 
     /// Simulated time, `steps_done * dt` (for a constant `dt`).

@@ -7,23 +7,65 @@
 use std::fmt::Write as _;
 
 use simkit_backend::gpu::DISPATCH_WGSL;
-use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Result, Simulation};
+use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Real, Result, Simulation};
 
 use crate::boundary::{Boundary, fill_ghosts};
 use crate::grid::{Grid, pad};
 use crate::model::Model;
-use crate::real::Real;
-use crate::stepper::{Integrator, Stepping, check_dt, check_dt_with, check_model};
+use crate::stepper::{Integrator, Stepping, check_dt, check_dt_with, check_model, dt_bound};
 
 const COMMON_WGSL: &str = simkit_backend::wgsl!("stencil_common.wgsl");
 const TILED_WGSL: &str = simkit_backend::wgsl!("stencil_tiled.wgsl");
 const GLOBAL_WGSL: &str = simkit_backend::wgsl!("stencil_global.wgsl");
 const GHOSTS_WGSL: &str = simkit_backend::wgsl!("ghosts.wgsl");
 const DIFFUSIVITY_WGSL: &str = simkit_backend::wgsl!("diffusivity.wgsl");
-/// Index of the first model parameter in the params buffer (see `stencil_common.wgsl`).
-const MODEL_PARAMS_AT: usize = 22;
+/// Accessors of the params buffer (`param_dt`, `boundary_code`, `mp`, ...).
+const PARAMS_WGSL: &str = simkit_backend::wgsl!("params.wgsl");
+/// The boundary rule `ghost_value`, twin of [`crate::boundary::ghost_value`].
+const BOUNDARY_WGSL: &str = simkit_backend::wgsl!("boundary.wgsl");
 /// Species the params layout has room for (Dirichlet values per edge).
 const MAX_SPECIES: usize = 4;
+
+/// Layout of the params buffer, one array of reals bound by every kernel: the only place
+/// the positions are written down. [`header_wgsl`] hands the same values to WGSL as the
+/// constants `P_*` that `params.wgsl` reads.
+mod params_at {
+    use super::MAX_SPECIES;
+    /// Time step `dt`.
+    pub const DT: usize = 0;
+    /// `1 / h^2`.
+    pub const INV_H2: usize = 1;
+    /// Boundary codes of the four edges (west, east, south, north).
+    pub const BOUNDARY: usize = 2;
+    /// Dirichlet values, `MAX_SPECIES` per edge, edges in the same order.
+    pub const DIRICHLET: usize = BOUNDARY + 4;
+    /// First model parameter ([`crate::Model::gpu_params`]).
+    pub const MODEL: usize = DIRICHLET + 4 * MAX_SPECIES;
+}
+
+/// The WGSL every rd kernel starts with: `alias real = f32|f64;`, the params layout constants
+/// `P_*` and the boundary codes `BC_*`, all written from the Rust definitions.
+fn header_wgsl<T: Real>() -> String {
+    let mut w = format!("alias real = {};\n", T::WGSL);
+    for (name, at) in [
+        ("P_DT", params_at::DT),
+        ("P_INV_H2", params_at::INV_H2),
+        ("P_BOUNDARY", params_at::BOUNDARY),
+        ("P_DIRICHLET", params_at::DIRICHLET),
+        ("P_MAX_SPECIES", MAX_SPECIES),
+        ("P_MODEL", params_at::MODEL),
+    ] {
+        let _ = writeln!(w, "const {name}: u32 = {at}u;");
+    }
+    for (name, b) in [
+        ("BC_NO_FLUX", Boundary::NoFlux),
+        ("BC_PERIODIC", Boundary::Periodic),
+        ("BC_DIRICHLET", Boundary::Dirichlet(Vec::new())),
+    ] {
+        let _ = writeln!(w, "const {name}: u32 = {}u;", b.code());
+    }
+    w
+}
 
 /// Which stencil kernel the GPU backend runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -101,14 +143,14 @@ impl<T: Real, M: Model> std::fmt::Debug for GpuRd<T, M> {
 }
 
 fn params_vec<T: Real, M: Model>(model: &M, grid: &Grid<T>, s: &Stepping) -> Vec<T> {
-    let mut p = vec![0.0f64; MODEL_PARAMS_AT];
-    p[0] = s.dt;
-    p[1] = 1.0 / (grid.h() * grid.h());
+    let mut p = vec![0.0f64; params_at::MODEL];
+    p[params_at::DT] = s.dt;
+    p[params_at::INV_H2] = 1.0 / (grid.h() * grid.h());
     for (e, b) in grid.boundaries().edges().into_iter().enumerate() {
-        p[2 + e] = f64::from(b.code());
+        p[params_at::BOUNDARY + e] = f64::from(b.code());
         if let Boundary::Dirichlet(v) = b {
             for (k, x) in v.iter().enumerate() {
-                p[6 + e * MAX_SPECIES + k] = *x;
+                p[params_at::DIRICHLET + e * MAX_SPECIES + k] = *x;
             }
         }
     }
@@ -159,6 +201,28 @@ fn bindings_wgsl(ns: usize, reduce: bool) -> String {
     }
     w.push_str("}\n");
     w
+}
+
+/// The kernel that fills the ghost layer of species `s` (boundary rule `ghost_value` of
+/// `boundary.wgsl`) on an `nx x ny` grid; `header` is [`header_wgsl`]. Bindings: the padded
+/// species plane, then params.
+fn ghost_kernel(ctx: &GpuContext, header: &str, nx: usize, ny: usize, s: usize) -> Result<Kernel> {
+    Kernel::new(
+        ctx,
+        &KernelDesc {
+            label: "rd ghosts",
+            sources: &[
+                header,
+                DISPATCH_WGSL,
+                PARAMS_WGSL,
+                BOUNDARY_WGSL,
+                GHOSTS_WGSL,
+            ],
+            entry: "main",
+            workgroup_size: 64,
+            constants: &[("NX", nx as f64), ("NY", ny as f64), ("S", s as f64)],
+        },
+    )
 }
 
 /// The on-device reduction of the model's effective diffusivity (field-dependent models).
@@ -274,7 +338,7 @@ impl<T: Real, M: Model> GpuRd<T, M> {
         let params =
             GpuBuffer::from_slice(ctx, "rd params", &params_vec(&model, &grid, &stepping))?;
 
-        let header = format!("alias real = {};\n", T::WGSL);
+        let header = header_wgsl::<T>();
         let body = match options.kernel {
             GpuKernel::Tiled => TILED_WGSL,
             GpuKernel::Global => GLOBAL_WGSL,
@@ -283,6 +347,7 @@ impl<T: Real, M: Model> GpuRd<T, M> {
         let sources = [
             header.as_str(),
             bindings.as_str(),
+            PARAMS_WGSL,
             COMMON_WGSL,
             model.wgsl(),
             body,
@@ -313,18 +378,7 @@ impl<T: Real, M: Model> GpuRd<T, M> {
         let stencil = make("rd stencil", 0.0)?;
         let stencil_avg = make("rd stencil (Heun average)", 1.0)?;
         let ghosts = (0..ns)
-            .map(|s| {
-                Kernel::new(
-                    ctx,
-                    &KernelDesc {
-                        label: "rd ghosts",
-                        sources: &[header.as_str(), DISPATCH_WGSL, GHOSTS_WGSL],
-                        entry: "main",
-                        workgroup_size: 64,
-                        constants: &[("NX", nx as f64), ("NY", ny as f64), ("S", s as f64)],
-                    },
-                )
-            })
+            .map(|s| ghost_kernel(ctx, &header, nx, ny, s))
             .collect::<Result<Vec<_>>>()?;
         let sb = |k: &Kernel, src: &[GpuBuffer<T>], dst: &[GpuBuffer<T>]| {
             let mut entries: Vec<wgpu::BindingResource<'_>> =
@@ -354,6 +408,7 @@ impl<T: Real, M: Model> GpuRd<T, M> {
                     sources: &[
                         header.as_str(),
                         rb.as_str(),
+                        PARAMS_WGSL,
                         COMMON_WGSL,
                         model.wgsl(),
                         DIFFUSIVITY_WGSL,
@@ -437,13 +492,7 @@ impl<T: Real, M: Model> GpuRd<T, M> {
     /// Largest stable `dt` for the current fields: for models whose diffusivity depends on
     /// the fields, reduced on the device (in f32) and read back.
     pub fn stable_dt(&self) -> Result<f64> {
-        let d = self.max_diffusivity()?;
-        let h = self.grid.h();
-        Ok(if d > 0.0 {
-            h * h / (4.0 * d)
-        } else {
-            f64::INFINITY
-        })
+        Ok(dt_bound(self.max_diffusivity()?, self.grid.h()))
     }
 
     /// The model's largest effective diffusivity for the current fields (on the device for
@@ -591,5 +640,201 @@ impl<T: Real, M: Model> Simulation for GpuRd<T, M> {
             self.options.tile.1,
             self.ctx.adapter_info().name
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use simkit_backend::rng::rng_uniform;
+    use simkit_backend::testing::{eval_wgsl, gpu_or_skip};
+
+    use super::*;
+    use crate::boundary::ghost_value;
+    use crate::{Boundaries, GrayScott};
+
+    /// A small grid with distinct values in every cell.
+    fn grid(nx: usize, ny: usize, bc: Boundaries) -> Grid<f32> {
+        let field = |seed: u32| {
+            (0..nx * ny)
+                .map(|k| 4.0 * rng_uniform(seed, 0, k as u32) - 1.0)
+                .collect()
+        };
+        Grid::new(nx, ny, 0.5, bc, vec![field(1), field(2)]).unwrap()
+    }
+
+    /// Boundary sets that together put every code and distinct Dirichlet values on every edge.
+    fn boundary_sets() -> Vec<Boundaries> {
+        vec![
+            Boundaries {
+                west: Boundary::Dirichlet(vec![0.5, -1.25]),
+                east: Boundary::Dirichlet(vec![2.0, 3.5]),
+                south: Boundary::Periodic,
+                north: Boundary::Periodic,
+            },
+            Boundaries {
+                west: Boundary::NoFlux,
+                east: Boundary::NoFlux,
+                south: Boundary::Dirichlet(vec![-0.75, 1e-20]),
+                north: Boundary::Dirichlet(vec![1e6, 0.0]),
+            },
+        ]
+    }
+
+    /// Every value the kernels read from params, through the accessors of `params.wgsl`,
+    /// is the quantity `params_vec` was given: dt, 1/h^2, the boundary code and Dirichlet
+    /// values of each edge, and the model parameters.
+    #[test]
+    fn shaders_read_params_where_params_vec_writes_them() {
+        let Some(ctx) = gpu_or_skip("shaders_read_params_where_params_vec_writes_them") else {
+            return;
+        };
+        let model = GrayScott::new(2e-5, 1e-5, 0.035, 0.065).unwrap();
+        let stepping = Stepping::euler(0.125);
+        let n = params_at::MODEL + 4;
+        let reader = format!(
+            "var<private> params: array<f32, {n}>;\n\
+             fn read_all(p: array<f32, {n}>) -> array<f32, {n}> {{\n\
+                 params = p;\n\
+                 var o: array<f32, {n}>;\n\
+                 o[0] = param_dt();\n\
+                 o[1] = param_inv_h2();\n\
+                 for (var e = 0u; e < 4u; e++) {{\n\
+                     o[2u + e] = real(boundary_code(e));\n\
+                     for (var s = 0u; s < 4u; s++) {{ o[6u + 4u * e + s] = dirichlet_value(e, s); }}\n\
+                 }}\n\
+                 for (var k = 0u; k < 4u; k++) {{ o[22u + k] = mp(k); }}\n\
+                 return o;\n\
+             }}\n"
+        );
+        let header = header_wgsl::<f32>();
+        let ty = format!("array<f32, {n}>");
+        for bc in boundary_sets() {
+            let g = grid(5, 4, bc.clone());
+            let p: [f32; 26] = params_vec(&model, &g, &stepping).try_into().unwrap();
+            let got: Vec<[f32; 26]> = eval_wgsl(
+                &ctx,
+                &[&header, &reader, PARAMS_WGSL],
+                &ty,
+                &ty,
+                "read_all(x)",
+                &[p],
+            )
+            .unwrap();
+            // The quantities in the order `read_all` lists them (its own order, not the layout).
+            let mut want = vec![0.125, 4.0];
+            let codes = bc.edges().map(|b| match b {
+                Boundary::NoFlux => 0.0,
+                Boundary::Periodic => 1.0,
+                Boundary::Dirichlet(_) => 2.0,
+            });
+            want.extend(codes);
+            for b in bc.edges() {
+                let mut v = match b {
+                    Boundary::Dirichlet(v) => v.clone(),
+                    _ => Vec::new(),
+                };
+                v.resize(4, 0.0);
+                want.extend(v);
+            }
+            want.extend([2e-5, 1e-5, 0.035, 0.035 + 0.065]);
+            let want: Vec<f32> = want.into_iter().map(|v| v as f32).collect();
+            assert_eq!(got[0].to_vec(), want, "{bc:?}");
+        }
+    }
+
+    /// The boundary rule: WGSL `ghost_value` against Rust `ghost_value` for every boundary
+    /// kind on a sample of values (0, 1, negative, tiny, large): bit for bit (one exact
+    /// doubling and one rounded subtraction on both sides).
+    #[test]
+    fn boundary_rule_matches_rust() {
+        let Some(ctx) = gpu_or_skip("boundary_rule_matches_rust") else {
+            return;
+        };
+        let values = [0.0f32, 1.0, -2.5, 0.3, 1e-20, 3e7];
+        let mut inputs = Vec::new();
+        let mut want = Vec::new();
+        for b in [
+            Boundary::NoFlux,
+            Boundary::Periodic,
+            Boundary::Dirichlet(Vec::new()),
+        ] {
+            for g in [0.0f32, 1.0, -1.25, 1e-20, 1e6] {
+                for inner in values {
+                    for opposite in values {
+                        let rule = match b {
+                            Boundary::Dirichlet(_) => Boundary::Dirichlet(vec![f64::from(g)]),
+                            _ => b.clone(),
+                        };
+                        inputs.push([b.code() as f32, g, inner, opposite]);
+                        want.push(ghost_value(&rule, 0, inner, opposite));
+                    }
+                }
+            }
+        }
+        let header = header_wgsl::<f32>();
+        let got: Vec<f32> = eval_wgsl(
+            &ctx,
+            &[&header, BOUNDARY_WGSL],
+            "vec4<f32>",
+            "f32",
+            "ghost_value(u32(x.x), x.y, x.z, x.w)",
+            &inputs,
+        )
+        .unwrap();
+        for ((x, g), w) in inputs.iter().zip(&got).zip(&want) {
+            assert_eq!(
+                g.to_bits(),
+                w.to_bits(),
+                "input {x:?}: GPU {g:e}, CPU {w:e}"
+            );
+        }
+    }
+
+    /// The ghost kernel at every boundary cell of a 7 x 5 grid (both species, every boundary
+    /// set) equals `fill_ghosts` bit for bit; corners are left as they were on both sides.
+    #[test]
+    fn ghost_kernel_matches_fill_ghosts() {
+        let Some(ctx) = gpu_or_skip("ghost_kernel_matches_fill_ghosts") else {
+            return;
+        };
+        let (nx, ny) = (7, 5);
+        let plane = (nx + 2) * (ny + 2);
+        let model = GrayScott::spots();
+        let header = header_wgsl::<f32>();
+        for bc in boundary_sets() {
+            let g = grid(nx, ny, bc.clone());
+            let params = params_vec(&model, &g, &Stepping::euler(1.0));
+            let params = GpuBuffer::from_slice(&ctx, "params", &params).unwrap();
+            for (s, f) in g.padded().chunks(plane).enumerate() {
+                // Ghosts start as garbage; both sides must overwrite every edge cell.
+                let mut want: Vec<f32> = f.to_vec();
+                for (k, v) in want.iter_mut().enumerate() {
+                    let (i, j) = (k % (nx + 2), k / (nx + 2));
+                    if i == 0 || j == 0 || i == nx + 1 || j == ny + 1 {
+                        *v = -7.0 - k as f32;
+                    }
+                }
+                let buf = GpuBuffer::from_slice(&ctx, "plane", &want).unwrap();
+                fill_ghosts(&mut want, nx, ny, s, &bc);
+                let kernel = ghost_kernel(&ctx, &header, nx, ny, s).unwrap();
+                let bind = kernel
+                    .bind(&ctx, &[buf.binding(), params.binding()])
+                    .unwrap();
+                simkit_backend::gpu::run_pass(&ctx, "ghosts", |pass| {
+                    kernel.dispatch_items(&ctx, pass, &bind, (2 * (nx + ny)) as u64)
+                })
+                .unwrap();
+                let got = buf.download(&ctx).unwrap();
+                for (k, (a, b)) in got.iter().zip(&want).enumerate() {
+                    assert_eq!(
+                        a.to_bits(),
+                        b.to_bits(),
+                        "{bc:?}, species {s}, padded cell ({}, {}): GPU {a:e}, CPU {b:e}",
+                        k % (nx + 2),
+                        k / (nx + 2)
+                    );
+                }
+            }
+        }
     }
 }

@@ -1,10 +1,9 @@
 //! The grid: species fields on a square 2D lattice with spacing `h` and edge conditions.
 
 use rayon::prelude::*;
-use simkit_backend::{Error, Result, require_positive};
+use simkit_backend::{Error, Real, Result, require_positive};
 
 use crate::boundary::Boundaries;
-use crate::real::Real;
 
 /// One or more species fields on an `nx x ny` grid of square cells of side `h`.
 ///

@@ -38,7 +38,6 @@ mod gpu;
 mod grid;
 mod model;
 mod models;
-mod real;
 pub mod scenes;
 mod stepper;
 mod sweep;
@@ -50,7 +49,7 @@ pub use gpu::{GpuKernel, GpuOptions, GpuRd};
 pub use grid::Grid;
 pub use model::{Model, RowIn, Stencil};
 pub use models::{Colony, Diffusion, GrayScott};
-pub use real::Real;
+pub use simkit_backend::Real;
 pub use stepper::{Guard, Integrator, Stepping, stable_dt};
 
 use simkit_backend::{Backend, Result, Simulation};

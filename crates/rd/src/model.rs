@@ -2,10 +2,9 @@
 
 use std::fmt::Debug;
 
-use simkit_backend::Result;
+use simkit_backend::{Real, Result};
 
 use crate::grid::Grid;
-use crate::real::Real;
 
 /// One row segment of the padded input fields, handed to [`Model::update_row`].
 ///

@@ -1,12 +1,11 @@
 //! Ready-made scenes and observables: the source's colony scene, a seeded Gray–Scott square,
 //! the colony gap width and a spot counter.
 
-use simkit_backend::{Result, rng::rng_uniform};
+use simkit_backend::{Real, Result, rng::rng_uniform};
 
 use crate::boundary::Boundaries;
 use crate::grid::Grid;
 use crate::models::Colony;
-use crate::real::Real;
 
 /// The source's bacterial-colony scene scaled to `nx x ny` (the original is 512 x 512):
 /// `h = 0.5`, `gamma = 0.5`, `d = 0.75 (1 + 0.4 U(-1, 1))`, `n = 1 + 0.1 U(-1, 1)`, `b = 0`

@@ -1,10 +1,9 @@
 //! Time integration settings and the stability guard.
 
-use simkit_backend::{Error, Result, require_positive};
+use simkit_backend::{Error, Real, Result, require_positive};
 
 use crate::grid::Grid;
 use crate::model::Model;
-use crate::real::Real;
 
 /// Explicit time integrator.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -77,9 +76,16 @@ impl Stepping {
 /// largest effective diffusivity (5-point Laplacian, explicit Euler; Heun's real stability
 /// interval `[-2, 0]` is the same). `f64::INFINITY` when nothing diffuses.
 pub fn stable_dt<T: Real, M: Model>(model: &M, grid: &Grid<T>) -> f64 {
-    let d = model.max_diffusivity(grid);
-    if d > 0.0 {
-        grid.h() * grid.h() / (4.0 * d)
+    dt_bound(model.max_diffusivity(grid), grid.h())
+}
+
+/// The explicit stability bound of the 5-point Laplacian, `h^2 / (4 d_max)` (forward Euler:
+/// the most negative Laplacian eigenvalue is `-8 / h^2`, and `dt * D * 8 / h^2 <= 2`);
+/// `f64::INFINITY` when `d_max <= 0` (nothing diffuses). Every stability check and every
+/// `stable_dt` of both backends goes through this one function.
+pub(crate) fn dt_bound(d_max: f64, h: f64) -> f64 {
+    if d_max > 0.0 {
+        h * h / (4.0 * d_max)
     } else {
         f64::INFINITY
     }
@@ -93,11 +99,7 @@ pub(crate) fn check_dt<T: Real, M: Model>(model: &M, grid: &Grid<T>, s: &Steppin
 /// Checks `dt` against `h^2 / (4 d_max)` unless the guard is overridden.
 pub(crate) fn check_dt_with(model: &str, d_max: f64, h: f64, s: &Stepping) -> Result<()> {
     require_positive("dt", s.dt)?;
-    let bound = if d_max > 0.0 {
-        h * h / (4.0 * d_max)
-    } else {
-        f64::INFINITY
-    };
+    let bound = dt_bound(d_max, h);
     if s.guard == Guard::Enforce && s.dt > bound {
         return Err(Error::Unstable {
             dt: s.dt,
@@ -131,4 +133,25 @@ pub(crate) fn check_model<T: Real, M: Model>(model: &M, grid: &Grid<T>) -> Resul
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_bound_is_h2_over_4d_and_infinite_without_diffusion() {
+        assert_eq!(dt_bound(2.0, 0.5), 0.5 * 0.5 / 8.0);
+        assert_eq!(dt_bound(0.0, 1.0), f64::INFINITY);
+        assert_eq!(dt_bound(-1.0, 1.0), f64::INFINITY);
+        let s = Stepping::euler(0.2);
+        assert!(check_dt_with("diffusion", 1.0, 1.0, &s).is_ok());
+        assert!(check_dt_with("diffusion", 1.0, 1.0, &Stepping::euler(0.25)).is_ok());
+        let err = check_dt_with("diffusion", 1.0, 1.0, &Stepping::euler(0.3)).unwrap_err();
+        assert!(
+            matches!(err, Error::Unstable { bound, .. } if bound == 0.25),
+            "{err}"
+        );
+        assert!(check_dt_with("diffusion", 1.0, 1.0, &Stepping::euler(0.3).unguarded()).is_ok());
+    }
 }

@@ -19,7 +19,7 @@ use rayon::prelude::*;
 
 use crate::boundary::{Boundaries, Boundary, ghost_value};
 use crate::model::{Model, RowIn};
-use crate::real::Real;
+use simkit_backend::Real;
 
 /// Scratch buffers kept between sweeps, one per parallel job at most.
 #[derive(Debug, Default)]

@@ -4,11 +4,12 @@
 //! One Newton step takes the estimate to about 2e-8 relative (below f32 rounding, ~6e-8);
 //! two steps take it to a few f64 ulps. The tests compare both against a plain f64 reference.
 //! Pairs are masked (self pair, exclusion radius) after the arithmetic, so `rsqrt(0) = inf`
-//! never reaches a sum.
+//! never reaches a sum. The formulas are those of [`crate::laws`] (the same argument of the
+//! reciprocal square root, the same masks); the tests compare this path with them.
 
 use std::arch::x86_64::*;
 
-use super::kernel::{LawKind, Sources};
+use super::pairs::{LawKind, Sources};
 
 /// Whether this CPU runs the AVX-512 path (checked once per force evaluation).
 pub(crate) fn available() -> bool {

@@ -9,9 +9,13 @@
 use multiversion::multiversion;
 use rayon::prelude::*;
 
+use simkit_backend::Real;
+
 #[cfg(target_arch = "x86_64")]
 use super::avx512;
+use super::pairs::{LawKind, Sources};
 use crate::config::ForceLaw;
+use crate::laws;
 
 /// Partial sums per target (16 f32 = one AVX-512 register; 16 f64 = two).
 pub(crate) const LANES: usize = 16;
@@ -20,33 +24,8 @@ const J_BLOCK: usize = 1024;
 /// Targets per rayon task.
 const TARGET_CHUNK: usize = 32;
 
-/// A float type the kernel runs in.
-pub(crate) trait Real:
-    Copy
-    + Send
-    + Sync
-    + PartialOrd
-    + std::ops::Add<Output = Self>
-    + std::ops::Sub<Output = Self>
-    + std::ops::Mul<Output = Self>
-    + std::ops::Div<Output = Self>
-    + std::ops::AddAssign
-    + 'static
-{
-    /// 0.
-    const ZERO: Self;
-    /// 1.
-    const ONE: Self;
-    /// Coordinate of padding sources (far from everything, finite when squared).
-    const PAD: Self;
-    /// Square root.
-    fn sqrt(self) -> Self;
-    /// `self * a + b` with one rounding (an FMA instruction in the AVX2/AVX-512 clones).
-    fn mul_add(self, a: Self, b: Self) -> Self;
-    /// Conversion from f64 (rounding).
-    fn from_f64(x: f64) -> Self;
-    /// Conversion to f64 (exact).
-    fn to_f64(self) -> f64;
+/// A float type the CPU kernel runs in: the shared [`Real`] plus its block kernel.
+pub(crate) trait CpuReal: Real {
     /// Field of one target from a block of sources: the AVX-512 rsqrt path when `fast`
     /// (the caller checked [`avx512::available`]), else the portable multiversioned kernel.
     fn block<L: Law>(
@@ -59,29 +38,10 @@ pub(crate) trait Real:
     ) -> [Self; 3];
 }
 
-/// Implements [`Real`] for a float type: its padding value and its AVX-512 block kernel.
-macro_rules! impl_real {
-    ($t:ty, $pad:expr, $simd:ident) => {
-        impl Real for $t {
-            const ZERO: Self = 0.0;
-            const ONE: Self = 1.0;
-            const PAD: Self = $pad;
-            #[inline(always)]
-            fn sqrt(self) -> Self {
-                <$t>::sqrt(self)
-            }
-            #[inline(always)]
-            fn mul_add(self, a: Self, b: Self) -> Self {
-                <$t>::mul_add(self, a, b)
-            }
-            #[inline(always)]
-            fn from_f64(x: f64) -> Self {
-                x as $t
-            }
-            #[inline(always)]
-            fn to_f64(self) -> f64 {
-                f64::from(self)
-            }
+/// Implements [`CpuReal`] for a float type: its AVX-512 block kernel.
+macro_rules! impl_cpu_real {
+    ($t:ty, $simd:ident) => {
+        impl CpuReal for $t {
             #[inline(always)]
             fn block<L: Law>(
                 xi: Self,
@@ -103,37 +63,28 @@ macro_rules! impl_real {
     };
 }
 
-impl_real!(f32, 1.0e12, block_f32);
-impl_real!(f64, 1.0e50, block_f64);
+impl_cpu_real!(f32, block_f32);
+impl_cpu_real!(f64, block_f64);
 
-/// Which law a [`Law`] type is (a compile-time constant in the SIMD path).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum LawKind {
-    Exact,
-    Exclusion,
-    Plummer,
-}
-
-/// A pair law: the factor `w(r^2)` with force `q_j w r`; `p` is the squared parameter.
+/// A pair law as a type (one compiled kernel per law): the weight `w(r^2)` of
+/// [`crate::laws`], with force `q_j w r`; `p` is the squared parameter.
 pub(crate) trait Law: Send + Sync {
     const KIND: LawKind;
     fn weight<T: Real>(r2: T, p: T) -> T;
 }
 
-/// Bare Coulomb; the self pair (r = 0) contributes nothing.
+/// [`laws::exact_weight`].
 pub(crate) struct ExactLaw;
-/// Bare Coulomb outside the exclusion radius, nothing inside.
+/// [`laws::exclusion_weight`].
 pub(crate) struct ExclusionLaw;
-/// Plummer-softened Coulomb.
+/// [`laws::plummer_weight`].
 pub(crate) struct PlummerLaw;
 
 impl Law for ExactLaw {
     const KIND: LawKind = LawKind::Exact;
     #[inline(always)]
     fn weight<T: Real>(r2: T, _p: T) -> T {
-        let inv = T::ONE / r2.sqrt();
-        let w = inv * inv * inv;
-        if r2 > T::ZERO { w } else { T::ZERO }
+        laws::exact_weight(r2)
     }
 }
 
@@ -141,9 +92,7 @@ impl Law for ExclusionLaw {
     const KIND: LawKind = LawKind::Exclusion;
     #[inline(always)]
     fn weight<T: Real>(r2: T, p: T) -> T {
-        let inv = T::ONE / r2.sqrt();
-        let w = inv * inv * inv;
-        if r2 > p { w } else { T::ZERO }
+        laws::exclusion_weight(r2, p)
     }
 }
 
@@ -151,22 +100,13 @@ impl Law for PlummerLaw {
     const KIND: LawKind = LawKind::Plummer;
     #[inline(always)]
     fn weight<T: Real>(r2: T, p: T) -> T {
-        let inv = T::ONE / (r2 + p).sqrt();
-        inv * inv * inv
+        laws::plummer_weight(r2, p)
     }
-}
-
-/// Sources in structure-of-arrays form, padded to a multiple of [`LANES`].
-pub(crate) struct Sources<'a, T> {
-    pub x: &'a [T],
-    pub y: &'a [T],
-    pub z: &'a [T],
-    pub q: &'a [T],
 }
 
 /// Field `E_i = sum_j q_j w(r_ij) r_ij` of one target from a block of sources.
 #[multiversion(targets("x86_64+avx512f+avx512vl+avx512dq+avx2+fma", "x86_64+avx2+fma"))]
-fn block_field<T: Real, L: Law>(xi: T, yi: T, zi: T, s: &Sources<'_, T>, p: T) -> [T; 3] {
+fn block_field<T: CpuReal, L: Law>(xi: T, yi: T, zi: T, s: &Sources<'_, T>, p: T) -> [T; 3] {
     let mut ax = [T::ZERO; LANES];
     let mut ay = [T::ZERO; LANES];
     let mut az = [T::ZERO; LANES];
@@ -197,7 +137,7 @@ fn block_field<T: Real, L: Law>(xi: T, yi: T, zi: T, s: &Sources<'_, T>, p: T) -
 
 /// Fields at the first `ex.len()` sources (the targets), written to `ex, ey, ez`; `fast`
 /// selects the AVX-512 rsqrt path (only pass `true` when [`avx512::available`]).
-pub(crate) fn field<T: Real>(
+pub(crate) fn field<T: CpuReal>(
     law: ForceLaw,
     fast: bool,
     s: &Sources<'_, T>,
@@ -213,7 +153,7 @@ pub(crate) fn field<T: Real>(
     }
 }
 
-fn field_with<T: Real, L: Law>(
+fn field_with<T: CpuReal, L: Law>(
     s: &Sources<'_, T>,
     p: T,
     fast: bool,

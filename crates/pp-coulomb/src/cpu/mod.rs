@@ -3,21 +3,22 @@
 #[cfg(target_arch = "x86_64")]
 mod avx512;
 mod kernel;
+mod pairs;
 
-pub(crate) use kernel::Real;
-use kernel::{LANES, Sources};
+use kernel::{CpuReal, LANES};
+use pairs::Sources;
 
 use std::collections::HashMap;
 
-use simkit_backend::Result;
+use simkit_backend::{Precision, Result};
 
-use crate::config::{Config, ForceLaw, Integrator, Precision, coincident_error};
+use crate::config::{Config, ForceLaw, Integrator, coincident_error};
+use crate::engine::{Engine, PositionsVelocities, pad_coordinate};
 use crate::particles::Particles;
-use crate::sim::{Engine, PositionsVelocities};
 
 /// CPU state in precision `T`. Positions are double-buffered: the force pass reads `x`, the
 /// drift writes `x_next`, then the two swap, so no position is written while it is read.
-pub(crate) struct CpuEngine<T: Real> {
+pub(crate) struct CpuEngine<T: CpuReal> {
     n: usize,
     x: [Vec<T>; 3],
     x_next: [Vec<T>; 3],
@@ -50,17 +51,23 @@ pub(crate) fn fast_path_available() -> bool {
     return false;
 }
 
-fn padded<T: Real>(values: impl Iterator<Item = T>, n: usize, pad: T) -> Vec<T> {
+fn padded<T: CpuReal>(values: impl Iterator<Item = T>, n: usize, pad: T) -> Vec<T> {
     let npad = n.next_multiple_of(LANES).max(LANES);
     let mut v: Vec<T> = values.collect();
     v.resize(npad, pad);
     v
 }
 
-impl<T: Real> CpuEngine<T> {
+impl<T: CpuReal> CpuEngine<T> {
     fn new(p: &Particles, c: &Config) -> Self {
         let n = p.len();
-        let coord = |k: usize| padded(p.position.iter().map(|x| T::from_f64(x[k])), n, T::PAD);
+        let coord = |k: usize| {
+            padded(
+                p.position.iter().map(|x| T::from_f64(x[k])),
+                n,
+                pad_coordinate(),
+            )
+        };
         let x = [coord(0), coord(1), coord(2)];
         let vel = |k: usize| p.velocity.iter().map(|v| T::from_f64(v[k])).collect();
         Self {
@@ -148,7 +155,7 @@ impl<T: Real> CpuEngine<T> {
     }
 }
 
-impl<T: Real> Engine for CpuEngine<T> {
+impl<T: CpuReal> Engine for CpuEngine<T> {
     fn step(&mut self, steps: u32) -> Result<()> {
         let half = self.dt * T::from_f64(0.5);
         // The whole loop on a pool thread: no hand-over to the pool per pass.
@@ -173,7 +180,7 @@ impl<T: Real> Engine for CpuEngine<T> {
         })
     }
 
-    fn positions_velocities(&mut self) -> Result<PositionsVelocities> {
+    fn state(&mut self) -> Result<PositionsVelocities> {
         Ok((Self::to_f64(&self.x, self.n), Self::to_f64(&self.v, self.n)))
     }
 

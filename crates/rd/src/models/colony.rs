@@ -2,12 +2,11 @@
 
 use multiversion::multiversion;
 use rayon::prelude::*;
-use simkit_backend::{Error, Result, require_non_negative};
+use simkit_backend::{Error, Real, Result, require_non_negative};
 
 use crate::grid::Grid;
 use crate::model::{Model, RowIn, Stencil};
 use crate::models::store;
-use crate::real::Real;
 
 /// Bacteria `b` (species 0) feeding on nutrient `n` (species 1):
 ///

@@ -1,12 +1,11 @@
 //! Linear diffusion with a constant diffusivity per species.
 
 use multiversion::multiversion;
-use simkit_backend::{Error, Result};
+use simkit_backend::{Error, Real, Result};
 
 use crate::grid::Grid;
 use crate::model::{Model, RowIn, Stencil};
 use crate::models::store;
-use crate::real::Real;
 
 /// `du_s/dt = D_s lap u_s` for 1 to 4 independent species: the validation workhorse.
 #[derive(Clone, Debug, PartialEq)]

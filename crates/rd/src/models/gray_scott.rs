@@ -1,12 +1,11 @@
 //! The Gray–Scott model (Pearson 1993).
 
 use multiversion::multiversion;
-use simkit_backend::{Error, Result, require_finite};
+use simkit_backend::{Error, Real, Result, require_finite};
 
 use crate::grid::Grid;
 use crate::model::{Model, RowIn, Stencil};
 use crate::models::store;
-use crate::real::Real;
 
 /// Gray–Scott: `du/dt = Du lap u - u v^2 + F (1 - u)`, `dv/dt = Dv lap v + u v^2 - (F + k) v`.
 ///

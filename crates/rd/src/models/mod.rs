@@ -8,7 +8,7 @@ pub use colony::Colony;
 pub use diffusion::Diffusion;
 pub use gray_scott::GrayScott;
 
-use crate::real::Real;
+use simkit_backend::Real;
 
 /// Writes `v` into `out`, or the Heun average `(out + v) / 2` when `AVG`.
 #[inline(always)]
