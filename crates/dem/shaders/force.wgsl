@@ -1,6 +1,8 @@
 // Contact forces by gathering over the full shell of neighbour cells (one invocation per
 // particle, writing only its own acceleration), walls, gravity, and the second half kick.
 // Variants (override constants, chosen once): FRICTION, INIT (initial accelerations only).
+// The contact law is contact.wgsl, the wall geometry walls.wgsl (one copy each, shared by
+// the particle and the wall contacts).
 override FRICTION: bool = false;
 override INIT: bool = false;
 
@@ -12,26 +14,12 @@ override INIT: bool = false;
 @group(0) @binding(5) var<storage, read> wrapped: array<vec4<f32>>;
 @group(0) @binding(6) var<storage, read> vpred: array<vec4<f32>>;
 @group(0) @binding(7) var<storage, read> species: array<u32>;
-// Species-pair coefficients (kappa, 2b, mu_s, mu_k), n_species^2 entries, then 4 entries
-// per wall: (normal, offset), (center.xy, radius, kind), coefficients, (vibrating, 0, 0, 0).
+// Species-pair coefficients (kappa, 2b, mu_s, mu_k), n_species^2 entries, then one DemWall
+// record (4 entries) per wall.
 @group(0) @binding(8) var<storage, read> table: array<vec4<f32>>;
 @group(0) @binding(9) var<storage, read_write> acc: array<vec4<f32>>;
 @group(0) @binding(10) var<storage, read_write> vel: array<vec4<f32>>;
 @group(0) @binding(11) var<storage, read> clock: array<u32>;
-
-fn tangential(n: vec3<f32>, vn: f32, vrel: vec3<f32>, fnorm: f32, mij: f32, c: vec4<f32>) -> vec3<f32> {
-    if (!FRICTION) {
-        return vec3<f32>(0.0);
-    }
-    let vt = vrel - vn * n;
-    let vt2 = dot(vt, vt);
-    if (vt2 <= 0.0) {
-        return vec3<f32>(0.0);
-    }
-    let vtn = sqrt(vt2);
-    let ft = min(c.z * abs(fnorm), c.w * mij * vtn);
-    return -(ft / vtn) * vt;
-}
 
 @compute @workgroup_size(64)
 fn dem_force(
@@ -70,12 +58,15 @@ fn dem_force(
                     let dist = sqrt(r2);
                     let n = sep / dist;
                     let vj = vpred[j];
-                    let mij = mi * vj.w / (mi + vj.w);
+                    let mij = dem_reduced_mass(mi, vj.w);
                     let cf = table[row + species[j]];
                     let vrel = vi.xyz - vj.xyz;
                     let vn = dot(vrel, n);
-                    let fnorm = mij * (cf.x * (rsum - dist) - cf.y * vn);
-                    f += fnorm * n + tangential(n, vn, vrel, fnorm, mij, cf);
+                    let fnorm = dem_normal_force(cf, mij, rsum - dist, vn);
+                    f += fnorm * n;
+                    if (FRICTION) {
+                        f += dem_friction_force(cf, n, vn, vrel, fnorm, mij);
+                    }
                 }
             }
         }
@@ -86,38 +77,35 @@ fn dem_force(
         if (!INIT) {
             steps = steps + 1u;
         }
-        let phase = f32(steps) * prm.omega_dt;
-        let zw = -prm.amplitude * cos(phase);
-        let vw = prm.amplitude * prm.omega * sin(phase);
+        let motion = dem_wall_motion(prm.amplitude, prm.omega, f32(steps) * prm.omega_dt);
         let base = prm.n_species * prm.n_species;
         for (var w = 0u; w < prm.n_walls; w++) {
-            let g0 = table[base + 4u * w];
-            let g1 = table[base + 4u * w + 1u];
-            let cf = table[base + 4u * w + 2u];
-            let vib = table[base + 4u * w + 3u].x;
+            let e = base + 4u * w;
+            let wall = DemWall(table[e], table[e + 1u], table[e + 2u], table[e + 3u]);
+            let cf = wall.coeff;
+            let vib = wall.motion.x;
             var n: vec3<f32>;
             var delta: f32;
-            if (g1.w > 0.5) {
-                let d = ti.xy - g1.xy;
-                let rho = length(d);
-                delta = rho + ri - g1.z;
-                if (rho <= 0.0) {
-                    continue;
-                }
-                n = vec3<f32>(-d / rho, 0.0);
+            if (wall.cylinder.w > 0.5) {
+                let cyl = dem_cylinder_overlap(wall.cylinder.xy, wall.cylinder.z, ti.xy, ri);
+                n = vec3<f32>(cyl.xy, 0.0);
+                delta = cyl.z;
             } else {
-                n = g0.xyz;
-                delta = ri - (dot(n, ti) - g0.w - vib * zw * n[prm.vertical]);
+                n = wall.plane.xyz;
+                delta = dem_plane_overlap(n, wall.plane.w, vib * motion.x * n[prm.vertical], ti, ri);
             }
             if (delta <= 0.0) {
                 continue;
             }
             var wv = vec3<f32>(0.0);
-            wv[prm.vertical] = vib * vw;
+            wv[prm.vertical] = vib * motion.y;
             let vrel = vi.xyz - wv;
             let vn = dot(vrel, n);
-            let fnorm = mi * (cf.x * delta - cf.y * vn);
-            f += fnorm * n + tangential(n, vn, vrel, fnorm, mi, cf);
+            let fnorm = dem_normal_force(cf, mi, delta, vn);
+            f += fnorm * n;
+            if (FRICTION) {
+                f += dem_friction_force(cf, n, vn, vrel, fnorm, mi);
+            }
         }
     }
     let a = f / mi;

@@ -1,6 +1,6 @@
 //! Solver settings: integrator, precision, time step and its guard.
 
-use simkit_backend::{Error, Result};
+use simkit_backend::{Error, Precision, Result};
 
 use crate::{ContactCoefficients, Scene};
 
@@ -15,16 +15,6 @@ pub enum Integrator {
     /// the damping uses the second-order estimate `v(t) = (r(t) - r(t-dt)) / dt + a(t-dt) dt / 2`
     /// instead of the source's lagged velocity. CPU backend only.
     PositionVerlet,
-}
-
-/// Floating-point precision of the CPU backend (the GPU backend always uses `f32`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum Precision {
-    /// Double precision (default).
-    #[default]
-    F64,
-    /// Single precision.
-    F32,
 }
 
 /// Divisor of the default time step: `dt = t_c / 30` (the source's chapter 1 choice).

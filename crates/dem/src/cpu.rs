@@ -14,31 +14,14 @@
 use multiversion::multiversion;
 use rayon::prelude::*;
 
-use simkit_backend::{Error, Result};
+use simkit_backend::{Error, Real, Result};
 
 use crate::pairs::{Block, CellBins, PARALLEL_MIN, block_size, make_blocks};
 use crate::prepared::Prepared;
-use crate::real::Real;
-use crate::{Integrator, State, pair_index};
-
-#[derive(Clone, Copy)]
-struct Coeff<T> {
-    kappa: T,
-    two_b: T,
-    mu_s: T,
-    mu_k: T,
-}
-
-impl<T: Real> Coeff<T> {
-    fn of(c: &crate::ContactCoefficients) -> Self {
-        Self {
-            kappa: T::of(c.kappa),
-            two_b: T::of(c.two_b),
-            mu_s: T::of(c.mu_s),
-            mu_k: T::of(c.mu_k),
-        }
-    }
-}
+use crate::{
+    ContactCoefficients, Integrator, State, cylinder_overlap, friction_force, normal_force,
+    pair_index, plane_overlap, reduced_mass,
+};
 
 #[derive(Clone, Copy)]
 struct WallT<T> {
@@ -47,7 +30,7 @@ struct WallT<T> {
     offset: T,
     center: [T; 2],
     radius: T,
-    coeff: Coeff<T>,
+    coeff: ContactCoefficients<T>,
     vibrating: bool,
     /// Whether the wall depends on a periodic coordinate (then the particle position is
     /// wrapped before the wall test: positions are wrapped only at list builds).
@@ -78,7 +61,7 @@ pub(crate) struct CpuEngine<const D: usize, T: Real> {
     started: bool,
     p: Particles<T, D>,
     n_species: usize,
-    coeff: Vec<Coeff<T>>,
+    coeff: Vec<ContactCoefficients<T>>,
     walls: Vec<WallT<T>>,
     bins: CellBins<D>,
     blocks: Vec<Block<T, D>>,
@@ -108,7 +91,7 @@ struct ForceInput<'a, T, const D: usize> {
     mass: &'a [T],
     species: &'a [u32],
     n_species: usize,
-    coeff: &'a [Coeff<T>],
+    coeff: &'a [ContactCoefficients<T>],
     walls: &'a [WallT<T>],
     gravity: [T; D],
     zw: T,
@@ -120,35 +103,6 @@ struct ForceInput<'a, T, const D: usize> {
     /// Square of the largest contact distance (twice the largest radius).
     cut2: T,
     block: usize,
-}
-
-#[inline(always)]
-fn tangential<T: Real, const D: usize, const FRICTION: bool>(
-    f: &mut [T; D],
-    n: [T; D],
-    vn: T,
-    vrel: [T; D],
-    fnorm: T,
-    mij: T,
-    c: &Coeff<T>,
-) {
-    if FRICTION {
-        let mut vt = [T::ZERO; D];
-        let mut vt2 = T::ZERO;
-        for d in 0..D {
-            vt[d] = vrel[d] - vn * n[d];
-            vt2 += vt[d] * vt[d];
-        }
-        if vt2 > T::ZERO {
-            let vtn = vt2.sqrt();
-            let fabs = if fnorm > T::ZERO { fnorm } else { -fnorm };
-            let ft = (c.mu_s * fabs).min(c.mu_k * mij * vtn);
-            let s = ft / vtn;
-            for d in 0..D {
-                f[d] += -(s * vt[d]);
-            }
-        }
-    }
 }
 
 /// The force of wall `w` on particle `i` (if they touch) added to `f`.
@@ -166,31 +120,26 @@ fn wall_force<T: Real, const D: usize, const FRICTION: bool>(
     }
     let mut n = [T::ZERO; D];
     let delta;
-    let mut wv = [T::ZERO; D];
     if w.cylinder {
-        let dx = pos[0] - w.center[0];
-        let dy = pos[1] - w.center[1];
-        let rho = (dx * dx + dy * dy).sqrt();
-        delta = rho + r - w.radius;
-        if delta <= T::ZERO || rho <= T::ZERO {
+        let nc;
+        (delta, nc) = cylinder_overlap(w.center, w.radius, [pos[0], pos[1]], r);
+        if delta <= T::ZERO {
             return;
         }
-        n[0] = -(dx / rho);
-        n[1] = -(dy / rho);
+        n[..2].copy_from_slice(&nc);
     } else {
-        let mut h = -w.offset;
-        for d in 0..D {
-            n[d] = w.normal[d];
-            h += n[d] * pos[d];
-        }
-        if w.vibrating {
-            h = h - inp.zw * n[inp.vert];
-        }
-        delta = r - h;
+        n = std::array::from_fn(|d| w.normal[d]);
+        let lift = if w.vibrating {
+            inp.zw * n[inp.vert]
+        } else {
+            T::ZERO
+        };
+        delta = plane_overlap(&n, w.offset, lift, &pos, r);
         if delta <= T::ZERO {
             return;
         }
     }
+    let mut wv = [T::ZERO; D];
     if w.vibrating {
         wv[inp.vert] = inp.vw;
     }
@@ -200,11 +149,15 @@ fn wall_force<T: Real, const D: usize, const FRICTION: bool>(
         vrel[d] = v[d] - wv[d];
         vn += vrel[d] * n[d];
     }
-    let fnorm = m * (w.coeff.kappa * delta - w.coeff.two_b * vn);
+    let fnorm = normal_force(&w.coeff, m, delta, vn);
     for d in 0..D {
         f[d] += fnorm * n[d];
     }
-    tangential::<T, D, FRICTION>(f, n, vn, vrel, fnorm, m, &w.coeff);
+    if FRICTION && let Some(ft) = friction_force(&w.coeff, &n, vn, &vrel, fnorm, m) {
+        for d in 0..D {
+            f[d] += ft[d];
+        }
+    }
 }
 
 /// The force of the contact of particles `i` and `j` at separation `sep = x_i - x_j`: added
@@ -238,7 +191,7 @@ fn pair_contact<T: Real, const D: usize, const FRICTION: bool>(
     }
     let dist = r2.sqrt();
     let delta = rsum - dist;
-    let inv = T::of(1.0) / dist;
+    let inv = T::ONE / dist;
     let (vi, vj) = (&inp.vel[i], &inp.vel[j]);
     let mut n = [T::ZERO; D];
     let mut vrel = [T::ZERO; D];
@@ -249,14 +202,18 @@ fn pair_contact<T: Real, const D: usize, const FRICTION: bool>(
         vn += vrel[d] * n[d];
     }
     let (m, mj) = (inp.mass[i], inp.mass[j]);
-    let mij = m * mj / (m + mj);
+    let mij = reduced_mass(m, mj);
     let c = &inp.coeff[pair_index(inp.species[i], inp.species[j], inp.n_species)];
-    let fnorm = mij * (c.kappa * delta - c.two_b * vn);
+    let fnorm = normal_force(c, mij, delta, vn);
     let mut fp = [T::ZERO; D];
     for d in 0..D {
         fp[d] = fnorm * n[d];
     }
-    tangential::<T, D, FRICTION>(&mut fp, n, vn, vrel, fnorm, mij, c);
+    if FRICTION && let Some(ft) = friction_force(c, &n, vn, &vrel, fnorm, mij) {
+        for d in 0..D {
+            fp[d] += ft[d];
+        }
+    }
     for d in 0..D {
         fi[d] += fp[d];
     }
@@ -381,7 +338,7 @@ fn permute<X: Copy + Send + Sync>(v: &mut Vec<X>, order: &[u32], parallel: bool)
 impl<const D: usize, T: Real> CpuEngine<D, T> {
     pub fn new(prep: Prepared) -> Result<Self> {
         let n = prep.n;
-        let cv = |a: &[f64; 3]| -> [T; D] { std::array::from_fn(|d| T::of(a[d])) };
+        let cv = |a: &[f64; 3]| -> [T; D] { std::array::from_fn(|d| T::from_f64(a[d])) };
         let lo: [f64; D] = std::array::from_fn(|d| prep.lo[d]);
         let len: [f64; D] = std::array::from_fn(|d| prep.len[d]);
         let periodic: [bool; D] = std::array::from_fn(|d| prep.periodic[d]);
@@ -400,15 +357,15 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
         }
         let bins = CellBins::new(lo, len, periodic, range, n)?;
         let mut gravity = [T::ZERO; D];
-        gravity[prep.vertical] = T::of(-prep.gravity);
+        gravity[prep.vertical] = T::from_f64(-prep.gravity);
         let p = Particles {
             pos: prep.positions.iter().map(cv).collect(),
             vel: prep.velocities.iter().map(cv).collect(),
             acc: vec![[T::ZERO; D]; n],
             aux: vec![[T::ZERO; D]; n],
-            radius: prep.radius.iter().map(|&r| T::of(r)).collect(),
-            mass: prep.mass.iter().map(|&m| T::of(m)).collect(),
-            inv_mass: prep.mass.iter().map(|&m| T::of(1.0 / m)).collect(),
+            radius: prep.radius.iter().map(|&r| T::from_f64(r)).collect(),
+            mass: prep.mass.iter().map(|&m| T::from_f64(m)).collect(),
+            inv_mass: prep.mass.iter().map(|&m| T::from_f64(1.0 / m)).collect(),
             species: prep.species.clone(),
             id: (0..n as u32).collect(),
             reference: Vec::new(),
@@ -422,11 +379,11 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
             .iter()
             .map(|w| WallT {
                 cylinder: w.cylinder,
-                normal: w.normal.map(T::of),
-                offset: T::of(w.offset),
-                center: w.center.map(T::of),
-                radius: T::of(w.radius),
-                coeff: Coeff::of(&w.coeff),
+                normal: w.normal.map(T::from_f64),
+                offset: T::from_f64(w.offset),
+                center: w.center.map(T::from_f64),
+                radius: T::from_f64(w.radius),
+                coeff: w.coeff.to_real(),
                 vibrating: w.vibrating,
                 wrap: if w.cylinder {
                     (0..D.min(2)).any(|d| periodic[d])
@@ -438,7 +395,11 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
         let mut e = Self {
             p,
             n_species: prep.n_species,
-            coeff: prep.coeff.iter().map(Coeff::of).collect(),
+            coeff: prep
+                .coeff
+                .iter()
+                .map(ContactCoefficients::to_real)
+                .collect(),
             walls,
             bins,
             blocks: make_blocks(n),
@@ -447,8 +408,8 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
             gravity,
             rebuild_dist2: 0.25 * prep.skin * prep.skin,
             periodic,
-            lo: lo.map(T::of),
-            len: len.map(T::of),
+            lo: lo.map(T::from_f64),
+            len: len.map(T::from_f64),
             cut2: (r_max + r_max) * (r_max + r_max),
             wall_margin: prep.skin,
             prep,
@@ -498,26 +459,20 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
         let amplitude = self.prep.vibration.map_or(0.0, |v| v.amplitude.abs());
         let vert = self.prep.vertical;
         let (walls, pos, radius) = (&self.walls, &self.p.pos, &self.p.radius);
+        let prepared = &self.prep.walls;
         let find = |b: &mut Block<T, D>| {
             b.walls.clear();
             for i in b.start..b.end {
                 let r = radius[i].to_f64();
                 let x: [f64; D] = std::array::from_fn(|d| pos[i][d].to_f64());
-                for (k, w) in walls.iter().enumerate() {
-                    // Largest overlap the wall could have now (negative: a gap).
-                    let reach = if w.cylinder {
-                        (x[0] - w.center[0].to_f64()).hypot(x[1] - w.center[1].to_f64()) + r
-                            - w.radius.to_f64()
+                for (k, (w, pw)) in walls.iter().zip(prepared).enumerate() {
+                    // Largest overlap the wall could have at any phase (negative: a gap).
+                    let travel = if pw.vibrating && !pw.cylinder {
+                        amplitude * pw.normal[vert].abs()
                     } else {
-                        let h: f64 = (0..D).map(|d| w.normal[d].to_f64() * x[d]).sum::<f64>()
-                            - w.offset.to_f64();
-                        let travel = if w.vibrating {
-                            amplitude * w.normal[vert].to_f64().abs()
-                        } else {
-                            0.0
-                        };
-                        r - h + travel
+                        0.0
                     };
+                    let reach = pw.overlap(&x, r, 0.0, vert) + travel;
                     if w.wrap || reach > -(margin + 0.01 * r) {
                         b.walls.push(((i - b.start) as u32, k as u32));
                     }
@@ -556,8 +511,8 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
             coeff: &self.coeff,
             walls: &self.walls,
             gravity: self.gravity,
-            zw: T::of(zw),
-            vw: T::of(vw),
+            zw: T::from_f64(zw),
+            vw: T::from_f64(vw),
             vert: self.prep.vertical,
             periodic: self.periodic,
             lo: self.lo,
@@ -589,8 +544,8 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
     /// displacement since the list build; otherwise 0.
     fn finish(&mut self, kick: bool, drift: bool) -> f64 {
         let bs = self.block;
-        let dt = T::of(self.prep.dt);
-        let h = T::of(0.5 * self.prep.dt);
+        let dt = T::from_f64(self.prep.dt);
+        let h = T::from_f64(0.5 * self.prep.dt);
         let blocks = &self.blocks;
         let p = &mut self.p;
         let inv_mass = &p.inv_mass;
@@ -644,8 +599,8 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
     /// first step of a call; later ones are fused into [`finish`](Self::finish)); returns
     /// the largest squared displacement since the list build.
     fn drift_velocity_verlet(&mut self) -> f64 {
-        let dt = T::of(self.prep.dt);
-        let h = T::of(0.5 * self.prep.dt);
+        let dt = T::from_f64(self.prep.dt);
+        let h = T::from_f64(0.5 * self.prep.dt);
         let bs = self.block;
         let p = &mut self.p;
         let drift = |((((a, v), x), vp), r): Chunks<'_, T, D>| {
@@ -692,9 +647,9 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
     fn step_position_verlet(&mut self) {
         self.forces(self.time, false);
         self.finish(false, false);
-        let dt = T::of(self.prep.dt);
-        let h = T::of(0.5 * self.prep.dt);
-        let inv_dt = T::of(1.0 / self.prep.dt);
+        let dt = T::from_f64(self.prep.dt);
+        let h = T::from_f64(0.5 * self.prep.dt);
+        let inv_dt = T::from_f64(1.0 / self.prep.dt);
         let first = !self.started;
         let bs = self.block;
         let p = &mut self.p;

@@ -87,36 +87,6 @@ pub(crate) fn deepest_overlap(
     Ok(worst)
 }
 
-/// Overlap of particle `x` (radius `r`) with wall `w` at vertical displacement `zw`, and
-/// the unit normal pointing from the wall to the particle.
-pub(crate) fn wall_overlap(
-    p: &Prepared,
-    w: &crate::prepared::PreparedWall,
-    x: [f64; 3],
-    r: f64,
-    zw: f64,
-) -> (f64, [f64; 3]) {
-    if w.cylinder {
-        let dx = x[0] - w.center[0];
-        let dy = x[1] - w.center[1];
-        let rho = (dx * dx + dy * dy).sqrt();
-        let n = if rho > 0.0 {
-            [-dx / rho, -dy / rho, 0.0]
-        } else {
-            [0.0; 3]
-        };
-        (rho + r - w.radius, n)
-    } else {
-        let shift = if w.vibrating {
-            zw * w.normal[p.vertical]
-        } else {
-            0.0
-        };
-        let h = (0..p.axes).map(|d| w.normal[d] * x[d]).sum::<f64>() - w.offset - shift;
-        (r - h, w.normal)
-    }
-}
-
 pub(crate) fn compute(
     p: &Prepared,
     time: f64,
@@ -163,7 +133,7 @@ pub(crate) fn compute(
         if depth > 0.0 {
             let c = &p.coeff[crate::pair_index(p.species[i], p.species[j], p.n_species)];
             let mij = crate::reduced_mass(p.mass[i], p.mass[j]);
-            out.elastic += 0.5 * mij * c.kappa * depth * depth;
+            out.elastic += crate::spring_energy(c, mij, depth);
             out.contacts += 1;
             worst = worst.max(depth);
             worst_ratio = worst_ratio.max(depth / p.radius[i].min(p.radius[j]));
@@ -172,9 +142,13 @@ pub(crate) fn compute(
     let (zw, _) = p.wall_motion(time);
     for ((&xi, &r), &m) in x.iter().zip(&p.radius).zip(&p.mass) {
         for w in &p.walls {
-            let (depth, _) = wall_overlap(p, w, xi, r, zw);
+            let depth = if p.axes == 2 {
+                w.overlap(&[xi[0], xi[1]], r, zw, p.vertical)
+            } else {
+                w.overlap(&xi, r, zw, p.vertical)
+            };
             if depth > 0.0 {
-                out.elastic += 0.5 * m * w.coeff.kappa * depth * depth;
+                out.elastic += crate::spring_energy(&w.coeff, m, depth);
                 out.wall_contacts += 1;
                 worst = worst.max(depth);
                 worst_ratio = worst_ratio.max(depth / r);

@@ -22,6 +22,11 @@ const PARAMS_WGSL: &str = simkit_backend::wgsl!("params.wgsl");
 const DRIFT_WGSL: &str = simkit_backend::wgsl!("drift.wgsl");
 const FORCE_WGSL: &str = simkit_backend::wgsl!("force.wgsl");
 const TICK_WGSL: &str = simkit_backend::wgsl!("tick.wgsl");
+/// The contact law (twin of [`crate::normal_force`], [`crate::friction_force`]).
+const CONTACT_WGSL: &str = simkit_backend::wgsl!("contact.wgsl");
+/// The wall geometry (twin of [`crate::plane_overlap`], [`crate::cylinder_overlap`],
+/// [`crate::wall_motion`]).
+const WALLS_WGSL: &str = simkit_backend::wgsl!("walls.wgsl");
 
 /// Steps recorded into one command buffer.
 const STEPS_PER_SUBMIT: u32 = 64;
@@ -43,7 +48,23 @@ struct GpuParams {
     n_species: u32,
     vertical: u32,
     dim: u32,
-    pad: [u32; 2],
+    _pad0: u32,
+    _pad1: u32,
+}
+
+/// Mirror of `DemWall` in `shaders/params.wgsl`: one wall record, 4 consecutive entries of
+/// the force kernel's coefficient table.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct GpuWall {
+    /// Unit normal and offset of a plane wall, relative to the grid origin.
+    plane: [f32; 4],
+    /// Axis `(x, y)` relative to the grid origin, radius, kind (1 = cylinder, 0 = plane).
+    cylinder: [f32; 4],
+    /// Contact coefficients `(kappa, 2b, mu_s, mu_k)`.
+    coeff: [f32; 4],
+    /// `(1, 0, 0, 0)` for a vibrating wall, zero otherwise.
+    motion: [f32; 4],
 }
 
 /// The cell-list buffers the force kernel reads.
@@ -134,16 +155,18 @@ struct BoundOnly {
 
 fn kernel(
     ctx: &GpuContext,
-    src: &str,
+    src: &[&str],
     entry: &str,
     wg: u32,
     consts: &[(&str, f64)],
 ) -> Result<Kernel> {
+    let mut sources = vec![DISPATCH_WGSL, CELLS_WGSL, PARAMS_WGSL];
+    sources.extend_from_slice(src);
     Kernel::new(
         ctx,
         &KernelDesc {
             label: entry,
-            sources: &[DISPATCH_WGSL, CELLS_WGSL, PARAMS_WGSL, src],
+            sources: &sources,
             entry,
             workgroup_size: wg,
             constants: consts,
@@ -220,25 +243,28 @@ impl GpuEngine {
         for w in &prep.walls {
             // Walls in wrapped coordinates (relative to the grid origin), as the kernel sees them.
             let n_dot_o: f64 = (0..3).map(|d| w.normal[d] * origin[d]).sum();
-            table.push([
-                w.normal[0] as f32,
-                w.normal[1] as f32,
-                w.normal[2] as f32,
-                (w.offset - n_dot_o) as f32,
-            ]);
-            table.push([
-                (w.center[0] - origin[0]) as f32,
-                (w.center[1] - origin[1]) as f32,
-                w.radius as f32,
-                if w.cylinder { 1.0 } else { 0.0 },
-            ]);
-            table.push([
-                w.coeff.kappa as f32,
-                w.coeff.two_b as f32,
-                w.coeff.mu_s as f32,
-                w.coeff.mu_k as f32,
-            ]);
-            table.push([if w.vibrating { 1.0 } else { 0.0 }, 0.0, 0.0, 0.0]);
+            let record = GpuWall {
+                plane: [
+                    w.normal[0] as f32,
+                    w.normal[1] as f32,
+                    w.normal[2] as f32,
+                    (w.offset - n_dot_o) as f32,
+                ],
+                cylinder: [
+                    (w.center[0] - origin[0]) as f32,
+                    (w.center[1] - origin[1]) as f32,
+                    w.radius as f32,
+                    if w.cylinder { 1.0 } else { 0.0 },
+                ],
+                coeff: [
+                    w.coeff.kappa as f32,
+                    w.coeff.two_b as f32,
+                    w.coeff.mu_s as f32,
+                    w.coeff.mu_k as f32,
+                ],
+                motion: [if w.vibrating { 1.0 } else { 0.0 }, 0.0, 0.0, 0.0],
+            };
+            table.extend_from_slice(&bytemuck::cast::<GpuWall, [[f32; 4]; 4]>(record));
         }
         let table = GpuBuffer::from_slice(ctx, "dem table", &table)?;
         let clock = GpuBuffer::<u32>::zeroed(ctx, "dem clock", 1)?;
@@ -259,7 +285,8 @@ impl GpuEngine {
             n_species: prep.n_species as u32,
             vertical: prep.vertical as u32,
             dim: prep.axes as u32,
-            pad: [0; 2],
+            _pad0: 0,
+            _pad1: 0,
         };
         let params = Uniform::new(ctx, "dem params", &pv);
         let cells = Cells::new(ctx, &prep, &pos)?;
@@ -270,7 +297,7 @@ impl GpuEngine {
             sorted_pos,
             wrapped,
         } = cells.buffers();
-        let k = kernel(ctx, DRIFT_WGSL, "dem_drift", 64, &[])?;
+        let k = kernel(ctx, &[DRIFT_WGSL], "dem_drift", 64, &[])?;
         let b = k.bind(
             ctx,
             &[
@@ -300,7 +327,7 @@ impl GpuEngine {
         ];
         let k = kernel(
             ctx,
-            FORCE_WGSL,
+            &[CONTACT_WGSL, WALLS_WGSL, FORCE_WGSL],
             "dem_force",
             64,
             &[("FRICTION", friction), ("INIT", 0.0)],
@@ -309,13 +336,13 @@ impl GpuEngine {
         let force = (k, b);
         let init = kernel(
             ctx,
-            FORCE_WGSL,
+            &[CONTACT_WGSL, WALLS_WGSL, FORCE_WGSL],
             "dem_force",
             64,
             &[("FRICTION", friction), ("INIT", 1.0)],
         )?;
         let init_bind = init.bind(ctx, &force_resources)?;
-        let k = kernel(ctx, TICK_WGSL, "dem_tick", 1, &[])?;
+        let k = kernel(ctx, &[TICK_WGSL], "dem_tick", 1, &[])?;
         let b = k.bind(ctx, &[clock.binding()])?;
         let tick = (k, b);
         // Initial accelerations a(0) with the initial velocities.
@@ -396,5 +423,56 @@ impl Engine for GpuEngine {
 
     fn name(&self) -> String {
         format!("gpu f32 ({})", self.ctx.adapter_info().name)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::mem::offset_of;
+
+    use simkit_backend::testing::assert_mirrors;
+
+    use super::*;
+
+    #[test]
+    fn gpu_params_mirror_dem_params() {
+        assert_mirrors::<GpuParams>(
+            PARAMS_WGSL,
+            "DemParams",
+            &[
+                ("gravity", offset_of!(GpuParams, gravity)),
+                ("dt", offset_of!(GpuParams, dt)),
+                ("half_dt", offset_of!(GpuParams, half_dt)),
+                ("omega_dt", offset_of!(GpuParams, omega_dt)),
+                ("amplitude", offset_of!(GpuParams, amplitude)),
+                ("omega", offset_of!(GpuParams, omega)),
+                ("n", offset_of!(GpuParams, n)),
+                ("n_walls", offset_of!(GpuParams, n_walls)),
+                ("n_species", offset_of!(GpuParams, n_species)),
+                ("vertical", offset_of!(GpuParams, vertical)),
+                ("dim", offset_of!(GpuParams, dim)),
+                ("_pad0", offset_of!(GpuParams, _pad0)),
+                ("_pad1", offset_of!(GpuParams, _pad1)),
+            ],
+        );
+    }
+
+    #[test]
+    fn gpu_wall_mirrors_dem_wall() {
+        assert_mirrors::<GpuWall>(
+            PARAMS_WGSL,
+            "DemWall",
+            &[
+                ("plane", offset_of!(GpuWall, plane)),
+                ("cylinder", offset_of!(GpuWall, cylinder)),
+                ("coeff", offset_of!(GpuWall, coeff)),
+                ("motion", offset_of!(GpuWall, motion)),
+            ],
+        );
+        // The kernel reads a record as 4 consecutive table entries.
+        assert_eq!(
+            std::mem::size_of::<GpuWall>(),
+            4 * std::mem::size_of::<[f32; 4]>()
+        );
     }
 }

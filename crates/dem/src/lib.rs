@@ -6,6 +6,10 @@
 //! - [`Scene`]: particles, species-pair [`Material`] table, walls, gravity, [`Vibration`].
 //! - [`ContactCoefficients`]: spring and dashpot from the requested restitution `e` and
 //!   contact time `t_c` with the reduced mass, so `e` holds for any mass pair and for walls.
+//! - The laws, one function each for every CPU path (both precisions, diagnostics
+//!   included) with a WGSL twin in `shaders/` that the GPU force kernel calls:
+//!   [`normal_force`], [`friction_force`], [`reduced_mass`] (contact), [`plane_overlap`],
+//!   [`cylinder_overlap`], [`wall_motion`] (walls); [`spring_energy`] for the diagnostics.
 //! - [`Config`]: [`Integrator`] (velocity or position Verlet), [`Precision`], time step
 //!   (default `t_c / 30`; above [`safe_dt`] an error unless overridden).
 //! - [`Dem`]: the simulation ([`simkit_backend::Simulation`]), with [`Diagnostics`].
@@ -37,16 +41,18 @@ mod engine;
 mod gpu;
 mod pairs;
 mod prepared;
-mod real;
 mod scene;
 pub mod scenes;
 mod sim;
 mod units;
+mod walls;
 
-pub use config::{Config, DEFAULT_STEPS_PER_CONTACT, Integrator, Precision, resolve_dt, safe_dt};
-pub use contact::{ContactCoefficients, normal_force, reduced_mass};
+pub use config::{Config, DEFAULT_STEPS_PER_CONTACT, Integrator, resolve_dt, safe_dt};
+pub use contact::{ContactCoefficients, friction_force, normal_force, reduced_mass, spring_energy};
 pub use diagnostics::Diagnostics;
 pub use prepared::MAX_INITIAL_OVERLAP;
 pub use scene::{Dim, Material, Particle, Scene, Vibration, Wall, WallShape, pair_index};
 pub use sim::{Dem, State};
+pub use simkit_backend::Precision;
 pub use units::Units;
+pub use walls::{cylinder_overlap, plane_overlap, wall_motion};

@@ -14,9 +14,7 @@
 
 use rayon::prelude::*;
 
-use simkit_backend::{Error, Result};
-
-use crate::real::Real;
+use simkit_backend::{Error, Real, Result};
 
 /// Below this particle count the CPU passes run on the calling thread: for small systems
 /// waking the rayon pool several times per step costs more than the work (the blocks, and
@@ -209,11 +207,11 @@ impl<const D: usize> CellBins<D> {
                             if self.periodic[d] {
                                 if s > half[d] {
                                     s -= self.len[d];
-                                    shift[d] = T::of(self.len[d]);
+                                    shift[d] = T::from_f64(self.len[d]);
                                     crosses = true;
                                 } else if s < -half[d] {
                                     s += self.len[d];
-                                    shift[d] = T::of(-self.len[d]);
+                                    shift[d] = T::from_f64(-self.len[d]);
                                     crosses = true;
                                 }
                             }

@@ -2,7 +2,10 @@
 
 use simkit_backend::{Error, Result};
 
-use crate::{Config, ContactCoefficients, Integrator, Scene, Vibration, WallShape, resolve_dt};
+use crate::{
+    Config, ContactCoefficients, Integrator, Scene, Vibration, WallShape, cylinder_overlap,
+    plane_overlap, resolve_dt, wall_motion,
+};
 
 /// A wall with its coefficients, in a backend-neutral form.
 #[derive(Clone, Copy, Debug)]
@@ -19,6 +22,25 @@ pub(crate) struct PreparedWall {
     pub radius: f64,
     pub coeff: ContactCoefficients,
     pub vibrating: bool,
+}
+
+impl PreparedWall {
+    /// Overlap (negative: minus the gap) of a particle at `x` with radius `r` with this
+    /// wall when the vibrating walls are displaced by `zw` along the `vertical` axis
+    /// ([`plane_overlap`] or [`cylinder_overlap`], as the force loops use them).
+    pub fn overlap<const D: usize>(&self, x: &[f64; D], r: f64, zw: f64, vertical: usize) -> f64 {
+        if self.cylinder {
+            cylinder_overlap(self.center, self.radius, [x[0], x[1]], r).0
+        } else {
+            let normal: [f64; D] = std::array::from_fn(|d| self.normal[d]);
+            let lift = if self.vibrating {
+                zw * self.normal[vertical]
+            } else {
+                0.0
+            };
+            plane_overlap(&normal, self.offset, lift, x, r)
+        }
+    }
 }
 
 /// Everything the backends need, validated.
@@ -154,7 +176,7 @@ impl Prepared {
     /// Vertical wall displacement and velocity at time `t`.
     pub fn wall_motion(&self, t: f64) -> (f64, f64) {
         match self.vibration {
-            Some(v) => (v.displacement(t), v.velocity(t)),
+            Some(v) => wall_motion(v.amplitude, v.omega, v.omega * t),
             None => (0.0, 0.0),
         }
     }

@@ -216,12 +216,12 @@ pub struct Vibration {
 impl Vibration {
     /// Displacement of the vibrating walls at time `t`.
     pub fn displacement(&self, t: f64) -> f64 {
-        -self.amplitude * (self.omega * t).cos()
+        crate::wall_motion(self.amplitude, self.omega, self.omega * t).0
     }
 
     /// Velocity of the vibrating walls at time `t`.
     pub fn velocity(&self, t: f64) -> f64 {
-        self.amplitude * self.omega * (self.omega * t).sin()
+        crate::wall_motion(self.amplitude, self.omega, self.omega * t).1
     }
 }
 

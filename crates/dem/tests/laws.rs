@@ -1,0 +1,431 @@
+//! Law-level checks: the WGSL contact law (`shaders/contact.wgsl`) and wall geometry
+//! (`shaders/walls.wgsl`) that the GPU force kernel calls, evaluated on the GPU for a sample
+//! of inputs, against their Rust twins (`simkit_dem::{normal_force, friction_force,
+//! reduced_mass, plane_overlap, cylinder_overlap, wall_motion}`) at `f32`.
+//!
+//! Tolerance of the arithmetic laws: 8 f32 ulps (`8 * 2^-23`) relative to the size of the
+//! terms that are summed (not to the result, which may cancel). Both sides run the same
+//! operation sequence in `f32`; WGSL allows 2.5 ulps for a division, inherits the
+//! `inverseSqrt` accuracy for `sqrt`, and lets the compiler contract `a * b + c` into an
+//! FMA, so a few ulps per chain of 3 to 5 operations separate conforming implementations.
+//! The wall motion (`cos`, `sin`) is compared with the exact `f64` value within
+//! `1e-5` of the amplitude: WGSL itself only requires an absolute error of `2^-11` for
+//! `cos`/`sin` on `[-pi, pi]`; the tolerance is far tighter and still leaves room for the
+//! hardware approximations GPUs use beyond that range.
+#![cfg(feature = "gpu")]
+
+use bytemuck::{Pod, Zeroable};
+
+use simkit_backend::rng::rng_uniform;
+use simkit_backend::testing::{eval_wgsl, gpu_or_skip};
+use simkit_dem::{
+    ContactCoefficients, Material, cylinder_overlap, friction_force, normal_force, plane_overlap,
+    reduced_mass, wall_motion,
+};
+
+const CONTACT_WGSL: &str = simkit_backend::wgsl!("contact.wgsl");
+const WALLS_WGSL: &str = simkit_backend::wgsl!("walls.wgsl");
+
+/// 8 f32 ulps at 1.
+const ULPS8: f64 = 8.0 * f32::EPSILON as f64;
+
+/// Input records of the WGSL harness (vec4 members only: no padding rules to mirror).
+const CASES_WGSL: &str = "
+struct Case2 { a: vec4<f32>, b: vec4<f32> }
+struct Case4 { a: vec4<f32>, b: vec4<f32>, c: vec4<f32>, d: vec4<f32> }
+";
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct Case2 {
+    a: [f32; 4],
+    b: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct Case4 {
+    a: [f32; 4],
+    b: [f32; 4],
+    c: [f32; 4],
+    d: [f32; 4],
+}
+
+/// Coefficients of a soft frictional material and of a stiff, strongly damped one, in f32.
+fn materials() -> Vec<ContactCoefficients<f32>> {
+    [
+        Material::new(0.9, 0.05).with_friction(0.5, 20.0),
+        Material::new(0.3, 1e-3).with_friction(0.2, 2000.0),
+        Material::new(0.99, 0.2).with_friction(1.0, 5.0),
+    ]
+    .iter()
+    .map(|m| ContactCoefficients::new(m).to_real::<f32>())
+    .collect()
+}
+
+fn vec4(c: &ContactCoefficients<f32>) -> [f32; 4] {
+    [c.kappa, c.two_b, c.mu_s, c.mu_k]
+}
+
+/// Largest `|gpu - cpu| / scale` over the samples, asserting each is within `tol`.
+fn check(what: &str, gpu: &[f32], cpu: &[f32], scale: &[f64], tol: f64) -> f64 {
+    assert_eq!(gpu.len(), cpu.len());
+    let mut worst = 0.0f64;
+    for (k, ((&g, &c), &s)) in gpu.iter().zip(cpu).zip(scale).enumerate() {
+        let err = (f64::from(g) - f64::from(c)).abs() / s.max(f64::MIN_POSITIVE);
+        assert!(
+            err <= tol,
+            "{what} sample {k}: gpu {g:e} cpu {c:e} (error {err:e} of scale {s:e} > {tol:e})"
+        );
+        worst = worst.max(err);
+    }
+    println!(
+        "{what}: {} samples, max error {worst:.3e} of scale",
+        gpu.len()
+    );
+    worst
+}
+
+#[test]
+fn normal_force_and_reduced_mass_match_their_wgsl_twins() {
+    let Some(ctx) = gpu_or_skip("normal_force_and_reduced_mass_match_their_wgsl_twins") else {
+        return;
+    };
+    // Zero, grazing (1e-7 of the radius), moderate and large overlaps; approaching,
+    // resting and separating normal velocities; equal and unequal masses.
+    let overlaps = [0.0f32, 5e-8, 1e-4, 0.01, 0.05, 0.3];
+    let velocities = [-3.0f32, -0.2, 0.0, 1e-6, 0.2, 3.0];
+    let masses = [(1.0f32, 1.0f32), (1.0, 8.0), (0.05, 2.5)];
+    let mut cases = Vec::new();
+    for c in materials() {
+        for &delta in &overlaps {
+            for &vn in &velocities {
+                for &(mi, mj) in &masses {
+                    cases.push(Case2 {
+                        a: vec4(&c),
+                        b: [mi, mj, delta, vn],
+                    });
+                }
+            }
+        }
+    }
+    let sources = [CASES_WGSL, CONTACT_WGSL];
+    let gpu_m: Vec<f32> = eval_wgsl(
+        &ctx,
+        &sources,
+        "Case2",
+        "f32",
+        "dem_reduced_mass(x.b.x, x.b.y)",
+        &cases,
+    )
+    .unwrap();
+    let cpu_m: Vec<f32> = cases.iter().map(|k| reduced_mass(k.b[0], k.b[1])).collect();
+    let scale_m: Vec<f64> = cpu_m.iter().map(|&m| f64::from(m)).collect();
+    check("reduced mass", &gpu_m, &cpu_m, &scale_m, ULPS8);
+
+    let gpu_f: Vec<f32> = eval_wgsl(
+        &ctx,
+        &sources,
+        "Case2",
+        "f32",
+        "dem_normal_force(x.a, dem_reduced_mass(x.b.x, x.b.y), x.b.z, x.b.w)",
+        &cases,
+    )
+    .unwrap();
+    let mut cpu_f = Vec::new();
+    let mut scale_f = Vec::new();
+    for k in &cases {
+        let c = ContactCoefficients {
+            kappa: k.a[0],
+            two_b: k.a[1],
+            mu_s: k.a[2],
+            mu_k: k.a[3],
+        };
+        let m = reduced_mass(k.b[0], k.b[1]);
+        cpu_f.push(normal_force(&c, m, k.b[2], k.b[3]));
+        let terms = (f64::from(c.kappa) * f64::from(k.b[2])).abs()
+            + (f64::from(c.two_b) * f64::from(k.b[3])).abs();
+        scale_f.push(f64::from(m) * terms);
+    }
+    // Zero overlap at rest is exactly zero on both sides.
+    for ((k, &g), &c) in cases.iter().zip(&gpu_f).zip(&cpu_f) {
+        if k.b[2] == 0.0 && k.b[3] == 0.0 {
+            assert_eq!((g, c), (0.0, 0.0));
+        }
+    }
+    check("normal force", &gpu_f, &cpu_f, &scale_f, ULPS8);
+}
+
+#[test]
+fn friction_force_matches_its_wgsl_twin() {
+    let Some(ctx) = gpu_or_skip("friction_force_matches_its_wgsl_twin") else {
+        return;
+    };
+    let mut cases = Vec::new();
+    let mut k = 0u32;
+    for c in materials() {
+        for &f_n in &[0.0f32, 1e-3, 0.7, 40.0, -2.0] {
+            for &slip in &[0.0f32, 1e-5, 1e-3, 0.05, 1.0, 20.0] {
+                for &m_ij in &[0.5f32, 3.0] {
+                    k += 1;
+                    let u = |a: u32| rng_uniform(11, a, k) - 0.5;
+                    // A unit normal in a pseudo-random direction (exactly axis-aligned for
+                    // the first sample of each set, so that zero slip is exactly zero).
+                    let n = if slip == 0.0 {
+                        [0.0, 0.0, 1.0]
+                    } else {
+                        let d = [u(0), u(1), u(2) + 0.7];
+                        let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                        [d[0] / l, d[1] / l, d[2] / l]
+                    };
+                    // A tangential direction: the normal crossed with a fixed axis.
+                    let t = [n[1], -n[0], 0.0];
+                    let tl = (t[0] * t[0] + t[1] * t[1]).sqrt().max(1e-30);
+                    let v_n = 1.5 * u(3);
+                    let v_rel: [f32; 3] = std::array::from_fn(|d| v_n * n[d] + slip * t[d] / tl);
+                    cases.push(Case4 {
+                        a: vec4(&c),
+                        b: [n[0], n[1], n[2], v_n],
+                        c: [v_rel[0], v_rel[1], v_rel[2], f_n],
+                        d: [m_ij, 0.0, 0.0, 0.0],
+                    });
+                }
+            }
+        }
+    }
+    let gpu: Vec<[f32; 4]> = eval_wgsl(
+        &ctx,
+        &[CASES_WGSL, CONTACT_WGSL],
+        "Case4",
+        "vec4<f32>",
+        "vec4<f32>(dem_friction_force(x.a, x.b.xyz, x.b.w, x.c.xyz, x.c.w, x.d.x), 0.0)",
+        &cases,
+    )
+    .unwrap();
+    let (mut g, mut r, mut scale) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut capped, mut viscous, mut zero) = (0, 0, 0);
+    for (k, out) in cases.iter().zip(&gpu) {
+        let c = ContactCoefficients {
+            kappa: k.a[0],
+            two_b: k.a[1],
+            mu_s: k.a[2],
+            mu_k: k.a[3],
+        };
+        let n = [k.b[0], k.b[1], k.b[2]];
+        let v_rel = [k.c[0], k.c[1], k.c[2]];
+        let (v_n, f_n, m_ij) = (k.b[3], k.c[3], k.d[0]);
+        let ft = friction_force(&c, &n, v_n, &v_rel, f_n, m_ij).unwrap_or([0.0; 3]);
+        // Which branch of min(mu_s |F_n|, mu_k m |v_t|) applies (in f64).
+        let vt: Vec<f64> = (0..3)
+            .map(|d| f64::from(v_rel[d]) - f64::from(v_n) * f64::from(n[d]))
+            .collect();
+        let vtn = vt.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let coulomb = f64::from(c.mu_s) * f64::from(f_n).abs();
+        let visc = f64::from(c.mu_k) * f64::from(m_ij) * vtn;
+        if vtn == 0.0 || coulomb.min(visc) == 0.0 {
+            zero += 1;
+        } else if coulomb <= visc {
+            capped += 1;
+        } else {
+            viscous += 1;
+        }
+        // Round-off of v_t = v_rel - v_n n is relative to |v_rel|: scale by |F_t| |v_rel| / |v_t|.
+        let vr = v_rel
+            .iter()
+            .map(|&x| f64::from(x).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        let s = if vtn > 0.0 {
+            coulomb.min(visc) * vr / vtn
+        } else {
+            0.0
+        };
+        for d in 0..3 {
+            g.push(out[d]);
+            r.push(ft[d]);
+            scale.push(s);
+        }
+        if vtn == 0.0 {
+            assert_eq!(&out[..3], &[0.0; 3], "zero slip must give zero friction");
+        }
+    }
+    assert!(
+        capped > 20 && viscous > 20 && zero > 10,
+        "sample covers the Coulomb cap ({capped}), the viscous branch ({viscous}) and zero ({zero})"
+    );
+    check("friction force", &g, &r, &scale, ULPS8);
+}
+
+#[test]
+fn wall_geometry_matches_its_wgsl_twin() {
+    let Some(ctx) = gpu_or_skip("wall_geometry_matches_its_wgsl_twin") else {
+        return;
+    };
+    // Plane walls: a floor, a tilted wall and a lid, particles touching (deep, grazing),
+    // just clear and far, with the wall at rest or lifted.
+    let normals = [[0.0f32, 0.0, 1.0], [0.6, 0.0, 0.8], [0.0, -1.0, 0.0]];
+    let mut planes = Vec::new();
+    for (w, n) in normals.iter().enumerate() {
+        let offset = [0.0f32, 1.5, -8.0][w];
+        for &r in &[0.5f32, 0.03] {
+            for &gap in &[-0.2f32, -1e-6, 0.0, 1e-6, 0.4] {
+                for &lift in &[0.0f32, 0.05, -0.05] {
+                    for k in 0..3u32 {
+                        // A point at height r + gap above the (lifted) plane, shifted along it.
+                        let s = [1.0 + k as f32, 2.0 - 0.5 * k as f32, 0.3 * k as f32];
+                        let along = s[0] * n[0] + s[1] * n[1] + s[2] * n[2];
+                        let h = offset + lift + r + gap;
+                        let x: [f32; 3] = std::array::from_fn(|d| s[d] + (h - along) * n[d]);
+                        planes.push(Case4 {
+                            a: [n[0], n[1], n[2], offset],
+                            b: [x[0], x[1], x[2], r],
+                            c: [lift, 0.0, 0.0, 0.0],
+                            d: [0.0; 4],
+                        });
+                    }
+                }
+            }
+        }
+    }
+    let gpu: Vec<f32> = eval_wgsl(
+        &ctx,
+        &[CASES_WGSL, WALLS_WGSL],
+        "Case4",
+        "f32",
+        "dem_plane_overlap(x.a.xyz, x.a.w, x.c.x, x.b.xyz, x.b.w)",
+        &planes,
+    )
+    .unwrap();
+    let mut cpu = Vec::new();
+    let mut scale = Vec::new();
+    for p in &planes {
+        let n = [p.a[0], p.a[1], p.a[2]];
+        let x = [p.b[0], p.b[1], p.b[2]];
+        cpu.push(plane_overlap(&n, p.a[3], p.c[0], &x, p.b[3]));
+        let dot: f64 = (0..3).map(|d| f64::from(n[d] * x[d]).abs()).sum();
+        scale.push(dot + f64::from(p.a[3].abs() + p.c[0].abs() + p.b[3]));
+    }
+    check("plane overlap", &gpu, &cpu, &scale, ULPS8);
+    // The 2D form (the CPU's `D = 2` path) is the same law.
+    for p in planes.iter().filter(|p| p.a[2] == 0.0) {
+        let three = plane_overlap(
+            &[p.a[0], p.a[1], 0.0],
+            p.a[3],
+            p.c[0],
+            &[p.b[0], p.b[1], p.b[2]],
+            p.b[3],
+        );
+        let two = plane_overlap(&[p.a[0], p.a[1]], p.a[3], p.c[0], &[p.b[0], p.b[1]], p.b[3]);
+        assert_eq!(two, three);
+    }
+
+    // Cylinder walls: particles deep in the wall, grazing, just inside, near and on the axis.
+    let mut cyl = Vec::new();
+    for &(center, radius) in &[
+        ([4.0f32, 4.0], 3.5f32),
+        ([0.0, 0.0], 1.0),
+        ([-2.0, 5.0], 10.0),
+    ] {
+        for &r in &[0.3f32, 0.01] {
+            for &rho in &[
+                0.0f32,
+                1e-3,
+                0.5 * radius,
+                radius - r - 0.1,
+                radius - r,
+                radius - r + 1e-6,
+                radius - r + 0.2,
+            ] {
+                for k in 0..4u32 {
+                    let phi = 0.4 + 1.7 * k as f32;
+                    let x = [center[0] + rho * phi.cos(), center[1] + rho * phi.sin()];
+                    cyl.push(Case2 {
+                        a: [center[0], center[1], radius, r],
+                        b: [x[0], x[1], 0.0, 0.0],
+                    });
+                }
+            }
+        }
+    }
+    let gpu: Vec<[f32; 4]> = eval_wgsl(
+        &ctx,
+        &[CASES_WGSL, WALLS_WGSL],
+        "Case2",
+        "vec4<f32>",
+        "vec4<f32>(dem_cylinder_overlap(x.a.xy, x.a.z, x.b.xy, x.a.w), 0.0)",
+        &cyl,
+    )
+    .unwrap();
+    let (mut gd, mut cd, mut sd, mut gn, mut cn, mut sn) =
+        (vec![], vec![], vec![], vec![], vec![], vec![]);
+    for (c, out) in cyl.iter().zip(&gpu) {
+        let (delta, n) = cylinder_overlap([c.a[0], c.a[1]], c.a[2], [c.b[0], c.b[1]], c.a[3]);
+        let rho = f64::from(c.b[0] - c.a[0]).hypot(f64::from(c.b[1] - c.a[1]));
+        if rho == 0.0 {
+            assert_eq!(*out, [0.0; 4], "a particle on the axis touches nothing");
+            assert_eq!((delta, n), (0.0, [0.0; 2]));
+            continue;
+        }
+        gd.push(out[2]);
+        cd.push(delta);
+        sd.push(f64::from(c.a[0].abs() + c.a[1].abs() + c.a[2] + c.a[3]) + rho);
+        for d in 0..2 {
+            gn.push(out[d]);
+            cn.push(n[d]);
+            // A unit vector from a difference of coordinates: round-off relative to them.
+            sn.push((f64::from(c.a[0].abs().max(c.a[1].abs())) + rho) / rho);
+        }
+    }
+    check("cylinder overlap", &gd, &cd, &sd, ULPS8);
+    check("cylinder normal", &gn, &cn, &sn, ULPS8);
+}
+
+#[test]
+fn wall_motion_matches_its_wgsl_twin() {
+    let Some(ctx) = gpu_or_skip("wall_motion_matches_its_wgsl_twin") else {
+        return;
+    };
+    let pi = std::f32::consts::PI;
+    let phases = [
+        0.0f32,
+        0.3,
+        pi / 2.0,
+        2.0,
+        pi,
+        -pi / 3.0,
+        -pi,
+        1.5 * pi,
+        2.0 * pi,
+        10.0,
+        100.25,
+    ];
+    let mut cases = Vec::new();
+    for &(a, omega) in &[(0.05f32, 1.0f32), (1.0, 6.0), (2e-3, 300.0)] {
+        for &phase in &phases {
+            cases.push([a, omega, phase, 0.0f32]);
+        }
+    }
+    let gpu: Vec<[f32; 2]> = eval_wgsl(
+        &ctx,
+        &[WALLS_WGSL],
+        "vec4<f32>",
+        "vec2<f32>",
+        "dem_wall_motion(x.x, x.y, x.z)",
+        &cases,
+    )
+    .unwrap();
+    let (mut gz, mut cz, mut sz, mut gv, mut cv, mut sv) =
+        (vec![], vec![], vec![], vec![], vec![], vec![]);
+    for (c, out) in cases.iter().zip(&gpu) {
+        let (a, omega, phase) = (f64::from(c[0]), f64::from(c[1]), f64::from(c[2]));
+        let (z, v) = wall_motion(a, omega, phase);
+        gz.push(out[0]);
+        cz.push(z as f32);
+        sz.push(a);
+        gv.push(out[1]);
+        cv.push(v as f32);
+        sv.push(a * omega);
+    }
+    check("wall displacement", &gz, &cz, &sz, 1e-5);
+    check("wall velocity", &gv, &cv, &sv, 1e-5);
+}
