@@ -13,7 +13,7 @@ use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use simkit::backend::{GpuContext, Simulation};
-use simkit::lattice_gas::{GpuLattice, GpuLayout, Lattice, LutCpu, MultiSpinCpu, Params, RuleSet};
+use simkit::lattice_gas::{Config, GpuLattice, GpuLayout, Lattice, LutCpu, MultiSpinCpu, RuleSet};
 
 fn bench(c: &mut Criterion) {
     let gpu = GpuContext::new().ok();
@@ -24,32 +24,32 @@ fn bench(c: &mut Criterion) {
     for n in [1024usize, 4096] {
         let mut lattice = Lattice::new(n, n).expect("size");
         lattice.fill_random(0.3, 1).expect("density");
-        let p = Params::default;
-        let full = || Params {
+        let p = Config::default();
+        let full = Config {
             rules: RuleSet::Full,
-            ..Params::default()
+            ..Config::default()
         };
         type Sim = Box<dyn Simulation<State = Lattice>>;
         let mut sims: Vec<(&str, Sim)> = vec![
             (
                 "lut",
-                Box::new(LutCpu::new(lattice.clone(), p()).expect("lut")),
+                Box::new(LutCpu::new(lattice.clone(), &p).expect("lut")),
             ),
             (
                 "lut-scalar",
                 Box::new(
-                    LutCpu::new(lattice.clone(), p())
+                    LutCpu::new(lattice.clone(), &p)
                         .expect("lut")
                         .force_scalar(),
                 ),
             ),
             (
                 "multispin",
-                Box::new(MultiSpinCpu::new(lattice.clone(), p()).expect("multispin")),
+                Box::new(MultiSpinCpu::new(lattice.clone(), &p).expect("multispin")),
             ),
             (
                 "multispin-full",
-                Box::new(MultiSpinCpu::new(lattice.clone(), full()).expect("multispin")),
+                Box::new(MultiSpinCpu::new(lattice.clone(), &full).expect("multispin")),
             ),
         ];
         if let Some(ctx) = gpu.as_ref() {
@@ -57,7 +57,11 @@ fn bench(c: &mut Criterion) {
                 ("gpu-bitplanes", GpuLayout::BitPlanes),
                 ("gpu-bytes", GpuLayout::Bytes),
             ] {
-                let sim = GpuLattice::with_layout(ctx, lattice.clone(), p(), layout).expect("gpu");
+                let config = Config {
+                    gpu_layout: Some(layout),
+                    ..Config::default()
+                };
+                let sim = GpuLattice::new(lattice.clone(), &config, ctx).expect("gpu");
                 sims.push((name, Box::new(sim)));
             }
         }

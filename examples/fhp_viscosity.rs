@@ -22,7 +22,7 @@ use std::time::Instant;
 use simkit::backend::Simulation;
 use simkit::lattice_gas::observables::{BlockField, TimeAverage};
 use simkit::lattice_gas::viscosity::{ShearWave, fhp1_viscosity};
-use simkit::lattice_gas::{Lattice, MultiSpinCpu, Params, ROW_SPACING, RuleSet};
+use simkit::lattice_gas::{Config, Lattice, MultiSpinCpu, ROW_SPACING, RuleSet};
 use simkit::output::plot::{Plot, Scale, Series, Style};
 
 fn main() -> simkit::backend::Result<()> {
@@ -98,7 +98,7 @@ fn tradeoffs() -> simkit::backend::Result<()> {
     let windows = [1usize, 4, 16, 64];
     let mut lattice = Lattice::new(n, n)?;
     lattice.fill_random(d, 5)?;
-    let mut sim = MultiSpinCpu::new(lattice, Params::default())?;
+    let mut sim = MultiSpinCpu::new(lattice, &Config::default())?;
     sim.step(50)?;
     let max_window = *windows.last().expect("windows");
     let mut snapshots = Vec::with_capacity(max_window);

@@ -1,4 +1,4 @@
-//! The source's channel flow past an obstacle (seed 001): walls on the top and bottom rows,
+//! The source's channel flow past an obstacle: walls on the top and bottom rows,
 //! a disc obstacle, an inflow column re-filled with east-movers and an emptied outflow
 //! column. Writes PNG frames of the time- and block-averaged velocity field, an animated GIF
 //! and a VTK file, and prints the throughput.
@@ -11,9 +11,9 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use simkit::backend::{Backend, GpuContext, Result};
+use simkit::backend::{Backend, GpuContext, Result, Simulation};
 use simkit::lattice_gas::observables::{BlockField, TimeAverage};
-use simkit::lattice_gas::{Engine, Lattice, Obstacle, Params, ROW_SPACING, RuleSet, simulation};
+use simkit::lattice_gas::{Config, Lattice, LatticeGas, Obstacle, ROW_SPACING, RuleSet};
 use simkit::output::gif::GifWriter;
 use simkit::output::heatmap::HeatmapOptions;
 use simkit::output::vector_field::{VectorFieldOptions, render_vector_field, write_vector_field};
@@ -45,7 +45,7 @@ fn main() -> Result<()> {
     let out = PathBuf::from("out/obstacle_flow");
     let mut lattice = channel_lattice(w, h)?;
     lattice.fill_with(3, |_, _, k| if k == 0 { 0.5 } else { 0.15 })?;
-    let params = Params {
+    let config = Config {
         periodic_x: false,
         periodic_y: false,
         inflow: true,
@@ -53,9 +53,9 @@ fn main() -> Result<()> {
         seed: 2026,
         // The source's collision table.
         rules: RuleSet::Full,
-        ..Params::default()
+        ..Config::default()
     };
-    let mut sim = simulation(lattice, params, Engine::for_backend(backend, w))?;
+    let mut sim = LatticeGas::new(lattice, &config, backend)?;
     println!(
         "channel {w} x {h}, {steps} steps on {}; output in {}/",
         sim.backend_name(),

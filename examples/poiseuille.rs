@@ -19,7 +19,7 @@
 use simkit::backend::{Result, Simulation};
 use simkit::lattice_gas::observables::CX;
 use simkit::lattice_gas::viscosity::fhp1_viscosity;
-use simkit::lattice_gas::{EAST, Lattice, MultiSpinCpu, Params, ROW_SPACING, WALL, WEST};
+use simkit::lattice_gas::{Config, EAST, Lattice, MultiSpinCpu, ROW_SPACING, WALL, WEST};
 use simkit::output::csv::write_csv;
 
 fn row_px(sim: &MultiSpinCpu) -> Vec<(f64, f64)> {
@@ -54,12 +54,12 @@ fn main() -> Result<()> {
     // 1. The acceleration from the force: periodic box, momentum gain per particle per step.
     let mut free = Lattice::new(w, h)?;
     free.fill_random(d, seed)?;
-    let params = Params {
+    let config = Config {
         body_force: p,
         seed,
-        ..Params::default()
+        ..Config::default()
     };
-    let mut boxed = MultiSpinCpu::new(free, params.clone())?;
+    let mut boxed = MultiSpinCpu::new(free, &config)?;
     let totals = |sim: &MultiSpinCpu| {
         row_px(sim)
             .iter()
@@ -74,11 +74,11 @@ fn main() -> Result<()> {
     let mut lattice = Lattice::new(w, h)?;
     lattice.add_wall_rows();
     lattice.fill_random(d, seed + 1)?;
-    let channel = Params {
+    let channel = Config {
         periodic_y: false,
-        ..params
+        ..config
     };
-    let mut sim = MultiSpinCpu::new(lattice, channel)?;
+    let mut sim = MultiSpinCpu::new(lattice, &channel)?;
     // The slowest mode relaxes in ~H^2 / (pi^2 nu) steps: 16000 steps at 64 rows, scaled.
     let relax = (16_000 * h * h / (64 * 64)).max(4000) as u32;
     let average = relax;

@@ -5,9 +5,7 @@ use std::time::Instant;
 
 use simkit::backend::{Backend, Result, Simulation};
 use simkit::lattice_gas::observables::{BlockField, TimeAverage};
-use simkit::lattice_gas::{
-    Engine, Lattice, LutCpu, Obstacle, Params, ROW_SPACING, RuleSet, simulation,
-};
+use simkit::lattice_gas::{Config, Lattice, LatticeGas, LutCpu, Obstacle, ROW_SPACING, RuleSet};
 
 use simkit::output::heatmap::HeatmapOptions;
 use simkit::output::vector_field::{VectorFieldOptions, write_vector_field};
@@ -31,7 +29,7 @@ pub fn run(backend: Backend<'_>, out: &Path) -> Result<Row> {
         radius: channel / 10.0,
     })?;
     lattice.fill_with(3, |_, _, k| if k == 0 { 0.5 } else { 0.15 })?;
-    let params = Params {
+    let config = Config {
         periodic_x: false,
         periodic_y: false,
         inflow: true,
@@ -39,13 +37,9 @@ pub fn run(backend: Backend<'_>, out: &Path) -> Result<Row> {
         seed: 2026,
         // The source's collision table.
         rules: RuleSet::Full,
-        ..Params::default()
+        ..Config::default()
     };
-    let mut sim = simulation(
-        lattice.clone(),
-        params.clone(),
-        Engine::for_backend(backend, w),
-    )?;
+    let mut sim = LatticeGas::new(lattice.clone(), &config, backend)?;
     let t = Instant::now();
     sim.step(average_from)?;
     let mut avg = TimeAverage::new();
@@ -59,8 +53,8 @@ pub fn run(backend: Backend<'_>, out: &Path) -> Result<Row> {
     write_vti(field, &out.join("velocity.vti"))?;
     let (ux, _) = field.velocity();
     let mean_ux = ux.iter().sum::<f64>() / ux.len() as f64;
-    // The portable scalar lookup table: another code path than any engine above.
-    let mut reference = LutCpu::new(lattice, params)?.force_scalar();
+    // The portable scalar lookup table: another code path than any backend above.
+    let mut reference = LutCpu::new(lattice, &config)?.force_scalar();
     reference.step(steps)?;
     let same = reference.state()? == sim.state()?;
     Ok(Row {

@@ -14,9 +14,10 @@ use simkit_backend::gpu::{DISPATCH_WGSL, Uniform};
 use simkit_backend::rng::RNG_WGSL;
 use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Result, Simulation};
 
+use crate::engine;
 use crate::random::{FORCE_STREAM, RANDOM_WGSL, force_threshold};
 use crate::rules::COLLIDE_WGSL;
-use crate::{CollisionTable, Lattice, Params, RuleSet, WALL};
+use crate::{CollisionTable, Config, GpuLayout, Lattice, RuleSet, WALL};
 
 /// The `Params` struct of both step kernels (mirrored by [`GpuParams`]).
 const PARAMS_WGSL: &str = simkit_backend::wgsl!("params.wgsl");
@@ -26,26 +27,6 @@ const COUNTER_WGSL: &str = simkit_backend::wgsl!("counter.wgsl");
 
 /// Steps recorded into one command submission.
 pub const STEPS_PER_SUBMIT: u32 = 64;
-
-/// How the GPU backend stores the lattice.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum GpuLayout {
-    /// One byte per site, four per `u32`, collision by table lookup (any width).
-    Bytes,
-    /// Six bit-planes of 32-site words, collision as boolean logic (width a multiple of 32).
-    BitPlanes,
-}
-
-impl GpuLayout {
-    /// The faster layout that fits a lattice of `width` sites per row.
-    pub fn for_width(width: usize) -> Self {
-        if width.is_multiple_of(32) {
-            GpuLayout::BitPlanes
-        } else {
-            GpuLayout::Bytes
-        }
-    }
-}
 
 /// Shader parameters of both layouts: the Rust mirror of `Params` in `shaders/params.wgsl`
 /// (field meanings there).
@@ -86,22 +67,15 @@ pub struct GpuLattice {
 }
 
 impl GpuLattice {
-    /// Uploads `lattice` in the layout [`GpuLayout::for_width`] picks and compiles the step
-    /// kernel for the boundaries and rules of `params`.
-    pub fn new(ctx: &GpuContext, lattice: Lattice, params: Params) -> Result<Self> {
-        let layout = GpuLayout::for_width(lattice.width());
-        Self::with_layout(ctx, lattice, params, layout)
-    }
-
-    /// As [`GpuLattice::new`] with an explicit layout; [`GpuLayout::BitPlanes`] needs a
-    /// width that is a multiple of 32.
-    pub fn with_layout(
-        ctx: &GpuContext,
-        lattice: Lattice,
-        params: Params,
-        layout: GpuLayout,
-    ) -> Result<Self> {
-        params.validate(&lattice)?;
+    /// Uploads `lattice` on `ctx` in the layout `config.gpu_layout` names (`None`:
+    /// [`GpuLayout::for_width`]; [`GpuLayout::BitPlanes`] needs a width that is a multiple
+    /// of 32) and compiles the step kernel for the boundaries and rules of `config`
+    /// (validated; `config.cpu` is not read).
+    pub fn new(lattice: Lattice, config: &Config, ctx: &GpuContext) -> Result<Self> {
+        config.validate_for(&lattice)?;
+        let layout = config
+            .gpu_layout
+            .unwrap_or_else(|| GpuLayout::for_width(lattice.width()));
         let (w, h) = (lattice.width(), lattice.height());
         let n_sites = w * h;
         let (words, walls, n_items) = match layout {
@@ -128,7 +102,7 @@ impl GpuLattice {
         let a = GpuBuffer::from_slice(ctx, "fhp lattice A", &words)?;
         let b = GpuBuffer::<u32>::zeroed(ctx, "fhp lattice B", words.len())?;
         let table: Vec<u32> = match layout {
-            GpuLayout::Bytes => CollisionTable::new(params.rules)
+            GpuLayout::Bytes => CollisionTable::new(config.rules)
                 .entries
                 .iter()
                 .map(|&e| u32::from(e))
@@ -142,14 +116,14 @@ impl GpuLattice {
             n_sites: n_sites as u32,
             nw: (w / 32) as u32,
             n_words: n_items as u32,
-            seed: params.seed,
-            force_seed: params.seed ^ FORCE_STREAM,
-            threshold: force_threshold(params.body_force),
+            seed: config.seed,
+            force_seed: config.seed ^ FORCE_STREAM,
+            threshold: force_threshold(config.body_force),
         };
         let uniform = Uniform::new(ctx, "fhp params", &gp);
         let counter = GpuBuffer::from_slice(ctx, "fhp step counter", &[0u32])?;
-        let flags = f64::from(params.flags());
-        let full = f64::from(u8::from(params.rules == RuleSet::Full));
+        let flags = f64::from(config.flags());
+        let full = f64::from(u8::from(config.rules == RuleSet::Full));
         let step_kernel = match layout {
             GpuLayout::Bytes => Kernel::new(
                 ctx,
@@ -228,9 +202,7 @@ impl GpuLattice {
     }
 }
 
-impl Simulation for GpuLattice {
-    type State = Lattice;
-
+impl engine::Engine for GpuLattice {
     fn step(&mut self, steps: u32) -> Result<()> {
         let mut left = steps;
         while left > 0 {
@@ -284,16 +256,32 @@ impl Simulation for GpuLattice {
         Ok(Lattice::from_raw(w, h, cells))
     }
 
-    fn steps_done(&self) -> u64 {
-        self.steps
-    }
-
-    fn backend_name(&self) -> String {
+    fn name(&self) -> String {
         let layout = match self.layout {
             GpuLayout::Bytes => "bytes",
             GpuLayout::BitPlanes => "bit-planes",
         };
         format!("gpu {layout} ({})", self.ctx.adapter_info().name)
+    }
+}
+
+impl Simulation for GpuLattice {
+    type State = Lattice;
+
+    fn step(&mut self, steps: u32) -> Result<()> {
+        engine::Engine::step(self, steps)
+    }
+
+    fn state(&mut self) -> Result<Lattice> {
+        engine::Engine::state(self)
+    }
+
+    fn steps_done(&self) -> u64 {
+        self.steps
+    }
+
+    fn backend_name(&self) -> String {
+        engine::Engine::name(self)
     }
 }
 

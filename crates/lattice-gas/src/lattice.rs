@@ -1,8 +1,8 @@
-//! The hexagonal lattice (one byte per site), obstacles and the scene parameters.
+//! The hexagonal lattice (one byte per site) and obstacles.
 
 use simkit_backend::{Error, Result};
 
-use crate::{REST, RuleSet, WALL};
+use crate::{REST, WALL};
 
 /// Vertical distance between rows in lattice units (rows of a hexagonal lattice).
 pub const ROW_SPACING: f64 = 0.866_025_403_784_438_6;
@@ -284,79 +284,6 @@ impl Obstacle {
                 Ok(data.clone())
             }
         }
-    }
-}
-
-/// How the lattice evolves: boundaries, rule set, random seed and optional forcing.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Params {
-    /// Collision rules.
-    pub rules: RuleSet,
-    /// Seed of the counter-based random bits.
-    pub seed: u32,
-    /// Periodic in x (otherwise particles leaving at the left/right edge are lost).
-    pub periodic_x: bool,
-    /// Periodic in y (needs an even height; otherwise particles leaving are lost).
-    pub periodic_y: bool,
-    /// Column 0 is re-filled with one east-mover per non-wall site after every step.
-    pub inflow: bool,
-    /// The last column is emptied (non-wall sites) after every step.
-    pub outflow: bool,
-    /// Body-force probability `p` in `[0, 1]`: a site with a west-mover and no east-mover
-    /// turns it into an east-mover with probability `p`. 0 disables the force.
-    pub body_force: f64,
-}
-
-impl Default for Params {
-    /// FHP-I, seed 1, periodic in x and y, no inflow, outflow or force.
-    fn default() -> Self {
-        Self {
-            rules: RuleSet::FhpI,
-            seed: 1,
-            periodic_x: true,
-            periodic_y: true,
-            inflow: false,
-            outflow: false,
-            body_force: 0.0,
-        }
-    }
-}
-
-impl Params {
-    /// Checks the parameters against a lattice; every backend calls it.
-    pub fn validate(&self, lattice: &Lattice) -> Result<()> {
-        if self.periodic_y && !lattice.height().is_multiple_of(2) {
-            return Err(Error::invalid(
-                "height",
-                lattice.height(),
-                "a periodic y axis needs an even number of rows (odd rows are shifted)",
-            ));
-        }
-        if (self.inflow || self.outflow) && self.periodic_x {
-            return Err(Error::invalid(
-                "periodic_x",
-                true,
-                "inflow/outflow columns need a non-periodic x axis",
-            ));
-        }
-        if !self.body_force.is_finite() || !(0.0..=1.0).contains(&self.body_force) {
-            return Err(Error::invalid(
-                "body_force",
-                self.body_force,
-                "must be a probability in [0, 1] (0 disables the force)",
-            ));
-        }
-        Ok(())
-    }
-
-    /// Bit flags shared by the backends (periodic x, periodic y, inflow, outflow, force).
-    #[cfg(feature = "gpu")]
-    pub(crate) fn flags(&self) -> u32 {
-        u32::from(self.periodic_x)
-            | u32::from(self.periodic_y) << 1
-            | u32::from(self.inflow) << 2
-            | u32::from(self.outflow) << 3
-            | u32::from(self.body_force > 0.0) << 4
     }
 }
 

@@ -8,7 +8,7 @@
 
 use simkit_backend::{Error, Result, Simulation};
 
-use crate::{Lattice, MultiSpinCpu, Params, ROW_SPACING, RuleSet};
+use crate::{Config, Lattice, MultiSpinCpu, ROW_SPACING, RuleSet};
 
 /// The FHP-I kinematic shear viscosity `1/(12 d (1-d)^3) - 1/8` (Frisch et al. 1987).
 pub fn fhp1_viscosity(d: f64) -> f64 {
@@ -84,12 +84,12 @@ impl ShearWave {
             let u = u0 * (two_pi * j as f64 / h as f64).sin();
             (d * (1.0 + 2.0 * cx[k] * u)).clamp(0.0, 1.0)
         })?;
-        let params = Params {
+        let config = Config {
             rules: self.rules,
             seed: self.seed,
-            ..Params::default()
+            ..Config::default()
         };
-        let mut sim = MultiSpinCpu::new(lattice, params)?;
+        let mut sim = MultiSpinCpu::new(lattice, &config)?;
         let weights: Vec<f64> = (0..h)
             .map(|j| (two_pi * j as f64 / h as f64).sin())
             .collect();

@@ -11,14 +11,15 @@
 use rayon::prelude::*;
 use simkit_backend::{Result, Simulation};
 
+use crate::engine;
 use crate::random::{FORCE_STREAM, chirality_word, force_hit, force_threshold, step_key};
-use crate::{CollisionTable, EAST, Lattice, Params, REST, WALL, WEST};
+use crate::{CollisionTable, Config, EAST, Lattice, REST, WALL, WEST};
 
 /// The lookup-table CPU backend.
 pub struct LutCpu {
     lattice: Lattice,
     next: Vec<u8>,
-    params: Params,
+    config: Config,
     /// The collision table indexed by `state | chirality << 6`.
     table: [u8; 256],
     /// Whether the AVX-512 VBMI path runs.
@@ -27,16 +28,17 @@ pub struct LutCpu {
 }
 
 impl LutCpu {
-    /// A lookup-table simulation of `lattice` under `params` (validated).
-    pub fn new(lattice: Lattice, params: Params) -> Result<Self> {
-        params.validate(&lattice)?;
+    /// A lookup-table simulation of `lattice` under `config` (validated; `config.cpu` and
+    /// `config.gpu_layout` are not read).
+    pub fn new(lattice: Lattice, config: &Config) -> Result<Self> {
+        config.validate_for(&lattice)?;
         let next = vec![0; lattice.cells().len()];
         Ok(Self {
-            table: table256(&CollisionTable::new(params.rules)),
+            table: table256(&CollisionTable::new(config.rules)),
             vbmi: has_vbmi(),
             lattice,
             next,
-            params,
+            config: config.clone(),
             steps: 0,
         })
     }
@@ -60,14 +62,14 @@ impl LutCpu {
             src: self.lattice.cells(),
             w,
             h,
-            params: &self.params,
+            config: &self.config,
             table: &self.table,
             vbmi: self.vbmi,
-            key: step_key(self.params.seed, t),
-            force_key: step_key(self.params.seed ^ FORCE_STREAM, t),
-            threshold: force_threshold(self.params.body_force),
+            key: step_key(self.config.seed, t),
+            force_key: step_key(self.config.seed ^ FORCE_STREAM, t),
+            threshold: force_threshold(self.config.body_force),
         };
-        let force = self.params.body_force > 0.0;
+        let force = self.config.body_force > 0.0;
         self.next.par_chunks_mut(w).enumerate().for_each_init(
             || vec![0u8; 3 * (w + 2)],
             |pad, (j, row)| {
@@ -89,7 +91,7 @@ struct RowCtx<'a> {
     src: &'a [u8],
     w: usize,
     h: usize,
-    params: &'a Params,
+    config: &'a Config,
     table: &'a [u8; 256],
     vbmi: bool,
     key: u32,
@@ -107,7 +109,7 @@ impl RowCtx<'_> {
             Some(jj) => {
                 let row = &self.src[jj * w..(jj + 1) * w];
                 dst[1..=w].copy_from_slice(row);
-                if self.params.periodic_x {
+                if self.config.periodic_x {
                     dst[0] = row[w - 1];
                     dst[w + 1] = row[0];
                 } else {
@@ -124,12 +126,12 @@ impl RowCtx<'_> {
             if j + 1 < h {
                 Some(j + 1)
             } else {
-                self.params.periodic_y.then_some(0)
+                self.config.periodic_y.then_some(0)
             }
         } else if j > 0 {
             Some(j - 1)
         } else {
-            self.params.periodic_y.then_some(h - 1)
+            self.config.periodic_y.then_some(h - 1)
         }
     }
 
@@ -148,10 +150,10 @@ impl RowCtx<'_> {
         } else {
             self.sites::<FORCE, false>(j, done, out, mid, up, down);
         }
-        if self.params.inflow && out[0] & WALL == 0 {
+        if self.config.inflow && out[0] & WALL == 0 {
             out[0] = EAST;
         }
-        if self.params.outflow && out[w - 1] & WALL == 0 {
+        if self.config.outflow && out[w - 1] & WALL == 0 {
             out[w - 1] = 0;
         }
     }
@@ -174,9 +176,9 @@ impl RowCtx<'_> {
         // SAFETY: `vbmi` is only set when `lut_vbmi::available()` returned true.
         let done = unsafe {
             if odd {
-                crate::lut_vbmi::sites::<true>(table, out, rows, first, self.key)
+                super::lut_vbmi::sites::<true>(table, out, rows, first, self.key)
             } else {
-                crate::lut_vbmi::sites::<false>(table, out, rows, first, self.key)
+                super::lut_vbmi::sites::<false>(table, out, rows, first, self.key)
             }
         };
         if FORCE {
@@ -270,7 +272,7 @@ fn table256(table: &CollisionTable) -> [u8; 256] {
 /// (checked at run time).
 #[cfg(target_arch = "x86_64")]
 pub fn has_vbmi() -> bool {
-    crate::lut_vbmi::available()
+    super::lut_vbmi::available()
 }
 
 /// Whether this CPU has AVX-512 VBMI (never, off x86-64).
@@ -279,9 +281,7 @@ pub fn has_vbmi() -> bool {
     false
 }
 
-impl Simulation for LutCpu {
-    type State = Lattice;
-
+impl engine::Engine for LutCpu {
     fn step(&mut self, steps: u32) -> Result<()> {
         // The whole loop on a pool thread: no hand-over to the pool per row pass.
         simkit_backend::pool::on_pool(|| {
@@ -296,16 +296,32 @@ impl Simulation for LutCpu {
         Ok(self.lattice.clone())
     }
 
-    fn steps_done(&self) -> u64 {
-        self.steps
-    }
-
-    fn backend_name(&self) -> String {
+    fn name(&self) -> String {
         if self.uses_vbmi() {
             "cpu-lut (avx512-vbmi)".into()
         } else {
             "cpu-lut (scalar)".into()
         }
+    }
+}
+
+impl Simulation for LutCpu {
+    type State = Lattice;
+
+    fn step(&mut self, steps: u32) -> Result<()> {
+        engine::Engine::step(self, steps)
+    }
+
+    fn state(&mut self) -> Result<Lattice> {
+        engine::Engine::state(self)
+    }
+
+    fn steps_done(&self) -> u64 {
+        self.steps
+    }
+
+    fn backend_name(&self) -> String {
+        engine::Engine::name(self)
     }
 }
 
@@ -319,7 +335,7 @@ mod tests {
     /// rule sets.
     #[test]
     fn vbmi_path_equals_scalar_loop() {
-        let vbmi = LutCpu::new(Lattice::new(64, 2).unwrap(), Params::default())
+        let vbmi = LutCpu::new(Lattice::new(64, 2).unwrap(), &Config::default())
             .unwrap()
             .uses_vbmi();
         println!("AVX-512 VBMI path present: {vbmi}");
@@ -334,7 +350,7 @@ mod tests {
                     radius: 3.0,
                 })
                 .unwrap();
-                let channel = Params {
+                let channel = Config {
                     rules,
                     periodic_x: false,
                     periodic_y: false,
@@ -342,16 +358,17 @@ mod tests {
                     outflow: true,
                     body_force: 0.05,
                     seed: 3,
+                    ..Config::default()
                 };
                 let mut boxed = Lattice::new(w, h).unwrap();
                 boxed.fill_random(0.4, 2).unwrap();
-                let periodic = Params {
+                let periodic = Config {
                     rules,
-                    ..Params::default()
+                    ..Config::default()
                 };
                 for (l, p) in [(chan, channel), (boxed, periodic)] {
-                    let mut fast = LutCpu::new(l.clone(), p.clone()).unwrap();
-                    let mut slow = LutCpu::new(l.clone(), p.clone()).unwrap().force_scalar();
+                    let mut fast = LutCpu::new(l.clone(), &p).unwrap();
+                    let mut slow = LutCpu::new(l.clone(), &p).unwrap().force_scalar();
                     assert!(!slow.uses_vbmi());
                     fast.step(50).unwrap();
                     slow.step(50).unwrap();

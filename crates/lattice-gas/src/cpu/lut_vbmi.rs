@@ -3,7 +3,7 @@
 //! The gathered state of a site (six direction bits and the wall bit 7) gets its chirality bit
 //! in the unused rest-particle bit 6, which makes a 256-entry table. Four `zmm` registers hold
 //! it; two `vpermi2b` look up the halves with bit 7 clear and set, and a blend on bit 7 picks
-//! one. The scalar path of [`crate::lut`] handles the tail of a row and CPUs without VBMI; the
+//! one. The scalar path of [`crate::cpu::lut`] handles the tail of a row and CPUs without VBMI; the
 //! tests check both paths give the same lattice.
 
 use std::arch::x86_64::*;

@@ -9,10 +9,11 @@ use multiversion::multiversion;
 use rayon::prelude::*;
 use simkit_backend::{Error, Result, Simulation};
 
+use crate::engine;
 use crate::field::{BlockField, CX, CY};
 use crate::random::{FORCE_STREAM, chirality_word, force_hit, force_threshold, step_key};
 use crate::rules::collide_bits;
-use crate::{Lattice, Params, RuleSet, WALL};
+use crate::{Config, Lattice, RuleSet, WALL};
 
 /// The multi-spin CPU backend.
 pub struct MultiSpinCpu {
@@ -24,14 +25,15 @@ pub struct MultiSpinCpu {
     planes: Vec<u64>,
     next: Vec<u64>,
     walls: Vec<u64>,
-    params: Params,
+    config: Config,
     steps: u64,
 }
 
 impl MultiSpinCpu {
-    /// A multi-spin simulation of `lattice` under `params`; the width must be a multiple of 64.
-    pub fn new(lattice: Lattice, params: Params) -> Result<Self> {
-        params.validate(&lattice)?;
+    /// A multi-spin simulation of `lattice` under `config` (validated; `config.cpu` and
+    /// `config.gpu_layout` are not read); the width must be a multiple of 64.
+    pub fn new(lattice: Lattice, config: &Config) -> Result<Self> {
+        config.validate_for(&lattice)?;
         let (w, h) = (lattice.width(), lattice.height());
         if !w.is_multiple_of(64) {
             return Err(Error::invalid(
@@ -62,7 +64,7 @@ impl MultiSpinCpu {
             next: vec![0; planes.len()],
             planes,
             walls,
-            params,
+            config: config.clone(),
             steps: 0,
         })
     }
@@ -122,10 +124,10 @@ impl MultiSpinCpu {
             walls: &self.walls,
             nw: self.nw,
             h: self.height,
-            params: &self.params,
-            key: step_key(self.params.seed, t),
-            force_key: step_key(self.params.seed ^ FORCE_STREAM, t),
-            threshold: force_threshold(self.params.body_force),
+            config: &self.config,
+            key: step_key(self.config.seed, t),
+            force_key: step_key(self.config.seed ^ FORCE_STREAM, t),
+            threshold: force_threshold(self.config.body_force),
         };
         let nw = self.nw;
         self.next
@@ -142,7 +144,7 @@ struct Ctx<'a> {
     walls: &'a [u64],
     nw: usize,
     h: usize,
-    params: &'a Params,
+    config: &'a Config,
     key: u32,
     force_key: u32,
     threshold: u32,
@@ -176,8 +178,8 @@ impl Ctx<'_> {
     fn row(&self, j: usize, out: &mut [u64], tmp: &mut [u64]) {
         let nw = self.nw;
         let h = self.h;
-        let px = self.params.periodic_x;
-        let py = self.params.periodic_y;
+        let px = self.config.periodic_x;
+        let py = self.config.periodic_y;
         let up = if j + 1 < h {
             Some(j + 1)
         } else {
@@ -228,11 +230,11 @@ impl Ctx<'_> {
         let first_hash = (j * nw * 2) as u32;
         random_words(rnd, first_hash, self.key);
         let walls = &self.walls[j * nw..(j + 1) * nw];
-        match self.params.rules {
+        match self.config.rules {
             RuleSet::FhpI => collide_fhp1(inc, rnd, walls, out, nw),
             RuleSet::Full => collide_full(inc, rnd, walls, out, nw),
         }
-        if self.params.body_force > 0.0 {
+        if self.config.body_force > 0.0 {
             let first_site = (j * nw * 64) as u32;
             force_words(rnd, first_site, self.force_key, self.threshold);
             for k in 0..nw {
@@ -241,13 +243,13 @@ impl Ctx<'_> {
                 out[3 * nw + k] &= !cond;
             }
         }
-        if self.params.inflow && walls[0] & 1 == 0 {
+        if self.config.inflow && walls[0] & 1 == 0 {
             for d in 0..6 {
                 out[d * nw] &= !1;
             }
             out[0] |= 1;
         }
-        if self.params.outflow && walls[nw - 1] >> 63 == 0 {
+        if self.config.outflow && walls[nw - 1] >> 63 == 0 {
             for d in 0..6 {
                 out[d * nw + nw - 1] &= !(1 << 63);
             }
@@ -323,9 +325,7 @@ macro_rules! collide_rows {
 collide_rows!(collide_fhp1, false);
 collide_rows!(collide_full, true);
 
-impl Simulation for MultiSpinCpu {
-    type State = Lattice;
-
+impl engine::Engine for MultiSpinCpu {
     fn step(&mut self, steps: u32) -> Result<()> {
         // The whole loop on a pool thread: no hand-over to the pool per row pass.
         simkit_backend::pool::on_pool(|| {
@@ -351,12 +351,32 @@ impl Simulation for MultiSpinCpu {
         Ok(Lattice::from_raw(w, h, cells))
     }
 
+    fn name(&self) -> String {
+        format!("cpu-multispin ({})", simd_target())
+    }
+
+    fn block_field(&mut self, block: usize) -> Result<BlockField> {
+        MultiSpinCpu::block_field(self, block)
+    }
+}
+
+impl Simulation for MultiSpinCpu {
+    type State = Lattice;
+
+    fn step(&mut self, steps: u32) -> Result<()> {
+        engine::Engine::step(self, steps)
+    }
+
+    fn state(&mut self) -> Result<Lattice> {
+        engine::Engine::state(self)
+    }
+
     fn steps_done(&self) -> u64 {
         self.steps
     }
 
     fn backend_name(&self) -> String {
-        format!("cpu-multispin ({})", simd_target())
+        engine::Engine::name(self)
     }
 }
 
@@ -376,11 +396,11 @@ mod tests {
         })
         .unwrap();
         l.fill_random(0.3, 8).unwrap();
-        let params = Params {
+        let config = Config {
             periodic_y: false,
-            ..Params::default()
+            ..Config::default()
         };
-        let mut sim = MultiSpinCpu::new(l, params).unwrap();
+        let mut sim = MultiSpinCpu::new(l, &config).unwrap();
         sim.step(20).unwrap();
         let state = sim.state().unwrap();
         for block in [1, 5, 16, 64, 100] {

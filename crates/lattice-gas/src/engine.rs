@@ -1,0 +1,21 @@
+//! The backend-neutral engine interface behind [`crate::LatticeGas`].
+
+use simkit_backend::Result;
+
+use crate::Lattice;
+use crate::field::BlockField;
+
+/// One backend instance ([`crate::LutCpu`], [`crate::MultiSpinCpu`] or the GPU backend).
+pub(crate) trait Engine: Send {
+    /// Advances the lattice by `steps` steps.
+    fn step(&mut self, steps: u32) -> Result<()>;
+    /// The current lattice (the GPU downloads it).
+    fn state(&mut self) -> Result<Lattice>;
+    /// Short backend name with the instruction set or layout that runs.
+    fn name(&self) -> String;
+    /// Block sums of density and momentum over `block x block` sites of the current lattice
+    /// (by default from [`Engine::state`]; multi-spin counts its bit-planes directly).
+    fn block_field(&mut self, block: usize) -> Result<BlockField> {
+        BlockField::from_lattice(&self.state()?, block)
+    }
+}
