@@ -2,8 +2,8 @@
 //! one force evaluation of N (N - 1) pair interactions plus an O(N) update).
 //!
 //! `cargo bench --bench pp_coulomb` (GPU rows run on the best adapter; here that is lavapipe,
-//! a CPU Vulkan driver). Compare with the source's OpenMP loop: 3.0e8 interactions/s on the
-//! same 2-core machine (`../shared/peers/FIGURES.md`).
+//! a CPU Vulkan driver). A speed ratio to another program counts only when that program runs
+//! on the same machine in the same session (see docs/pp-coulomb.md).
 
 use std::time::Duration;
 
@@ -61,7 +61,7 @@ fn bench(c: &mut Criterion) {
             let config = Config::new(1.0, law)
                 .with_integrator(Integrator::SymplecticEuler)
                 .with_precision(precision);
-            let mut sim = PpCoulomb::new(p.clone(), config, backend).expect("sim");
+            let mut sim = PpCoulomb::new(p.clone(), &config, backend).expect("sim");
             group.bench_with_input(BenchmarkId::new(name, n), &n, |b, _| {
                 b.iter(|| {
                     sim.step(1).expect("step");

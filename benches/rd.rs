@@ -15,7 +15,7 @@ use std::time::Duration;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use simkit::backend::{Backend, GpuContext, Simulation};
 use simkit::rd::scenes::{colony_scene, gray_scott_square};
-use simkit::rd::{CpuRd, GpuKernel, GpuOptions, GrayScott, Grid, Model, Rd, Real, Stepping};
+use simkit::rd::{Config, GpuKernel, GpuOptions, GrayScott, Grid, Model, Rd, Real, Stepping};
 
 const CPU_STEPS: u32 = 48;
 
@@ -41,7 +41,8 @@ fn bench_sim<T: Real, M: Model>(
                 .build()
                 .unwrap();
             let (grid, model, dt) = make(n);
-            let mut sim = Rd::new(Backend::Cpu, grid, model, Stepping::euler(dt)).unwrap();
+            let config = Config::new(Stepping::euler(dt));
+            let mut sim = Rd::new(grid, model, &config, Backend::Cpu).unwrap();
             g.bench_function(BenchmarkId::new(format!("cpu-{threads}t"), n), |b| {
                 b.iter(|| pool.install(|| sim.step(CPU_STEPS).unwrap()))
             });
@@ -54,11 +55,11 @@ fn bench_sim<T: Real, M: Model>(
             ("gpu-global", GpuKernel::Global),
         ] {
             let (grid, model, dt) = make(n);
-            let options = GpuOptions {
+            let config = Config::new(Stepping::euler(dt)).with_gpu(GpuOptions {
                 kernel,
                 ..GpuOptions::default()
-            };
-            match Rd::with_options(Backend::Gpu(ctx), grid, model, Stepping::euler(dt), options) {
+            });
+            match Rd::new(grid, model, &config, Backend::Gpu(ctx)) {
                 Ok(mut sim) => g.bench_function(BenchmarkId::new(name, n), |b| {
                     b.iter(|| sim.step(steps).unwrap())
                 }),
@@ -87,8 +88,8 @@ fn bench_sweep(c: &mut Criterion) {
         .unwrap();
     for k in [1u32, 2, 4, 8] {
         let (grid, model) = colony_scene::<f32>(n, n, 1).unwrap();
-        let mut sim = CpuRd::new(grid, model, Stepping::euler(0.005)).unwrap();
-        sim.set_steps_per_sweep(k).unwrap();
+        let config = Config::new(Stepping::euler(0.005)).with_steps_per_sweep(k);
+        let mut sim = Rd::new(grid, model, &config, Backend::Cpu).unwrap();
         g.bench_function(BenchmarkId::new("cpu-2t", k), |b| {
             b.iter(|| pool.install(|| sim.step(CPU_STEPS).unwrap()))
         });

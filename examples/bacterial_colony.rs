@@ -23,7 +23,7 @@ use simkit::output::plot::{Plot, Series};
 use simkit::output::progress::Progress;
 use simkit::output::vtk::ImageData;
 use simkit::rd::scenes::{colony_scene, gap_width};
-use simkit::rd::{Rd, Stepping};
+use simkit::rd::{Config, Rd, Stepping};
 
 const N: usize = 512;
 const FRAMES: u32 = 16;
@@ -56,7 +56,7 @@ fn main() -> Result<()> {
 
     let (grid, model) = colony_scene::<f32>(N, N, 2026)?;
     let (cy, left, right) = (N * 127 / 512, N * 103 / 512, N * 151 / 512);
-    let mut sim = Rd::new(backend, grid, model, Stepping::euler(0.005))?;
+    let mut sim = Rd::new(grid, model, &Config::new(Stepping::euler(0.005)), backend)?;
     println!(
         "bacterial colony: {N} x {N}, h = 0.5, dt = 0.005, gamma = 0.5, {steps} steps on {}",
         sim.backend_name()

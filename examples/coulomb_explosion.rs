@@ -54,7 +54,7 @@ fn main() -> Result<()> {
     let omega = explosion_omega(q, 1.0, m, radius);
     let expansion = Expansion::new(&particles.position, radius);
     let config = Config::new(0.05, ForceLaw::Exact).with_precision(precision);
-    let mut sim = PpCoulomb::new(particles, config, backend)?;
+    let mut sim = PpCoulomb::new(particles, &config, backend)?;
     println!(
         "Coulomb explosion: N = {n}, R = 1, total charge 1, omega = {omega}, {}",
         sim.backend_name()

@@ -12,7 +12,7 @@ use std::time::Instant;
 use simkit::backend::{Backend, GpuContext, Result, Simulation};
 use simkit::output::heatmap::{HeatmapOptions, write_heatmap};
 use simkit::rd::scenes::{count_spots, gray_scott_square, variance};
-use simkit::rd::{GrayScott, Rd, Stepping};
+use simkit::rd::{Config, GrayScott, Rd, Stepping};
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().collect();
@@ -47,7 +47,8 @@ fn main() -> Result<()> {
         ("worms", GrayScott::worms()),
     ] {
         let grid = gray_scott_square::<f64>(n, GrayScott::PEARSON_H, n / 8, 1)?;
-        let mut sim = Rd::new(backend, grid, model.clone(), Stepping::euler(1.0))?;
+        let config = Config::new(Stepping::euler(1.0));
+        let mut sim = Rd::new(grid, model.clone(), &config, backend)?;
         let t = Instant::now();
         sim.step(steps)?;
         let secs = t.elapsed().as_secs_f64();

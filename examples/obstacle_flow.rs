@@ -8,7 +8,7 @@
 //! ```
 //! Output under `out/obstacle_flow/`. Defaults: 1024 x 512 sites, 6000 steps, multi-spin CPU.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 use simkit::backend::{Backend, GpuContext, Result, Simulation};
@@ -16,8 +16,7 @@ use simkit::lattice_gas::observables::{BlockField, TimeAverage};
 use simkit::lattice_gas::{Config, Lattice, LatticeGas, Obstacle, ROW_SPACING, RuleSet};
 use simkit::output::gif::GifWriter;
 use simkit::output::heatmap::HeatmapOptions;
-use simkit::output::vector_field::{VectorFieldOptions, render_vector_field, write_vector_field};
-use simkit::output::vtk::ImageData;
+use simkit::output::vector_field::{VectorFieldOptions, render_vector_field};
 
 fn arg_value(args: &[String], name: &str) -> Option<String> {
     args.iter()
@@ -80,7 +79,7 @@ fn main() -> Result<()> {
         if done.is_multiple_of(frame_every) || done == steps {
             let field = avg.field().expect("at least one sample");
             let title = format!("FHP channel, step {done}, {block}x{block} blocks");
-            write_velocity_png(field, &out.join(format!("frame_{frame:03}.png")), &title)?;
+            simkit::files::write_block_velocity_png(field, &out.join(format!("frame_{frame:03}.png")), &title)?;
             let (ux, uy, cols, rows) = field.velocity_square_cells();
             let opts = VectorFieldOptions::new().background(
                 HeatmapOptions::new()
@@ -91,7 +90,7 @@ fn main() -> Result<()> {
             let (img, _) = render_vector_field(&ux, &uy, cols, rows, &opts)?;
             gif.push(&img)?;
             if done == steps {
-                write_vti(field, &out.join("final.vti"))?;
+                simkit::files::write_block_field_vti(field, &out.join("final.vti"))?;
             }
             avg.reset();
             frame += 1;
@@ -116,31 +115,4 @@ fn channel_lattice(w: usize, h: usize) -> Result<Lattice> {
         radius: channel_height / 12.0,
     })?;
     Ok(lattice)
-}
-
-/// The velocity of `field` as a PNG: magnitude colour map with arrows, on physically square
-/// cells ([`BlockField::velocity_square_cells`]).
-fn write_velocity_png(field: &BlockField, path: &Path, title: &str) -> Result<()> {
-    let (ux, uy, cols, rows) = field.velocity_square_cells();
-    let scale = (768 / cols.max(rows)).clamp(1, 32) as u32;
-    let opts =
-        VectorFieldOptions::new().background(HeatmapOptions::new().upscale(scale).title(title));
-    write_vector_field(path, &ux, &uy, cols, rows, &opts)?;
-    Ok(())
-}
-
-/// Density and velocity of `field` as VTK image data (`.vti`), block centres in lattice units.
-fn write_vti(field: &BlockField, path: &Path) -> Result<()> {
-    let (origin, spacing) = field.block_geometry();
-    let mut img = ImageData::new_2d(field.nx, field.ny, origin, spacing)?;
-    let (ux, uy) = field.velocity();
-    let vel: Vec<f64> = ux
-        .iter()
-        .zip(&uy)
-        .flat_map(|(&x, &y)| [x, y, 0.0])
-        .collect();
-    img.add_scalar("density", &field.density())?;
-    img.add_vector("velocity", &vel, 3)?;
-    img.write(path)?;
-    Ok(())
 }

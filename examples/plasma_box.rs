@@ -48,7 +48,7 @@ fn main() -> Result<()> {
     let config = Config::new(1.0, law)
         .with_integrator(Integrator::SymplecticEuler)
         .with_precision(precision);
-    let mut sim = PpCoulomb::new(particles, config, backend)?;
+    let mut sim = PpCoulomb::new(particles, &config, backend)?;
     println!(
         "{} particles, exclusion radius {:.4} (Debye length), {steps} steps on {}",
         sim.len(),

@@ -77,7 +77,7 @@ fn median_relative(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
 /// Seconds per force evaluation (median of `reps` symplectic-Euler steps).
 fn time_per_eval(p: &Particles, config: Config, b: Backend<'_>, reps: usize) -> Result<f64> {
     let config = config.with_integrator(Integrator::SymplecticEuler);
-    let mut sim = PpCoulomb::new(p.clone(), config, b)?;
+    let mut sim = PpCoulomb::new(p.clone(), &config, b)?;
     sim.step(1)?;
     sim.state()?;
     let mut times = Vec::new();
@@ -107,7 +107,7 @@ fn energy_run(
 ) -> Result<(f64, f64)> {
     let mut sim = PpCoulomb::new(
         p.clone(),
-        Config::new(dt, law).with_integrator(integ),
+        &Config::new(dt, law).with_integrator(integ),
         Backend::Cpu,
     )?;
     let d0 = sim.diagnostics()?;
@@ -215,7 +215,7 @@ fn main() -> Result<()> {
             let config = Config::new(1e-9, *law)
                 .with_precision(*prec)
                 .with_rsqrt(*rsqrt);
-            let acc = PpCoulomb::new(p.clone(), config, *backend)?.accelerations()?;
+            let acc = PpCoulomb::new(p.clone(), &config, *backend)?.accelerations()?;
             let err = l2_relative(&acc, &exact).max(1e-17);
             let med = median_relative(&acc, &exact);
             let reps = if matches!(backend, Backend::Gpu(_)) {

@@ -13,7 +13,7 @@ use simkit::backend::{Backend, GpuContext, Result, Simulation};
 use simkit::output::plot::{Plot, Scale, Series};
 use simkit::rd::scenes::colony_scene;
 use simkit::rd::{
-    Boundaries, Diffusion, GpuKernel, GpuOptions, Grid, Integrator, Rd, Real, Stepping,
+    Boundaries, Config, Diffusion, GpuKernel, GpuOptions, Grid, Integrator, Rd, Real, Stepping,
 };
 
 const L: f64 = 40.0;
@@ -49,7 +49,8 @@ fn gaussian<T: Real>(n: usize, dt_factor: f64, integrator: Integrator) -> Result
         integrator,
         ..Stepping::euler(dt)
     };
-    let mut sim = Rd::new(Backend::Cpu, grid, Diffusion::new(&[1.0])?, stepping)?;
+    let config = Config::new(stepping);
+    let mut sim = Rd::new(grid, Diffusion::new(&[1.0])?, &config, Backend::Cpu)?;
     let t = Instant::now();
     sim.step(steps)?;
     let secs = t.elapsed().as_secs_f64();
@@ -150,12 +151,8 @@ fn main() -> Result<()> {
             );
             let (grid, model) = colony_scene::<f32>(256, 256, 3)?;
             let steps = 500;
-            let mut cpu = Rd::new(
-                Backend::Cpu,
-                grid.clone(),
-                model.clone(),
-                Stepping::euler(0.005),
-            )?;
+            let config = Config::new(Stepping::euler(0.005));
+            let mut cpu = Rd::new(grid.clone(), model.clone(), &config, Backend::Cpu)?;
             cpu.step(steps)?;
             let reference = cpu.state()?;
             for (kernel, tile) in [
@@ -165,42 +162,31 @@ fn main() -> Result<()> {
                 (GpuKernel::Tiled, (32, 8)),
                 (GpuKernel::Tiled, (32, 32)),
             ] {
-                let options = GpuOptions {
+                let config = config.with_gpu(GpuOptions {
                     kernel,
                     tile,
                     ..GpuOptions::default()
-                };
-                let row = Rd::with_options(
-                    Backend::Gpu(&ctx),
-                    grid.clone(),
-                    model.clone(),
-                    Stepping::euler(0.005),
-                    options,
-                )
-                .and_then(|mut sim| {
-                    sim.step(10)?;
-                    let t = Instant::now();
-                    sim.step(steps)?;
-                    let rate = (256.0 * 256.0) * f64::from(steps) / t.elapsed().as_secs_f64();
-                    // Re-run from the start for the comparison at equal step counts.
-                    let mut check = Rd::with_options(
-                        Backend::Gpu(&ctx),
-                        grid.clone(),
-                        model.clone(),
-                        Stepping::euler(0.005),
-                        options,
-                    )?;
-                    check.step(steps)?;
-                    let g = check.state()?;
-                    let scale = reference.max_abs(0);
-                    let diff = g
-                        .field(0)
-                        .iter()
-                        .zip(reference.field(0))
-                        .map(|(a, b)| f64::from((a - b).abs()) / scale)
-                        .fold(0.0, f64::max);
-                    Ok(format!("{rate:.3e} | {diff:.1e}"))
                 });
+                let row = Rd::new(grid.clone(), model.clone(), &config, Backend::Gpu(&ctx))
+                    .and_then(|mut sim| {
+                        sim.step(10)?;
+                        let t = Instant::now();
+                        sim.step(steps)?;
+                        let rate = (256.0 * 256.0) * f64::from(steps) / t.elapsed().as_secs_f64();
+                        // Re-run from the start for the comparison at equal step counts.
+                        let mut check =
+                            Rd::new(grid.clone(), model.clone(), &config, Backend::Gpu(&ctx))?;
+                        check.step(steps)?;
+                        let g = check.state()?;
+                        let scale = reference.max_abs(0);
+                        let diff = g
+                            .field(0)
+                            .iter()
+                            .zip(reference.field(0))
+                            .map(|(a, b)| f64::from((a - b).abs()) / scale)
+                            .fold(0.0, f64::max);
+                        Ok(format!("{rate:.3e} | {diff:.1e}"))
+                    });
                 let cell = row.unwrap_or_else(|e| format!("not run: {e} | -"));
                 let _ = writeln!(md, "| {kernel:?} | {}x{} | {cell} |", tile.0, tile.1);
             }

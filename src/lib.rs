@@ -19,11 +19,12 @@
 //!
 //! ```
 //! use simkit::prelude::*;
-//! use simkit::rd::{Boundaries, Diffusion, Grid, Stepping};
+//! use simkit::rd::{Boundaries, Config, Diffusion, Grid, Stepping};
 //! # fn main() -> Result<()> {
 //! let grid = Grid::new(16, 16, 1.0, Boundaries::no_flux(), vec![vec![1.0f64; 256]])?;
 //! let model = Diffusion::new(&[1.0])?;
-//! let mut sim = Rd::new(Backend::Cpu, grid, model, Stepping::euler(0.2))?;
+//! let config = Config::new(Stepping::euler(0.2));
+//! let mut sim = Rd::new(grid, model, &config, Backend::Cpu)?;
 //! sim.step(10)?;
 //! assert_eq!(sim.steps_done(), 10);
 //! # Ok(())
@@ -39,6 +40,7 @@ pub use simkit_pp_coulomb as pp_coulomb;
 pub use simkit_rd as rd;
 
 pub mod cli;
+pub mod files;
 
 /// The names almost every program needs: `use simkit::prelude::*;`.
 ///

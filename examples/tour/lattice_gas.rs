@@ -7,9 +7,6 @@ use simkit::backend::{Backend, Result, Simulation};
 use simkit::lattice_gas::observables::{BlockField, TimeAverage};
 use simkit::lattice_gas::{Config, Lattice, LatticeGas, LutCpu, Obstacle, ROW_SPACING, RuleSet};
 
-use simkit::output::heatmap::HeatmapOptions;
-use simkit::output::vector_field::{VectorFieldOptions, write_vector_field};
-use simkit::output::vtk::ImageData;
 
 use crate::Row;
 
@@ -49,8 +46,8 @@ pub fn run(backend: Backend<'_>, out: &Path) -> Result<Row> {
     }
     let secs = t.elapsed().as_secs_f64();
     let field = avg.field().expect("samples were added");
-    write_velocity_png(field, &out.join("velocity.png"), "FHP channel, 8x8 blocks")?;
-    write_vti(field, &out.join("velocity.vti"))?;
+    simkit::files::write_block_velocity_png(field, &out.join("velocity.png"), "FHP channel, 8x8 blocks")?;
+    simkit::files::write_block_field_vti(field, &out.join("velocity.vti"))?;
     let (ux, _) = field.velocity();
     let mean_ux = ux.iter().sum::<f64>() / ux.len() as f64;
     // The portable scalar lookup table: another code path than any backend above.
@@ -68,31 +65,4 @@ pub fn run(backend: Backend<'_>, out: &Path) -> Result<Row> {
             if same { "yes" } else { "NO" }
         ),
     })
-}
-
-/// The velocity of `field` as a PNG: magnitude colour map with arrows, on physically square
-/// cells ([`BlockField::velocity_square_cells`]).
-fn write_velocity_png(field: &BlockField, path: &Path, title: &str) -> Result<()> {
-    let (ux, uy, cols, rows) = field.velocity_square_cells();
-    let scale = (768 / cols.max(rows)).clamp(1, 32) as u32;
-    let opts =
-        VectorFieldOptions::new().background(HeatmapOptions::new().upscale(scale).title(title));
-    write_vector_field(path, &ux, &uy, cols, rows, &opts)?;
-    Ok(())
-}
-
-/// Density and velocity of `field` as VTK image data (`.vti`), block centres in lattice units.
-fn write_vti(field: &BlockField, path: &Path) -> Result<()> {
-    let (origin, spacing) = field.block_geometry();
-    let mut img = ImageData::new_2d(field.nx, field.ny, origin, spacing)?;
-    let (ux, uy) = field.velocity();
-    let vel: Vec<f64> = ux
-        .iter()
-        .zip(&uy)
-        .flat_map(|(&x, &y)| [x, y, 0.0])
-        .collect();
-    img.add_scalar("density", &field.density())?;
-    img.add_vector("velocity", &vel, 3)?;
-    img.write(path)?;
-    Ok(())
 }

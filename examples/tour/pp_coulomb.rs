@@ -19,7 +19,7 @@ pub fn run(backend: Backend<'_>, out: &Path) -> Result<Row> {
     let omega = explosion_omega(particles.charge[0], 1.0, particles.mass[0], radius);
     let expansion = Expansion::new(&particles.position, radius);
     let config = Config::new(0.05, ForceLaw::Exact).with_precision(Precision::F32);
-    let mut sim = PpCoulomb::new(particles, config, backend)?;
+    let mut sim = PpCoulomb::new(particles, &config, backend)?;
     let start = Instant::now();
     let t_end = explosion_time(4.5, omega);
     let samples = run_explosion(

@@ -6,7 +6,7 @@ use std::time::Instant;
 use simkit::backend::{Backend, Result, Simulation};
 use simkit::output::heatmap::{HeatmapOptions, write_heatmap};
 use simkit::rd::scenes::colony_scene;
-use simkit::rd::{Rd, Stepping};
+use simkit::rd::{Config, Rd, Stepping};
 
 use crate::Row;
 
@@ -18,7 +18,7 @@ pub fn run(backend: Backend<'_>, out: &Path) -> Result<Row> {
     let (grid, model) = colony_scene::<f32>(n, n, 7)?;
     let start = grid.total(0) + grid.total(1);
     let b0 = grid.total(0);
-    let mut sim = Rd::new(backend, grid, model, Stepping::euler(0.005))?;
+    let mut sim = Rd::new(grid, model, &Config::new(Stepping::euler(0.005)), backend)?;
     let t = Instant::now();
     sim.step(steps)?;
     let secs = t.elapsed().as_secs_f64();

@@ -1,70 +1,16 @@
-//! Force kernels against the plain f64 reference, Newton's third law, CPU vs GPU, bad input.
+//! Force kernels against the plain f64 reference, Newton's third law, bad input (the CPU vs
+//! GPU comparisons are in `conformance.rs`).
 
+mod common;
+
+use common::{LAWS, l2_relative, max_error_over_rms, norm, plasma};
 use simkit_backend::testing::backends;
 #[cfg(feature = "gpu")]
 use simkit_backend::testing::gpu_or_skip;
 use simkit_backend::{Backend, Simulation};
-#[cfg(feature = "gpu")]
-use simkit_pp_coulomb::Integrator;
 use simkit_pp_coulomb::{
-    Config, ForceLaw, Particles, PpCoulomb, Precision, Region, Species, Velocities,
-    reference_accelerations,
+    Config, ForceLaw, Particles, PpCoulomb, Precision, Species, reference_accelerations,
 };
-
-/// Electrons and heavier ions in a cube (several species, per-particle charge and mass).
-fn plasma(n: usize, seed: u64) -> Particles {
-    let mut p = Particles::new();
-    let e = p.add_species(Species::new("electron", -1.0, 1.0)).unwrap();
-    let ion = p.add_species(Species::new("ion", 2.0, 100.0)).unwrap();
-    let cube = Region::Cube {
-        min: [-10.0; 3],
-        length: 20.0,
-    };
-    let v = Velocities::Maxwellian { thermal_speed: 0.3 };
-    p.fill(e, n - n / 3, cube, v, seed).unwrap();
-    p.fill(ion, n / 3, cube, v, seed + 1).unwrap();
-    p
-}
-
-const LAWS: [ForceLaw; 3] = [
-    ForceLaw::Exact,
-    ForceLaw::Exclusion { radius: 1.5 },
-    ForceLaw::Plummer { epsilon: 0.4 },
-];
-
-fn norm(a: [f64; 3]) -> f64 {
-    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
-}
-
-/// max_i |a_i - b_i| / rms_i |b_i|.
-fn max_error_over_rms(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
-    let rms = (b.iter().map(|x| norm(*x).powi(2)).sum::<f64>() / b.len() as f64).sqrt();
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| norm([x[0] - y[0], x[1] - y[1], x[2] - y[2]]))
-        .fold(0.0, f64::max)
-        / rms
-}
-
-/// sqrt(sum_i |a_i - b_i|^2 / sum_i |b_i|^2): the L2 relative error over all particles.
-fn l2_relative(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
-    let num: f64 = a
-        .iter()
-        .zip(b)
-        .map(|(x, y)| norm([x[0] - y[0], x[1] - y[1], x[2] - y[2]]).powi(2))
-        .sum();
-    let den: f64 = b.iter().map(|y| norm(*y).powi(2)).sum();
-    (num / den).sqrt()
-}
-
-#[cfg(feature = "gpu")]
-fn accelerations(p: &Particles, law: ForceLaw, prec: Precision, b: Backend<'_>) -> Vec<[f64; 3]> {
-    let config = Config::new(0.01, law).with_precision(prec);
-    PpCoulomb::new(p.clone(), &config, b)
-        .unwrap()
-        .accelerations()
-        .unwrap()
-}
 
 #[test]
 fn cpu_kernels_match_reference_and_third_law() {
@@ -100,72 +46,6 @@ fn cpu_kernels_match_reference_and_third_law() {
         let third = norm(d.force_sum) / d.force_magnitude_sum;
         println!("{law:?}: |sum F| / sum |F| = {third:.2e}");
         assert!(third < 1e-13, "{law:?}: third law {third:e}");
-    }
-}
-
-#[cfg(feature = "gpu")]
-#[test]
-fn gpu_matches_cpu_f32_n4096_and_f64() {
-    let Some(ctx) = gpu_or_skip("gpu_matches_cpu_f32_n4096_and_f64") else {
-        return;
-    };
-    let p = plasma(4096, 2);
-    let law = ForceLaw::Plummer { epsilon: 0.1 };
-    let cpu32 = accelerations(&p, law, Precision::F32, Backend::Cpu);
-    let gpu32 = accelerations(&p, law, Precision::F32, Backend::Gpu(&ctx));
-    let cpu64 = accelerations(&p, law, Precision::F64, Backend::Cpu);
-    let e = l2_relative(&gpu32, &cpu32);
-    let emax = max_error_over_rms(&gpu32, &cpu32);
-    let e32_64 = l2_relative(&cpu32, &cpu64);
-    let egpu_64 = l2_relative(&gpu32, &cpu64);
-    println!(
-        "N=4096 f32: L2 relative |a_gpu - a_cpu| = {e:.2e} (max_i / rms: {emax:.2e}); \
-         f32 vs f64 (L2 relative): cpu {e32_64:.2e}, gpu {egpu_64:.2e}"
-    );
-    assert!(e < 1e-5, "gpu vs cpu f32: {e:e}");
-    for law in LAWS {
-        let p = plasma(300, 3);
-        let c = accelerations(&p, law, Precision::F64, Backend::Cpu);
-        if ctx.has_f64() {
-            let g = accelerations(&p, law, Precision::F64, Backend::Gpu(&ctx));
-            let e = max_error_over_rms(&g, &c);
-            println!("{law:?} f64 gpu vs cpu {e:.2e}");
-            assert!(e < 1e-12, "{law:?}: {e:e}");
-        }
-        let g = accelerations(&p, law, Precision::F32, Backend::Gpu(&ctx));
-        let e = max_error_over_rms(&g, &c);
-        assert!(e < 1e-5, "{law:?}: f32 gpu vs f64 cpu {e:e}");
-    }
-}
-
-#[cfg(feature = "gpu")]
-#[test]
-fn gpu_and_cpu_trajectories_agree() {
-    let Some(ctx) = gpu_or_skip("gpu_and_cpu_trajectories_agree") else {
-        return;
-    };
-    let prec = if ctx.has_f64() {
-        Precision::F64
-    } else {
-        Precision::F32
-    };
-    let tol = if ctx.has_f64() { 1e-10 } else { 1e-4 };
-    for integrator in [Integrator::SymplecticEuler, Integrator::Leapfrog] {
-        let p = plasma(500, 4);
-        let config = Config::new(0.05, ForceLaw::Plummer { epsilon: 0.5 })
-            .with_integrator(integrator)
-            .with_precision(prec);
-        let mut cpu = PpCoulomb::new(p.clone(), &config, Backend::Cpu).unwrap();
-        let mut gpu = PpCoulomb::new(p, &config, Backend::Gpu(&ctx)).unwrap();
-        cpu.step(10).unwrap();
-        gpu.step(7).unwrap();
-        gpu.step(3).unwrap();
-        let (a, b) = (cpu.state().unwrap(), gpu.state().unwrap());
-        let dx = max_error_over_rms(&b.position, &a.position);
-        let dv = max_error_over_rms(&b.velocity, &a.velocity);
-        println!("{integrator:?}: positions {dx:.2e}, velocities {dv:.2e}");
-        assert!(dx < tol && dv < tol, "{integrator:?}: {dx:e} {dv:e}");
-        assert_eq!(gpu.steps_done(), 10);
     }
 }
 
@@ -245,8 +125,8 @@ fn gpu_refuses_more_particles_than_the_adapter_loops_allow() {
     assert_eq!(max, 64_512);
     let config = Config::new(0.01, ForceLaw::Plummer { epsilon: 0.1 });
     // Construction only: one force evaluation at this size takes seconds on llvmpipe.
-    PpCoulomb::new(plasma(max, 5), config, Backend::Gpu(&ctx)).unwrap();
-    let e = PpCoulomb::new(plasma(max + 1, 5), config, Backend::Gpu(&ctx))
+    PpCoulomb::new(plasma(max, 5), &config, Backend::Gpu(&ctx)).unwrap();
+    let e = PpCoulomb::new(plasma(max + 1, 5), &config, Backend::Gpu(&ctx))
         .expect_err("one particle over the limit")
         .to_string();
     assert!(

@@ -1,9 +1,11 @@
 //! CPU backend: cache-blocked tiles of the padded grid, processed in parallel with rayon.
 
 use rayon::prelude::*;
-use simkit_backend::{Error, Real, Result, Simulation};
+use simkit_backend::{Real, Result};
 
 use crate::boundary::fill_ghosts;
+use crate::config::Config;
+use crate::engine::Engine;
 use crate::grid::{Grid, pad};
 use crate::model::{Model, RowIn};
 use crate::stepper::{Integrator, Stepping, check_dt, check_dt_with, check_model, dt_bound};
@@ -16,10 +18,6 @@ const BAND_ROWS: usize = 16;
 /// 2x slower at 4096^2: a row segment of 2 KiB is too short a stream for the hardware
 /// prefetchers.
 const BLOCK_COLS: usize = 8192;
-/// Default number of Euler steps fused into one sweep (temporal blocking).
-pub const DEFAULT_STEPS_PER_SWEEP: u32 = 4;
-/// Most steps one sweep may fuse.
-const MAX_STEPS_PER_SWEEP: u32 = 16;
 /// Rows per band in a fused sweep (each band recomputes `2 (k - 1)` halo rows per level).
 const FUSED_BAND_ROWS: usize = 64;
 
@@ -30,12 +28,12 @@ const FUSED_BAND_ROWS: usize = 64;
 /// blocks and each row segment goes to the model's vectorised row kernel (compiled for
 /// AVX-512, AVX2+FMA and baseline x86-64, chosen at run time).
 ///
-/// Explicit Euler fuses [`CpuRd::steps_per_sweep`] steps into one sweep over the grid
+/// Explicit Euler fuses [`Config::steps_per_sweep`] steps into one sweep over the grid
 /// (temporal blocking: intermediate steps of a band of rows stay in a small per-thread
 /// buffer), bit-identical to one pass per step; Heun and grids with periodic south/north
 /// edges take one pass per stage.
 #[derive(Debug)]
-pub struct CpuRd<T: Real, M: Model> {
+pub(crate) struct CpuRd<T: Real, M: Model> {
     model: M,
     grid: Grid<T>,
     stepping: Stepping,
@@ -51,9 +49,10 @@ pub struct CpuRd<T: Real, M: Model> {
 }
 
 impl<T: Real, M: Model> CpuRd<T, M> {
-    /// Builds the simulation; checks the model against the grid and `dt` against the
-    /// stability bound (unless overridden).
-    pub fn new(grid: Grid<T>, model: M, stepping: Stepping) -> Result<Self> {
+    /// Builds the simulation from a validated `config`; checks the model against the grid
+    /// and `dt` against the stability bound (unless overridden).
+    pub(crate) fn new(grid: Grid<T>, model: M, config: &Config) -> Result<Self> {
+        let stepping = config.stepping;
         check_model(&model, &grid)?;
         check_dt(&model, &grid, &stepping)?;
         let (nx, ny) = (grid.nx(), grid.ny());
@@ -82,62 +81,10 @@ impl<T: Real, M: Model> CpuRd<T, M> {
             coef,
             steps: 0,
             snapshot_fresh: true,
-            steps_per_sweep: DEFAULT_STEPS_PER_SWEEP,
+            steps_per_sweep: config.steps_per_sweep,
             scratch: ScratchPool::default(),
             next_dmax: None,
         })
-    }
-
-    /// Euler steps fused into one sweep over the grid (temporal blocking); 1 = one pass per
-    /// step. Default [`DEFAULT_STEPS_PER_SWEEP`].
-    pub fn steps_per_sweep(&self) -> u32 {
-        self.steps_per_sweep
-    }
-
-    /// Sets the number of Euler steps fused into one sweep (1..=16). The results are
-    /// bit-identical for every value; only the speed changes.
-    pub fn set_steps_per_sweep(&mut self, k: u32) -> Result<()> {
-        if !(1..=MAX_STEPS_PER_SWEEP).contains(&k) {
-            return Err(Error::invalid(
-                "steps per sweep",
-                k,
-                format!("must be 1..={MAX_STEPS_PER_SWEEP} (1 = no temporal blocking)"),
-            ));
-        }
-        self.steps_per_sweep = k;
-        Ok(())
-    }
-
-    /// The model.
-    pub fn model(&self) -> &M {
-        &self.model
-    }
-
-    /// Current time-stepping settings.
-    pub fn stepping(&self) -> Stepping {
-        self.stepping
-    }
-
-    /// Changes the time step (checked against the bound from the current fields).
-    pub fn set_stepping(&mut self, stepping: Stepping) -> Result<()> {
-        check_dt_with(
-            self.model.name(),
-            self.max_diffusivity(),
-            self.grid.h(),
-            &stepping,
-        )?;
-        self.stepping = stepping;
-        Ok(())
-    }
-
-    /// Largest stable `dt` for the current fields.
-    pub fn stable_dt(&self) -> f64 {
-        dt_bound(self.max_diffusivity(), self.grid.h())
-    }
-
-    /// Simulated time, `steps_done * dt` (for a constant `dt`).
-    pub fn time(&self) -> f64 {
-        self.steps as f64 * self.stepping.dt
     }
 
     fn refresh_snapshot(&mut self) {
@@ -274,11 +221,7 @@ impl<T: Real, M: Model> CpuRd<T, M> {
     }
 }
 
-impl<T: Real, M: Model> Simulation for CpuRd<T, M> {
-    type State = Grid<T>;
-
-    /// Advances `steps` steps; the stability bound is re-checked first from the current
-    /// fields when the model's diffusivity depends on them.
+impl<T: Real, M: Model> Engine<T, M> for CpuRd<T, M> {
     fn step(&mut self, steps: u32) -> Result<()> {
         if self.model.field_dependent_diffusivity() {
             let d = match self.next_dmax {
@@ -305,7 +248,30 @@ impl<T: Real, M: Model> Simulation for CpuRd<T, M> {
         self.steps
     }
 
-    fn backend_name(&self) -> String {
+    fn name(&self) -> String {
         format!("cpu ({} threads)", rayon::current_num_threads())
+    }
+
+    fn model(&self) -> &M {
+        &self.model
+    }
+
+    fn stepping(&self) -> Stepping {
+        self.stepping
+    }
+
+    fn set_stepping(&mut self, stepping: Stepping) -> Result<()> {
+        check_dt_with(
+            self.model.name(),
+            self.max_diffusivity(),
+            self.grid.h(),
+            &stepping,
+        )?;
+        self.stepping = stepping;
+        Ok(())
+    }
+
+    fn stable_dt(&self) -> Result<f64> {
+        Ok(dt_bound(self.max_diffusivity(), self.grid.h()))
     }
 }

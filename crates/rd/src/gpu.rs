@@ -7,9 +7,11 @@
 use std::fmt::Write as _;
 
 use simkit_backend::gpu::DISPATCH_WGSL;
-use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Real, Result, Simulation};
+use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Real, Result};
 
 use crate::boundary::{Boundary, fill_ghosts};
+use crate::config::{Config, GpuKernel, GpuOptions};
+use crate::engine::Engine;
 use crate::grid::{Grid, pad};
 use crate::model::Model;
 use crate::stepper::{Integrator, Stepping, check_dt, check_dt_with, check_model, dt_bound};
@@ -67,37 +69,6 @@ fn header_wgsl<T: Real>() -> String {
     w
 }
 
-/// Which stencil kernel the GPU backend runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum GpuKernel {
-    /// Tile plus one-cell halo staged in workgroup memory (the source's scheme).
-    #[default]
-    Tiled,
-    /// Every neighbour read straight from global memory (for comparison).
-    Global,
-}
-
-/// GPU backend options.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct GpuOptions {
-    /// Stencil kernel.
-    pub kernel: GpuKernel,
-    /// Tile (= workgroup) size `(x, y)` in cells; a WGSL override constant.
-    pub tile: (u32, u32),
-    /// Steps recorded into one command buffer before it is submitted.
-    pub steps_per_submit: u32,
-}
-
-impl Default for GpuOptions {
-    fn default() -> Self {
-        Self {
-            kernel: GpuKernel::Tiled,
-            tile: (16, 16),
-            steps_per_submit: 100,
-        }
-    }
-}
-
 /// Reaction–diffusion on the GPU. The fields stay on the device between `step` calls;
 /// `state()` downloads them.
 ///
@@ -105,7 +76,7 @@ impl Default for GpuOptions {
 /// diffusivity depends on the fields, again before each `step` call from the current fields:
 /// a reduction kernel finds the largest effective diffusivity on the device (in f32) and only
 /// that one number is read back.
-pub struct GpuRd<T: Real, M: Model> {
+pub(crate) struct GpuRd<T: Real, M: Model> {
     ctx: GpuContext,
     model: M,
     grid: Grid<T>,
@@ -234,16 +205,11 @@ struct Reduce {
 }
 
 impl<T: Real, M: Model> GpuRd<T, M> {
-    /// Uploads the grid and builds the kernels. Errors: bad model/grid/dt (as on the CPU),
-    /// `f64` without `SHADER_F64`, a tile over the device's workgroup limits, a grid over the
-    /// buffer or dispatch limits.
-    pub fn new(
-        ctx: &GpuContext,
-        grid: Grid<T>,
-        model: M,
-        stepping: Stepping,
-        options: GpuOptions,
-    ) -> Result<Self> {
+    /// Uploads the grid and builds the kernels from a validated `config` (its stepping and
+    /// GPU options). Errors: bad model/grid/dt (as on the CPU), `f64` without `SHADER_F64`, a
+    /// tile over the device's workgroup limits, a grid over the buffer or dispatch limits.
+    pub(crate) fn new(ctx: &GpuContext, grid: Grid<T>, model: M, config: &Config) -> Result<Self> {
+        let (stepping, options) = (config.stepping, config.gpu);
         check_model(&model, &grid)?;
         check_dt(&model, &grid, &stepping)?;
         if T::WGSL == "f64" && !ctx.has_f64() {
@@ -283,9 +249,6 @@ impl<T: Real, M: Model> GpuRd<T, M> {
                     lim.max_compute_workgroup_storage_size
                 ),
             ));
-        }
-        if options.steps_per_submit == 0 {
-            return Err(Error::invalid("steps_per_submit", 0, "must be >= 1"));
         }
         if 2 * ns as u32 + 2 > lim.max_storage_buffers_per_shader_stage {
             return Err(Error::Unsupported(format!(
@@ -460,41 +423,6 @@ impl<T: Real, M: Model> GpuRd<T, M> {
         })
     }
 
-    /// The model.
-    pub fn model(&self) -> &M {
-        &self.model
-    }
-
-    /// The options the kernels were built with.
-    pub fn options(&self) -> GpuOptions {
-        self.options
-    }
-
-    /// Current time-stepping settings.
-    pub fn stepping(&self) -> Stepping {
-        self.stepping
-    }
-
-    /// Changes the time step (checked against the bound from the current fields).
-    pub fn set_stepping(&mut self, stepping: Stepping) -> Result<()> {
-        check_dt_with(
-            self.model.name(),
-            self.max_diffusivity()?,
-            self.grid.h(),
-            &stepping,
-        )?;
-        self.params
-            .upload(&self.ctx, &params_vec(&self.model, &self.grid, &stepping))?;
-        self.stepping = stepping;
-        Ok(())
-    }
-
-    /// Largest stable `dt` for the current fields: for models whose diffusivity depends on
-    /// the fields, reduced on the device (in f32) and read back.
-    pub fn stable_dt(&self) -> Result<f64> {
-        Ok(dt_bound(self.max_diffusivity()?, self.grid.h()))
-    }
-
     /// The model's largest effective diffusivity for the current fields (on the device for
     /// field-dependent models; the maximum is taken in f32).
     fn max_diffusivity(&self) -> Result<f64> {
@@ -514,11 +442,6 @@ impl<T: Real, M: Model> GpuRd<T, M> {
         })?;
         let bits = r.dmax.download(&self.ctx)?;
         Ok(f64::from(f32::from_bits(bits[0])))
-    }
-
-    /// Simulated time, `steps_done * dt` (for a constant `dt`).
-    pub fn time(&self) -> f64 {
-        self.steps as f64 * self.stepping.dt
     }
 
     fn record_step(&mut self, pass: &mut wgpu::ComputePass<'_>) -> Result<()> {
@@ -574,9 +497,7 @@ impl<T: Real, M: Model> GpuRd<T, M> {
     }
 }
 
-impl<T: Real, M: Model> Simulation for GpuRd<T, M> {
-    type State = Grid<T>;
-
+impl<T: Real, M: Model> Engine<T, M> for GpuRd<T, M> {
     fn step(&mut self, steps: u32) -> Result<()> {
         if self.model.field_dependent_diffusivity() {
             check_dt_with(
@@ -629,7 +550,34 @@ impl<T: Real, M: Model> Simulation for GpuRd<T, M> {
         self.steps
     }
 
-    fn backend_name(&self) -> String {
+    fn model(&self) -> &M {
+        &self.model
+    }
+
+    fn stepping(&self) -> Stepping {
+        self.stepping
+    }
+
+    fn set_stepping(&mut self, stepping: Stepping) -> Result<()> {
+        check_dt_with(
+            self.model.name(),
+            self.max_diffusivity()?,
+            self.grid.h(),
+            &stepping,
+        )?;
+        self.params
+            .upload(&self.ctx, &params_vec(&self.model, &self.grid, &stepping))?;
+        self.stepping = stepping;
+        Ok(())
+    }
+
+    /// For models whose diffusivity depends on the fields, the maximum is reduced on the
+    /// device (in f32) and read back.
+    fn stable_dt(&self) -> Result<f64> {
+        Ok(dt_bound(self.max_diffusivity()?, self.grid.h()))
+    }
+
+    fn name(&self) -> String {
         let k = match self.options.kernel {
             GpuKernel::Tiled => "tiled",
             GpuKernel::Global => "global",

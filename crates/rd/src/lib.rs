@@ -8,22 +8,27 @@
 //! - [`Stepping`]: `dt`, [`Integrator`] (Euler or Heun) and the stability [`Guard`]: a `dt`
 //!   above [`stable_dt`] (`h^2 / (4 D_max)` from the current fields) is refused with
 //!   [`simkit_backend::Error::Unstable`] unless overridden.
-//! - Backends: [`CpuRd`] (cache-blocked tiles in parallel, vectorised with run-time CPU
-//!   feature dispatch, several Euler steps fused per sweep over the grid) and [`GpuRd`] (WGSL; tile + halo in workgroup memory, or a plain
-//!   global-memory kernel; many steps per submission), both behind
-//!   [`simkit_backend::Simulation`]; [`Rd`] picks one from a [`simkit_backend::Backend`] value.
+//! - [`Config`]: the [`Stepping`], the CPU's temporal blocking depth
+//!   ([`Config::steps_per_sweep`]) and the [`GpuOptions`] (plain data, ignored by the CPU).
+//! - [`Rd`]: the simulation behind [`simkit_backend::Simulation`], built as
+//!   `Rd::new(grid, model, &config, backend)` on the backend the [`simkit_backend::Backend`]
+//!   value names: the CPU (cache-blocked tiles in parallel, vectorised with run-time CPU
+//!   feature dispatch, several Euler steps fused per sweep over the grid) or the GPU (WGSL;
+//!   tile + halo in workgroup memory, or a plain global-memory kernel; many steps per
+//!   submission).
 //!
 //! ```
 //! use simkit_backend::{Backend, Simulation};
-//! use simkit_rd::{Boundaries, Diffusion, Grid, Rd, Stepping};
+//! use simkit_rd::{Boundaries, Config, Diffusion, Grid, Rd, Stepping};
 //! # fn main() -> simkit_backend::Result<()> {
 //! let (nx, ny, h) = (32, 32, 1.0);
 //! let mut u = vec![0.0f64; nx * ny];
 //! u[16 * nx + 16] = 1.0;
 //! let grid = Grid::new(nx, ny, h, Boundaries::no_flux(), vec![u])?;
 //! let model = Diffusion::new(&[1.0])?;
-//! assert!(Rd::new(Backend::Cpu, grid.clone(), model.clone(), Stepping::euler(0.3)).is_err());
-//! let mut sim = Rd::new(Backend::Cpu, grid, model, Stepping::euler(0.2))?;
+//! let unstable = Config::new(Stepping::euler(0.3));
+//! assert!(Rd::new(grid.clone(), model.clone(), &unstable, Backend::Cpu).is_err());
+//! let mut sim = Rd::new(grid, model, &Config::new(Stepping::euler(0.2)), Backend::Cpu)?;
 //! sim.step(100)?;
 //! let total = sim.state()?.total(0);
 //! assert!((total - 1.0).abs() < 1e-12);
@@ -32,7 +37,9 @@
 //! ```
 
 mod boundary;
+mod config;
 mod cpu;
+mod engine;
 #[cfg(feature = "gpu")]
 mod gpu;
 mod grid;
@@ -43,9 +50,7 @@ mod stepper;
 mod sweep;
 
 pub use boundary::{Boundaries, Boundary};
-pub use cpu::{CpuRd, DEFAULT_STEPS_PER_SWEEP};
-#[cfg(feature = "gpu")]
-pub use gpu::{GpuKernel, GpuOptions, GpuRd};
+pub use config::{Config, DEFAULT_STEPS_PER_SWEEP, GpuKernel, GpuOptions};
 pub use grid::Grid;
 pub use model::{Model, RowIn, Stencil};
 pub use models::{Colony, Diffusion, GrayScott};
@@ -54,100 +59,98 @@ pub use stepper::{Guard, Integrator, Stepping, stable_dt};
 
 use simkit_backend::{Backend, Result, Simulation};
 
-/// A simulation on either backend, chosen at run time.
-// One simulation object per run: the few hundred bytes of difference do not matter.
-#[allow(clippy::large_enum_variant)]
-#[derive(Debug)]
-pub enum Rd<T: Real, M: Model> {
-    /// CPU backend.
-    Cpu(CpuRd<T, M>),
-    /// GPU backend.
-    #[cfg(feature = "gpu")]
-    Gpu(GpuRd<T, M>),
+use crate::cpu::CpuRd;
+use crate::engine::Engine;
+#[cfg(feature = "gpu")]
+use crate::gpu::GpuRd;
+
+/// Reaction–diffusion of the fields of a [`Grid`] under a [`Model`], on the backend chosen at
+/// construction.
+///
+/// The stability bound `dt <= h^2 / (4 D_max)` is checked at construction, at
+/// [`Rd::set_stepping`] and, for models whose diffusivity depends on the fields, again before
+/// each `step` call from the current fields (on the GPU, a reduction kernel finds `D_max` on
+/// the device, in f32, and only that number is read back).
+pub struct Rd<T: Real, M: Model> {
+    engine: Box<dyn Engine<T, M>>,
+}
+
+impl<T: Real, M: Model> std::fmt::Debug for Rd<T, M> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Rd")
+            .field("backend", &self.engine.name())
+            .field("model", self.engine.model())
+            .field("stepping", &self.engine.stepping())
+            .field("steps", &self.engine.steps_done())
+            .finish()
+    }
 }
 
 impl<T: Real, M: Model> Rd<T, M> {
-    /// Builds the simulation on `backend` (GPU with default [`GpuOptions`]).
-    pub fn new(backend: Backend<'_>, grid: Grid<T>, model: M, stepping: Stepping) -> Result<Self> {
-        match backend {
-            Backend::Cpu => Ok(Rd::Cpu(CpuRd::new(grid, model, stepping)?)),
+    /// Validates `config`, checks the model against the grid and `dt` against the stability
+    /// bound (unless overridden), and builds the backend `backend` names (the grid is
+    /// uploaded once on the GPU).
+    ///
+    /// Errors: an invalid [`Config`], a model that does not fit the grid, non-finite field
+    /// values, an unstable `dt`; on the GPU also `f64` fields without `SHADER_F64`, a tile
+    /// over the device's workgroup limits, a grid over the buffer or dispatch limits.
+    pub fn new(grid: Grid<T>, model: M, config: &Config, backend: Backend<'_>) -> Result<Self> {
+        config.validate()?;
+        let engine: Box<dyn Engine<T, M>> = match backend {
+            Backend::Cpu => Box::new(CpuRd::new(grid, model, config)?),
             #[cfg(feature = "gpu")]
-            gpu => Self::with_options(gpu, grid, model, stepping, GpuOptions::default()),
-        }
+            Backend::Gpu(ctx) => Box::new(GpuRd::new(ctx, grid, model, config)?),
+        };
+        Ok(Self { engine })
     }
 
-    /// Builds the simulation on `backend`; `options` apply to the GPU backend only.
-    #[cfg(feature = "gpu")]
-    pub fn with_options(
-        backend: Backend<'_>,
-        grid: Grid<T>,
-        model: M,
-        stepping: Stepping,
-        options: GpuOptions,
-    ) -> Result<Self> {
-        Ok(match backend {
-            Backend::Cpu => Rd::Cpu(CpuRd::new(grid, model, stepping)?),
-            #[cfg(feature = "gpu")]
-            Backend::Gpu(ctx) => Rd::Gpu(GpuRd::new(ctx, grid, model, stepping, options)?),
-        })
+    /// The model.
+    pub fn model(&self) -> &M {
+        self.engine.model()
     }
 
-    /// Changes the time-stepping settings (checked against the stability bound).
+    /// Changes the time-stepping settings (checked against the stability bound from the
+    /// current fields).
     pub fn set_stepping(&mut self, stepping: Stepping) -> Result<()> {
-        match self {
-            Rd::Cpu(s) => s.set_stepping(stepping),
-            #[cfg(feature = "gpu")]
-            Rd::Gpu(s) => s.set_stepping(stepping),
-        }
+        self.engine.set_stepping(stepping)
     }
 
     /// Current time-stepping settings.
     pub fn stepping(&self) -> Stepping {
-        match self {
-            Rd::Cpu(s) => s.stepping(),
-            #[cfg(feature = "gpu")]
-            Rd::Gpu(s) => s.stepping(),
-        }
+        self.engine.stepping()
     }
 
-    /// Simulated time, `steps_done * dt`.
+    /// Simulated time, `steps_done * dt` (for a constant `dt`).
     pub fn time(&self) -> f64 {
-        match self {
-            Rd::Cpu(s) => s.time(),
-            #[cfg(feature = "gpu")]
-            Rd::Gpu(s) => s.time(),
-        }
+        self.engine.steps_done() as f64 * self.engine.stepping().dt
+    }
+
+    /// Largest stable `dt`, `h^2 / (4 D_max)`, for the current fields (on the GPU, for
+    /// models whose diffusivity depends on the fields, `D_max` is reduced on the device in
+    /// f32 and read back: hence the `Result`).
+    pub fn stable_dt(&self) -> Result<f64> {
+        self.engine.stable_dt()
     }
 }
 
 impl<T: Real, M: Model> Simulation for Rd<T, M> {
     type State = Grid<T>;
+
+    /// Advances `steps` steps; the stability bound is re-checked first from the current
+    /// fields when the model's diffusivity depends on them.
     fn step(&mut self, steps: u32) -> Result<()> {
-        match self {
-            Rd::Cpu(s) => s.step(steps),
-            #[cfg(feature = "gpu")]
-            Rd::Gpu(s) => s.step(steps),
-        }
+        self.engine.step(steps)
     }
+
     fn state(&mut self) -> Result<Grid<T>> {
-        match self {
-            Rd::Cpu(s) => s.state(),
-            #[cfg(feature = "gpu")]
-            Rd::Gpu(s) => s.state(),
-        }
+        self.engine.state()
     }
+
     fn steps_done(&self) -> u64 {
-        match self {
-            Rd::Cpu(s) => s.steps_done(),
-            #[cfg(feature = "gpu")]
-            Rd::Gpu(s) => s.steps_done(),
-        }
+        self.engine.steps_done()
     }
+
     fn backend_name(&self) -> String {
-        match self {
-            Rd::Cpu(s) => s.backend_name(),
-            #[cfg(feature = "gpu")]
-            Rd::Gpu(s) => s.backend_name(),
-        }
+        self.engine.name()
     }
 }

@@ -83,8 +83,9 @@ impl<'a, T: Real> RowIn<'a, T> {
 ///
 /// The CPU backend calls [`Model::update_row`] on cache-blocked row segments; the GPU backend
 /// compiles [`Model::wgsl`] into its tiled and global-memory kernels with [`Model::gpu_params`]
-/// as run-time parameters. Both evaluate the same formula.
-pub trait Model: Clone + Debug + Send + Sync {
+/// as run-time parameters. Both evaluate the same formula. A model owns its parameters and
+/// coefficient fields (`'static`): the simulation keeps it for the whole run.
+pub trait Model: Clone + Debug + Send + Sync + 'static {
     /// Short name, e.g. `"gray-scott"`.
     fn name(&self) -> &'static str;
     /// Number of species fields the model advances.

@@ -5,9 +5,9 @@
 use simkit_backend::testing::gpu_or_skip;
 use simkit_backend::{Backend, Simulation};
 use simkit_rd::scenes::{count_spots, gray_scott_square, variance};
+use simkit_rd::{Config, GrayScott, Grid, Rd, Stepping};
 #[cfg(feature = "gpu")]
 use simkit_rd::{GpuKernel, GpuOptions};
-use simkit_rd::{GrayScott, Grid, Rd, Stepping};
 
 const N: usize = 128;
 const STEPS: u32 = 6000;
@@ -37,10 +37,10 @@ fn check((var, spots): (f64, usize)) {
 #[test]
 fn spots_on_cpu() {
     let sim = Rd::new(
-        Backend::Cpu,
         square(),
         GrayScott::spots(),
-        Stepping::euler(1.0),
+        &Config::new(Stepping::euler(1.0)),
+        Backend::Cpu,
     );
     check(run(sim.unwrap()));
 }
@@ -56,8 +56,8 @@ fn spots_on_gpu() {
             kernel,
             ..GpuOptions::default()
         };
-        let (grid, model, stepping) = (square(), GrayScott::spots(), Stepping::euler(1.0));
-        let sim = Rd::with_options(Backend::Gpu(&ctx), grid, model, stepping, options);
+        let config = Config::new(Stepping::euler(1.0)).with_gpu(options);
+        let sim = Rd::new(square(), GrayScott::spots(), &config, Backend::Gpu(&ctx));
         check(run(sim.unwrap()));
     }
 }

@@ -1,14 +1,17 @@
 //! Temporal blocking (several Euler steps fused into one sweep on the CPU) gives bit-identical
 //! fields to one pass per step, for every fused depth, band layout and edge condition.
 
-use simkit_backend::Simulation;
 use simkit_backend::rng::rng_uniform;
+use simkit_backend::{Backend, Simulation};
 use simkit_rd::scenes::colony_scene;
-use simkit_rd::{Boundaries, Boundary, CpuRd, Diffusion, GrayScott, Grid, Model, Real, Stepping};
+use simkit_rd::{
+    Boundaries, Boundary, Config, DEFAULT_STEPS_PER_SWEEP, Diffusion, GrayScott, Grid, Model, Rd,
+    Real, Stepping,
+};
 
 fn run<T: Real, M: Model>(grid: &Grid<T>, model: &M, dt: f64, k: u32, steps: u32) -> Grid<T> {
-    let mut sim = CpuRd::new(grid.clone(), model.clone(), Stepping::euler(dt)).unwrap();
-    sim.set_steps_per_sweep(k).unwrap();
+    let config = Config::new(Stepping::euler(dt)).with_steps_per_sweep(k);
+    let mut sim = Rd::new(grid.clone(), model.clone(), &config, Backend::Cpu).unwrap();
     // Two calls: the fused depth restarts at every call.
     sim.step(steps / 2).unwrap();
     sim.step(steps - steps / 2).unwrap();
@@ -85,8 +88,11 @@ fn periodic_y_and_bad_depths() {
     let grid = Grid::new(24, 24, 1.0, Boundaries::periodic(), vec![f]).unwrap();
     let model = Diffusion::new(&[1.0]).unwrap();
     same_for_every_depth(&grid, &model, 0.2, 9);
-    let mut sim = CpuRd::new(grid, model, Stepping::euler(0.2)).unwrap();
-    assert_eq!(sim.steps_per_sweep(), simkit_rd::DEFAULT_STEPS_PER_SWEEP);
-    assert!(sim.set_steps_per_sweep(0).is_err());
-    assert!(sim.set_steps_per_sweep(17).is_err());
+    let config = Config::new(Stepping::euler(0.2));
+    assert_eq!(config.steps_per_sweep, DEFAULT_STEPS_PER_SWEEP);
+    for bad in [0, 17] {
+        let config = config.with_steps_per_sweep(bad);
+        assert!(config.validate().is_err(), "{bad}");
+        assert!(Rd::new(grid.clone(), model.clone(), &config, Backend::Cpu).is_err());
+    }
 }

@@ -1,16 +1,17 @@
 //! Physics validation: heat kernel convergence orders, conservation, stability guard,
 //! Dirichlet profile, colony reaction bookkeeping.
 
-#[cfg(feature = "gpu")]
 use simkit_backend::Backend;
 use simkit_backend::rng::rng_uniform;
 use simkit_backend::testing::backends;
 #[cfg(feature = "gpu")]
 use simkit_backend::testing::gpu_or_skip;
 use simkit_backend::{Error, Simulation};
+#[cfg(feature = "gpu")]
+use simkit_rd::GpuOptions;
 use simkit_rd::scenes::colony_scene;
 use simkit_rd::{
-    Boundaries, Boundary, Colony, CpuRd, Diffusion, Grid, Integrator, Rd, Stepping, stable_dt,
+    Boundaries, Boundary, Colony, Config, Diffusion, Grid, Integrator, Rd, Stepping, stable_dt,
 };
 
 const L: f64 = 40.0;
@@ -51,7 +52,13 @@ fn gaussian_run(n: usize, dt: f64, integrator: Integrator) -> Vec<f64> {
         integrator,
         ..Stepping::euler(dt)
     };
-    let mut sim = CpuRd::new(grid, Diffusion::new(&[1.0]).unwrap(), stepping).unwrap();
+    let mut sim = Rd::new(
+        grid,
+        Diffusion::new(&[1.0]).unwrap(),
+        &Config::new(stepping),
+        Backend::Cpu,
+    )
+    .unwrap();
     sim.step(steps).unwrap();
     sim.state().unwrap().field(0).to_vec()
 }
@@ -121,7 +128,7 @@ fn no_flux_conserves_mass() {
     let before = [grid.total(0), grid.total(1)];
     let model = Diffusion::new(&[1.0, 0.3]).unwrap();
     let dt = 0.9 * stable_dt(&model, &grid);
-    let mut sim = CpuRd::new(grid, model, Stepping::heun(dt)).unwrap();
+    let mut sim = Rd::new(grid, model, &Config::new(Stepping::heun(dt)), Backend::Cpu).unwrap();
     sim.step(10_000).unwrap();
     let g = sim.state().unwrap();
     for (s, b) in before.iter().enumerate() {
@@ -142,7 +149,13 @@ fn colony_b_changes_only_through_reaction() {
     let h2 = grid.h() * grid.h();
     let start = grid.total(0) + grid.total(1);
     let b0 = grid.total(0);
-    let mut sim = CpuRd::new(grid, model.clone(), Stepping::euler(dt)).unwrap();
+    let mut sim = Rd::new(
+        grid,
+        model.clone(),
+        &Config::new(Stepping::euler(dt)),
+        Backend::Cpu,
+    )
+    .unwrap();
     for _ in 0..200 {
         let g = sim.state().unwrap();
         let r: f64 = g
@@ -189,16 +202,33 @@ fn stability_guard_is_tight() {
             integrator,
             ..Stepping::euler(dt)
         };
-        let mut ok = CpuRd::new(grid.clone(), model.clone(), s(0.99 * bound)).unwrap();
+        let mut ok = Rd::new(
+            grid.clone(),
+            model.clone(),
+            &Config::new(s(0.99 * bound)),
+            Backend::Cpu,
+        )
+        .unwrap();
         ok.step(3000).unwrap();
         assert!(ok.state().unwrap().max_abs(0) <= grid.max_abs(0));
 
-        let err = CpuRd::new(grid.clone(), model.clone(), s(1.01 * bound)).unwrap_err();
+        let err = Rd::new(
+            grid.clone(),
+            model.clone(),
+            &Config::new(s(1.01 * bound)),
+            Backend::Cpu,
+        )
+        .unwrap_err();
         assert!(matches!(err, Error::Unstable { .. }), "{err}");
         println!("{integrator:?} refused: {err}");
 
-        let mut wild =
-            CpuRd::new(grid.clone(), model.clone(), s(1.01 * bound).unguarded()).unwrap();
+        let mut wild = Rd::new(
+            grid.clone(),
+            model.clone(),
+            &Config::new(s(1.01 * bound).unguarded()),
+            Backend::Cpu,
+        )
+        .unwrap();
         wild.step(3000).unwrap();
         let m = wild.state().unwrap().max_abs(0);
         assert!(
@@ -218,7 +248,13 @@ fn colony_guard_follows_fields() {
     grid.field_mut(0)[5] = 4.0;
     let kappa = model.d()[5] * 4.0 * grid.field(1)[5];
     assert!((stable_dt(&model, &grid) - 0.25 / (4.0 * kappa)).abs() < 1e-15);
-    let err = CpuRd::new(grid, model, Stepping::euler(0.25 / 4.0)).unwrap_err();
+    let err = Rd::new(
+        grid,
+        model,
+        &Config::new(Stepping::euler(0.25 / 4.0)),
+        Backend::Cpu,
+    )
+    .unwrap_err();
     assert!(matches!(err, Error::Unstable { .. }), "{err}");
 }
 
@@ -236,11 +272,17 @@ fn colony_step_rechecks_current_fields() {
     grid.field_mut(1).fill(3.0);
     let dt = 0.98 * stable_dt(&model, &grid);
     for per_call in [5, 8] {
-        let mut sim = CpuRd::new(grid.clone(), model.clone(), Stepping::euler(dt)).unwrap();
+        let mut sim = Rd::new(
+            grid.clone(),
+            model.clone(),
+            &Config::new(Stepping::euler(dt)),
+            Backend::Cpu,
+        )
+        .unwrap();
         let mut refused = None;
         for call in 0..200 {
             let state = sim.state().unwrap();
-            assert_eq!(sim.stable_dt(), stable_dt(&model, &state));
+            assert_eq!(sim.stable_dt().unwrap(), stable_dt(&model, &state));
             match sim.step(per_call) {
                 Ok(()) => {}
                 Err(Error::Unstable { bound, .. }) => {
@@ -274,7 +316,13 @@ fn gpu_colony_step_rechecks_device_fields() {
     grid.field_mut(1).fill(3.0);
     let dt = 0.98 * stable_dt(&model, &grid);
     let run = |backend| {
-        let mut sim = Rd::new(backend, grid.clone(), model.clone(), Stepping::euler(dt)).unwrap();
+        let mut sim = Rd::new(
+            grid.clone(),
+            model.clone(),
+            &Config::new(Stepping::euler(dt)),
+            backend,
+        )
+        .unwrap();
         for call in 0..200 {
             match sim.step(5) {
                 Ok(()) => {}
@@ -308,7 +356,13 @@ fn dirichlet_relaxes_to_linear_profile() {
     let grid = Grid::new(nx, ny, 1.0, bc, vec![vec![0.3f32; nx * ny]]).unwrap();
     let model = Diffusion::new(&[1.0]).unwrap();
     for backend in backends("dirichlet_relaxes_to_linear_profile") {
-        let mut sim = Rd::new(backend, grid.clone(), model.clone(), Stepping::euler(0.24)).unwrap();
+        let mut sim = Rd::new(
+            grid.clone(),
+            model.clone(),
+            &Config::new(Stepping::euler(0.24)),
+            backend,
+        )
+        .unwrap();
         sim.step(3000).unwrap();
         let g = sim.state().unwrap();
         for j in 0..ny {
@@ -370,15 +424,62 @@ fn bad_input_is_refused() {
     let grid = Grid::new(4, 4, 1.0, bc(), vec![vec![0.0; 16]]).unwrap();
     let one = Diffusion::new(&[1.0]).unwrap();
     let two = Diffusion::new(&[1.0, 1.0]).unwrap();
-    assert!(CpuRd::new(grid.clone(), two, Stepping::euler(0.1)).is_err());
+    assert!(
+        Rd::new(
+            grid.clone(),
+            two,
+            &Config::new(Stepping::euler(0.1)),
+            Backend::Cpu
+        )
+        .is_err()
+    );
     for dt in [0.0, -0.1, f64::NAN, f64::INFINITY] {
-        let e = CpuRd::new(grid.clone(), one.clone(), Stepping::euler(dt).unguarded());
+        let e = Rd::new(
+            grid.clone(),
+            one.clone(),
+            &Config::new(Stepping::euler(dt).unguarded()),
+            Backend::Cpu,
+        );
         assert!(matches!(e, Err(Error::InvalidParameter { .. })), "dt {dt}");
     }
     let (cgrid, _) = colony_scene::<f64>(8, 8, 1).unwrap();
     let small = Colony::new(0.5, 4, 4, vec![1.0; 16]).unwrap();
-    assert!(CpuRd::new(cgrid, small, Stepping::euler(0.001)).is_err());
+    assert!(
+        Rd::new(
+            cgrid,
+            small,
+            &Config::new(Stepping::euler(0.001)),
+            Backend::Cpu
+        )
+        .is_err()
+    );
     let mut edited = grid;
     edited.field_mut(0)[3] = f64::INFINITY;
-    assert!(CpuRd::new(edited, one, Stepping::euler(0.1)).is_err());
+    assert!(
+        Rd::new(
+            edited,
+            one,
+            &Config::new(Stepping::euler(0.1)),
+            Backend::Cpu
+        )
+        .is_err()
+    );
+}
+
+/// GPU tiles over the device's workgroup limits (or empty) are refused with a clear error.
+#[cfg(feature = "gpu")]
+#[test]
+fn gpu_rejects_bad_tiles() {
+    let Some(ctx) = gpu_or_skip("gpu_rejects_bad_tiles") else {
+        return;
+    };
+    let (grid, model) = colony_scene::<f32>(32, 32, 1).unwrap();
+    for tile in [(0, 16), (16, 0), (1024, 1024)] {
+        let config = Config::new(Stepping::euler(0.005)).with_gpu(GpuOptions {
+            tile,
+            ..GpuOptions::default()
+        });
+        let err = Rd::new(grid.clone(), model.clone(), &config, Backend::Gpu(&ctx)).unwrap_err();
+        assert!(matches!(err, Error::InvalidParameter { .. }), "{err}");
+    }
 }
