@@ -3,7 +3,7 @@
 //! - `bed2d_2048`: the source's 2D vibrated bed (2048 discs, 64 wide, Gamma = 3 at 20 Hz,
 //!   friction, vibrating floor and lid), dt = t_c / 30, 200 steps per iteration, starting
 //!   from the initial lattice (a dense bed, no warm-up).
-//! - `box3d_20000`: the 3D granular box of `shared/peers/in.gran3d` (25 x 25 x 32 spheres of
+//! - `box3d_20000`: the 3D granular box of `benches/peers/dem_gran3d.lmp` (25 x 25 x 32 spheres of
 //!   diameter 1 on a lattice of spacing 1.05, Gaussian velocities, gravity, frictional floor,
 //!   periodic x and y; k_n = 2e5, gamma_n = 50, mu = 0.5, dt = 1e-4, skin 0.1), the scene
 //!   of the LAMMPS `gran/hooke` comparison.

@@ -1,6 +1,8 @@
 //! CPU backend: particles sorted by cell at every list rebuild, a half Verlet list (each
-//! pair evaluated once, Newton's third law) in fixed blocks of consecutive particles, rayon
-//! over the blocks (on the calling thread below [`PARALLEL_MIN`] particles).
+//! pair evaluated once, Newton's third law) in fixed blocks of consecutive particles
+//! ([`simkit_neighbor::BlockedHalfList`]; the wall candidates and queued reactions of each
+//! block live here, in [`BlockWork`]), rayon over the blocks (on the calling thread below
+//! [`PARALLEL_MIN`] particles).
 //!
 //! Per velocity Verlet step two passes over the blocks: the force pass (each block sums the
 //! forces on its own particles and queues the reactions it owes to later blocks, per target
@@ -16,12 +18,28 @@ use rayon::prelude::*;
 
 use simkit_backend::{Error, Real, Result};
 
-use crate::pairs::{Block, CellBins, PARALLEL_MIN, block_size, make_blocks};
+use simkit_neighbor::{BlockedHalfList, HalfListBlock};
+
 use crate::prepared::Prepared;
 use crate::{
     ContactCoefficients, Integrator, State, cylinder_overlap, friction_force, normal_force,
     pair_index, plane_overlap, reduced_mass,
 };
+
+/// Below this particle count the CPU passes run on the calling thread: for small systems
+/// waking the rayon pool several times per step costs more than the work (the blocks, and
+/// so the results, are the same either way).
+const PARALLEL_MIN: usize = 4096;
+
+/// What the force pass keeps per block of the neighbour list besides its half list: the
+/// wall candidates and the reactions `(j, F)` owed to particles of later blocks.
+struct BlockWork<T, const D: usize> {
+    /// `(k, w)`: particle `start + k` may touch wall `w` before the next list build
+    /// (ascending `k`, walls in scene order); the others are too far away to be tested.
+    walls: Vec<(u32, u32)>,
+    /// `ghosts[t]`: reactions owed to particles of block `t`.
+    ghosts: Vec<Vec<(u32, [T; D])>>,
+}
 
 #[derive(Clone, Copy)]
 struct WallT<T> {
@@ -63,8 +81,10 @@ pub(crate) struct CpuEngine<const D: usize, T: Real> {
     n_species: usize,
     coeff: Vec<ContactCoefficients<T>>,
     walls: Vec<WallT<T>>,
-    bins: CellBins<D>,
-    blocks: Vec<Block<T, D>>,
+    /// Cell sort and per-block half list (each pair with its periodic image).
+    list: BlockedHalfList<T, D>,
+    /// Per block of `list`: wall candidates and queued reactions.
+    work: Vec<BlockWork<T, D>>,
     block: usize,
     /// Whether the passes run on the rayon pool ([`PARALLEL_MIN`] particles or more);
     /// smaller systems run on the calling thread, with the same blocks and the same bits.
@@ -231,7 +251,8 @@ fn pair_contact<T: Real, const D: usize, const FRICTION: bool>(
 /// walls and every pair of its half list; reactions on later blocks go to `b.ghosts`.
 fn block_forces<T: Real, const D: usize, const FRICTION: bool>(
     inp: &ForceInput<'_, T, D>,
-    b: &mut Block<T, D>,
+    nb: &HalfListBlock<T, D>,
+    b: &mut BlockWork<T, D>,
     f: &mut [[T; D]],
 ) {
     for g in b.ghosts.iter_mut() {
@@ -239,7 +260,7 @@ fn block_forces<T: Real, const D: usize, const FRICTION: bool>(
     }
     f.fill([T::ZERO; D]);
     let pos = inp.pos;
-    let (start, end) = (b.start, b.end);
+    let (start, end) = (nb.start(), nb.end());
     let mut next_wall = 0;
     for k in 0..f.len() {
         let i = start + k;
@@ -258,12 +279,12 @@ fn block_forces<T: Real, const D: usize, const FRICTION: bool>(
         }
         let xi = pos[i];
         // Same image: no periodic test per pair (positions are not wrapped between builds).
-        for &j in &b.idx[b.offsets[k] as usize..b.offsets[k + 1] as usize] {
+        for &j in nb.partners_of(k) {
             let j = j as usize;
             let sep: [T; D] = std::array::from_fn(|d| xi[d] - pos[j][d]);
             pair_contact::<T, D, FRICTION>(inp, i, j, sep, &mut fi, start, end, f, &mut b.ghosts);
         }
-        for &(j, shift) in &b.img[b.img_offsets[k] as usize..b.img_offsets[k + 1] as usize] {
+        for &(j, shift) in nb.image_partners_of(k) {
             let j = j as usize;
             let sep: [T; D] = std::array::from_fn(|d| (xi[d] - pos[j][d]) - shift[d]);
             pair_contact::<T, D, FRICTION>(inp, i, j, sep, &mut fi, start, end, f, &mut b.ghosts);
@@ -355,7 +376,14 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
                 ),
             ));
         }
-        let bins = CellBins::new(lo, len, periodic, range, n)?;
+        let list = BlockedHalfList::new(lo, len, periodic, range, n)?;
+        let n_blocks = list.blocks().len();
+        let work = (0..n_blocks)
+            .map(|_| BlockWork {
+                walls: Vec::new(),
+                ghosts: (0..n_blocks).map(|_| Vec::new()).collect(),
+            })
+            .collect();
         let mut gravity = [T::ZERO; D];
         gravity[prep.vertical] = T::from_f64(-prep.gravity);
         let p = Particles {
@@ -401,9 +429,9 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
                 .map(ContactCoefficients::to_real)
                 .collect(),
             walls,
-            bins,
-            blocks: make_blocks(n),
-            block: block_size(n),
+            block: list.block_size(),
+            list,
+            work,
             parallel: n >= PARALLEL_MIN,
             gravity,
             rebuild_dist2: 0.25 * prep.skin * prep.skin,
@@ -416,14 +444,14 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
             time: 0.0,
             started: false,
         };
-        e.rebuild();
+        e.rebuild()?;
         Ok(e)
     }
 
     /// Wraps the periodic coordinates into the box, sorts the particles by cell and
     /// rebuilds the half lists (each pair with its periodic image, fixed until the next
     /// build).
-    fn rebuild(&mut self) {
+    fn rebuild(&mut self) -> Result<()> {
         let (per, lo, len) = (self.periodic, self.lo, self.len);
         if self.parallel {
             self.p
@@ -433,7 +461,7 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
         } else {
             self.p.pos.iter_mut().for_each(|x| wrap(x, per, lo, len));
         }
-        let order = self.bins.sort(&self.p.pos);
+        let order = self.list.sort(&self.p.pos)?;
         let p = &mut self.p;
         let par = self.parallel;
         permute(&mut p.pos, &order, par);
@@ -446,8 +474,9 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
         permute(&mut p.species, &order, par);
         permute(&mut p.id, &order, par);
         p.reference.clone_from(&p.pos);
-        self.bins.build_lists(&p.pos, &mut self.blocks, par);
+        self.list.build(&p.pos, par)?;
         self.find_wall_candidates();
+        Ok(())
     }
 
     /// Lists for every particle the walls it may touch before the next list build: those
@@ -460,9 +489,9 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
         let vert = self.prep.vertical;
         let (walls, pos, radius) = (&self.walls, &self.p.pos, &self.p.radius);
         let prepared = &self.prep.walls;
-        let find = |b: &mut Block<T, D>| {
+        let find = |(nb, b): (&HalfListBlock<T, D>, &mut BlockWork<T, D>)| {
             b.walls.clear();
-            for i in b.start..b.end {
+            for i in nb.start()..nb.end() {
                 let r = radius[i].to_f64();
                 let x: [f64; D] = std::array::from_fn(|d| pos[i][d].to_f64());
                 for (k, (w, pw)) in walls.iter().zip(prepared).enumerate() {
@@ -474,15 +503,19 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
                     };
                     let reach = pw.overlap(&x, r, 0.0, vert) + travel;
                     if w.wrap || reach > -(margin + 0.01 * r) {
-                        b.walls.push(((i - b.start) as u32, k as u32));
+                        b.walls.push(((i - nb.start()) as u32, k as u32));
                     }
                 }
             }
         };
+        let blocks = self.list.blocks();
         if self.parallel {
-            self.blocks.par_iter_mut().for_each(find);
+            blocks
+                .par_iter()
+                .zip(self.work.par_iter_mut())
+                .for_each(find);
         } else {
-            self.blocks.iter_mut().for_each(find);
+            blocks.iter().zip(self.work.iter_mut()).for_each(find);
         }
     }
 
@@ -520,17 +553,24 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
             cut2: self.cut2,
             block: bs,
         };
-        let force = |(b, f): (&mut Block<T, D>, &mut [[T; D]])| {
-            block_forces::<T, D, FRICTION>(&inp, b, f);
+        type Task<'a, T, const D: usize> = (
+            (&'a HalfListBlock<T, D>, &'a mut BlockWork<T, D>),
+            &'a mut [[T; D]],
+        );
+        let force = |((nb, b), f): Task<'_, T, D>| {
+            block_forces::<T, D, FRICTION>(&inp, nb, b, f);
         };
+        let blocks = self.list.blocks();
         if self.parallel {
-            self.blocks
-                .par_iter_mut()
+            blocks
+                .par_iter()
+                .zip(self.work.par_iter_mut())
                 .zip(p.acc.par_chunks_mut(bs))
                 .for_each(force);
         } else {
-            self.blocks
-                .iter_mut()
+            blocks
+                .iter()
+                .zip(self.work.iter_mut())
                 .zip(p.acc.chunks_mut(bs))
                 .for_each(force);
         }
@@ -546,12 +586,12 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
         let bs = self.block;
         let dt = T::from_f64(self.prep.dt);
         let h = T::from_f64(0.5 * self.prep.dt);
-        let blocks = &self.blocks;
+        let work = &self.work;
         let p = &mut self.p;
         let inv_mass = &p.inv_mass;
         let body = |(t, ((((f, v), x), vp), r)): (usize, Chunks<'_, T, D>)| -> f64 {
             let s = t * bs;
-            for b in &blocks[..t] {
+            for b in &work[..t] {
                 for &(j, fp) in &b.ghosts[t] {
                     let fj = &mut f[j as usize - s];
                     for d in 0..D {
@@ -589,10 +629,11 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
     }
 
     /// Rebuilds the lists when the largest displacement `max2` (squared) exceeds skin / 2.
-    fn after_drift(&mut self, max2: f64) {
+    fn after_drift(&mut self, max2: f64) -> Result<()> {
         if max2 > self.rebuild_dist2 {
-            self.rebuild();
+            self.rebuild()?;
         }
+        Ok(())
     }
 
     /// The opening half kick and drift of a velocity Verlet step on its own (the
@@ -625,9 +666,9 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
 
     /// `steps` velocity Verlet steps: per step one force pass and one pass that finishes
     /// the forces, closes this step and (except after the last) opens the next.
-    fn advance_velocity_verlet(&mut self, steps: u32) {
+    fn advance_velocity_verlet(&mut self, steps: u32) -> Result<()> {
         if steps == 0 {
-            return;
+            return Ok(());
         }
         if !self.started {
             self.p.aux.clone_from(&self.p.vel);
@@ -638,13 +679,14 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
         let mut max2 = self.drift_velocity_verlet();
         for s in 0..steps {
             self.time += self.prep.dt;
-            self.after_drift(max2);
+            self.after_drift(max2)?;
             self.forces(self.time, true);
             max2 = self.finish(true, s + 1 < steps);
         }
+        Ok(())
     }
 
-    fn step_position_verlet(&mut self) {
+    fn step_position_verlet(&mut self) -> Result<()> {
         self.forces(self.time, false);
         self.finish(false, false);
         let dt = T::from_f64(self.prep.dt);
@@ -673,7 +715,7 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
         );
         self.started = true;
         self.time += self.prep.dt;
-        self.after_drift(max2);
+        self.after_drift(max2)
     }
 }
 
@@ -756,25 +798,25 @@ fn wrap<T: Real, const D: usize>(x: &mut [T; D], per: [bool; D], lo: [T; D], len
 }
 
 impl<const D: usize, T: Real> crate::engine::Engine for CpuEngine<D, T> {
-    fn advance(&mut self, steps: u32) -> Result<()> {
+    fn step(&mut self, steps: u32) -> Result<()> {
         let run = |e: &mut Self| match e.prep.integrator {
             Integrator::VelocityVerlet => e.advance_velocity_verlet(steps),
             Integrator::PositionVerlet => {
                 for _ in 0..steps {
-                    e.step_position_verlet();
+                    e.step_position_verlet()?;
                 }
+                Ok(())
             }
         };
         if self.parallel {
             // The whole loop on a pool thread: no hand-over to the pool per pass.
-            simkit_backend::pool::on_pool(|| run(self));
+            simkit_backend::pool::on_pool(|| run(self))
         } else {
-            run(self);
+            run(self)
         }
-        Ok(())
     }
 
-    fn snapshot(&mut self) -> Result<State> {
+    fn state(&mut self) -> Result<State> {
         let c = |a: &[T; D]| -> [f64; 3] {
             let mut o = [0.0; 3];
             for d in 0..D {
@@ -836,10 +878,10 @@ mod tests {
             let mut e = CpuEngine::<D, f64>::new(prep).expect("engine");
             if all {
                 e.wall_margin = f64::INFINITY;
-                e.rebuild();
+                e.rebuild().expect("rebuild");
             }
-            e.advance(steps).expect("advance");
-            e.snapshot().expect("state")
+            e.step(steps).expect("step");
+            e.state().expect("state")
         };
         (run(false), run(true))
     }

@@ -7,8 +7,12 @@ use crate::prepared::Prepared;
 
 /// One backend instance (CPU at some dimension and precision, or GPU).
 pub(crate) trait Engine: Send {
-    fn advance(&mut self, steps: u32) -> Result<()>;
-    fn snapshot(&mut self) -> Result<State>;
+    /// Advances `steps` time steps.
+    fn step(&mut self, steps: u32) -> Result<()>;
+    /// Time, positions and velocities (scene order, `[x, y, 0]` in 2D).
+    fn state(&mut self) -> Result<State>;
+    /// The validated scene and run settings the engine was built from.
     fn prepared(&self) -> &Prepared;
+    /// Backend description (device, precision, threads).
     fn name(&self) -> String;
 }

@@ -376,7 +376,7 @@ impl GpuEngine {
 }
 
 impl Engine for GpuEngine {
-    fn advance(&mut self, steps: u32) -> Result<()> {
+    fn step(&mut self, steps: u32) -> Result<()> {
         let ctx = &self.ctx;
         let n = self.prep.n as u64;
         let mut left = steps;
@@ -398,7 +398,7 @@ impl Engine for GpuEngine {
         Ok(())
     }
 
-    fn snapshot(&mut self) -> Result<State> {
+    fn state(&mut self) -> Result<State> {
         self.cells.check(&self.ctx)?;
         let pos = self.pos.download(&self.ctx)?;
         let vel = self.vel.download(&self.ctx)?;

@@ -91,7 +91,7 @@ pub fn vibrating_bed(p: &BedParams) -> Result<(Scene, Units)> {
     Ok((s, u))
 }
 
-/// The 3D granular box of the LAMMPS comparison (`shared/peers/in.gran3d`): spheres of
+/// The 3D granular box of the LAMMPS comparison (`benches/peers/dem_gran3d.lmp` in the simkit repository): spheres of
 /// diameter 1 and density 1 on a simple-cubic lattice of spacing 1.05 (`nx * ny * nz`),
 /// Gaussian random velocities of unit variance per component, gravity 1, a frictional
 /// floor at z = 0, periodic in x and y. Contact: `k_n = 2e5`, `gamma_n = 50` (LAMMPS

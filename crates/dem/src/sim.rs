@@ -81,7 +81,7 @@ impl Dem {
 
     /// Diagnostics of the current state (downloads it on the GPU).
     pub fn diagnostics(&mut self) -> Result<Diagnostics> {
-        let s = self.engine.snapshot()?;
+        let s = self.engine.state()?;
         self.diagnostics_of(&s)
     }
 
@@ -108,13 +108,13 @@ impl Simulation for Dem {
     type State = State;
 
     fn step(&mut self, steps: u32) -> Result<()> {
-        self.engine.advance(steps)?;
+        self.engine.step(steps)?;
         self.steps += u64::from(steps);
         Ok(())
     }
 
     fn state(&mut self) -> Result<State> {
-        self.engine.snapshot()
+        self.engine.state()
     }
 
     fn steps_done(&self) -> u64 {

@@ -17,13 +17,18 @@
 //!   loops.
 //! - [`VerletList`]: CSR half or full list within `cutoff + skin`, with
 //!   [`VerletList::needs_rebuild`] / [`VerletList::update`].
+//! - [`BlockedHalfList`]: cell-sorted half list within `cutoff + skin` in fixed blocks of
+//!   consecutive particles ([`HalfListBlock`]), cross-image pairs stored apart with their
+//!   shift; for block-parallel force loops with Newton's third law that are bit-identical
+//!   for any thread count (the `dem` CPU backend's list).
 //! - GPU: [`GpuCellList`] (device-resident sorted cells whose buffers other kernels bind,
 //!   plus [`CELLS_WGSL`] helper functions), [`GpuNeighborList`] (CSR count-then-fill) and
 //!   [`GpuNeighborSearch`] (the [`NeighborSearch`] trait on the GPU).
 //!
-//! All of them implement [`NeighborSearch`]. [`Neighbors`] picks the recommended one (sorted
-//! cells, or the GPU search) from a [`simkit_backend::Backend`] value, built like every simkit
-//! simulation: `Neighbors::new(&grid, &Config::default(), backend)`.
+//! All of them but [`BlockedHalfList`] implement [`NeighborSearch`]. [`Neighbors`] picks the
+//! recommended one (sorted cells, or the GPU search) from a [`simkit_backend::Backend`]
+//! value, built like every simkit simulation:
+//! `Neighbors::new(&grid, &Config::default(), backend)`.
 //!
 //! # Conventions
 //! Pairs are reported as `(i, j, sep, r2)` with original particle indices, the minimum image
@@ -47,6 +52,7 @@
 //! # }
 //! ```
 
+mod blocked;
 mod brute;
 mod config;
 #[cfg(feature = "gpu")]
@@ -60,6 +66,7 @@ mod stencil;
 mod traverse;
 mod verlet;
 
+pub use blocked::{BlockedHalfList, HalfListBlock};
 pub use brute::BruteForce;
 pub use config::Config;
 #[cfg(feature = "gpu")]

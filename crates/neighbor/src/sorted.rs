@@ -5,7 +5,7 @@ use rayon::prelude::*;
 use simkit_backend::{Error, Result};
 
 use crate::CellGrid;
-use crate::traverse::{COORD_PAD, TraversalKernel, Scratch, View, visit_cells, visit_particle};
+use crate::traverse::{COORD_PAD, Scratch, TraversalKernel, View, visit_cells, visit_particle};
 
 /// Cells handed to one rayon task in parallel traversals.
 const CELLS_PER_TASK: usize = 64;

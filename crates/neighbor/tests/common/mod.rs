@@ -5,7 +5,8 @@
 use std::collections::BTreeMap;
 
 use simkit_neighbor::{
-    BruteForce, CellGrid, TraversalKernel, LinkedCells, ListKind, NeighborSearch, SortedCells, VerletList,
+    BruteForce, CellGrid, LinkedCells, ListKind, NeighborSearch, SortedCells, TraversalKernel,
+    VerletList,
 };
 #[cfg(feature = "gpu")]
 use simkit_neighbor::{GpuCellList, GpuNeighborList, GpuNeighborSearch, NeighborLists};
@@ -55,7 +56,11 @@ pub fn check_cpu<const D: usize>(grid: &CellGrid<D>, p: &[[f64; D]]) -> PairMap<
     let m = pairs_of(&mut sorted, p);
     assert_eq!(m, reference, "sorted cells differ from brute force");
     // Every traversal kernel this CPU runs (the default picked one of them).
-    for kernel in [TraversalKernel::Portable, TraversalKernel::PackedAvx2, TraversalKernel::PackedAvx512] {
+    for kernel in [
+        TraversalKernel::Portable,
+        TraversalKernel::PackedAvx2,
+        TraversalKernel::PackedAvx512,
+    ] {
         if kernel.is_supported() {
             let mut k = SortedCells::new(grid).with_kernel(kernel).unwrap();
             assert_eq!(pairs_of(&mut k, p), reference, "kernel {kernel:?}");
