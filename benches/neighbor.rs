@@ -18,8 +18,8 @@ use rand::{RngExt, SeedableRng};
 use rayon::prelude::*;
 use simkit::backend::{GpuBuffer, GpuContext};
 use simkit::neighbor::{
-    BruteForce, CellGrid, GpuCellList, GpuNeighborList, TraversalKernel, LinkedCells, ListKind,
-    NeighborSearch, SortedCells, VerletList, positions_to_f32,
+    BruteForce, CellGrid, GpuCellList, GpuNeighborList, LinkedCells, ListKind, NeighborSearch,
+    SortedCells, TraversalKernel, VerletList, positions_to_f32,
 };
 
 const CUTOFF: f64 = 2.5;

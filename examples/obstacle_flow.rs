@@ -79,7 +79,11 @@ fn main() -> Result<()> {
         if done.is_multiple_of(frame_every) || done == steps {
             let field = avg.field().expect("at least one sample");
             let title = format!("FHP channel, step {done}, {block}x{block} blocks");
-            simkit::files::write_block_velocity_png(field, &out.join(format!("frame_{frame:03}.png")), &title)?;
+            simkit::files::write_block_velocity_png(
+                field,
+                &out.join(format!("frame_{frame:03}.png")),
+                &title,
+            )?;
             let (ux, uy, cols, rows) = field.velocity_square_cells();
             let opts = VectorFieldOptions::new().background(
                 HeatmapOptions::new()

@@ -7,7 +7,6 @@ use simkit::backend::{Backend, Result, Simulation};
 use simkit::lattice_gas::observables::{BlockField, TimeAverage};
 use simkit::lattice_gas::{Config, Lattice, LatticeGas, LutCpu, Obstacle, ROW_SPACING, RuleSet};
 
-
 use crate::Row;
 
 /// 256 x 128 channel (wall rows, a disc, inflow and outflow columns), 1200 steps of the
@@ -46,7 +45,11 @@ pub fn run(backend: Backend<'_>, out: &Path) -> Result<Row> {
     }
     let secs = t.elapsed().as_secs_f64();
     let field = avg.field().expect("samples were added");
-    simkit::files::write_block_velocity_png(field, &out.join("velocity.png"), "FHP channel, 8x8 blocks")?;
+    simkit::files::write_block_velocity_png(
+        field,
+        &out.join("velocity.png"),
+        "FHP channel, 8x8 blocks",
+    )?;
     simkit::files::write_block_field_vti(field, &out.join("velocity.vti"))?;
     let (ux, _) = field.velocity();
     let mean_ux = ux.iter().sum::<f64>() / ux.len() as f64;

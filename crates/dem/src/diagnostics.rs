@@ -2,7 +2,7 @@
 
 use simkit_neighbor::{CellGrid, OutOfBox, SortedCells};
 
-use simkit_backend::Result;
+use simkit_backend::{Error, Result};
 
 use crate::prepared::Prepared;
 
@@ -70,6 +70,29 @@ pub(crate) fn for_each_close_pair(
     } else {
         run::<3>(p, positions, &mut f)
     }
+}
+
+/// Initial overlaps deeper than this fraction of the smaller radius are refused.
+pub const MAX_INITIAL_OVERLAP: f64 = 0.1;
+
+/// Refuses initial particle–particle overlaps deeper than [`MAX_INITIAL_OVERLAP`] of the
+/// smaller radius (they would release a large elastic energy at once).
+pub(crate) fn check_initial_overlaps(p: &Prepared) -> Result<()> {
+    let worst = deepest_overlap(p, &p.positions)?;
+    if let Some((i, j, depth)) = worst {
+        let rmin = p.radius[i].min(p.radius[j]);
+        if depth > MAX_INITIAL_OVERLAP * rmin {
+            return Err(Error::invalid(
+                format!("initial positions of particles {i} and {j}"),
+                format!("overlap {depth:e}"),
+                format!(
+                    "deeper than {MAX_INITIAL_OVERLAP} of the smaller radius ({rmin}); \
+                     separate the particles (e.g. a lattice spacing above the diameter)"
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The deepest particle–particle overlap `(i, j, depth)`, if any pair overlaps.

@@ -1,6 +1,6 @@
 //! Scene data resolved for the backends: coefficients, time step, grid geometry.
 
-use simkit_backend::{Error, Result};
+use simkit_backend::Result;
 
 use crate::{
     Config, ContactCoefficients, Integrator, Scene, Vibration, WallShape, cylinder_overlap,
@@ -68,9 +68,6 @@ pub(crate) struct Prepared {
     pub periodic: [bool; 3],
     pub cutoff: f64,
 }
-
-/// Initial overlaps deeper than this fraction of the smaller radius are refused.
-pub const MAX_INITIAL_OVERLAP: f64 = 0.1;
 
 impl Prepared {
     pub fn new(scene: &Scene, config: &Config) -> Result<Self> {
@@ -149,28 +146,7 @@ impl Prepared {
             periodic: scene.periodic(),
             cutoff: 2.0 * r_max,
         };
-        p.check_initial_overlaps()?;
         Ok(p)
-    }
-
-    /// Refuses initial particle–particle overlaps deeper than [`MAX_INITIAL_OVERLAP`] of the
-    /// smaller radius (they would release a large elastic energy at once).
-    fn check_initial_overlaps(&self) -> Result<()> {
-        let worst = crate::diagnostics::deepest_overlap(self, &self.positions)?;
-        if let Some((i, j, depth)) = worst {
-            let rmin = self.radius[i].min(self.radius[j]);
-            if depth > MAX_INITIAL_OVERLAP * rmin {
-                return Err(Error::invalid(
-                    format!("initial positions of particles {i} and {j}"),
-                    format!("overlap {depth:e}"),
-                    format!(
-                        "deeper than {MAX_INITIAL_OVERLAP} of the smaller radius ({rmin}); \
-                         separate the particles (e.g. a lattice spacing above the diameter)"
-                    ),
-                ));
-            }
-        }
-        Ok(())
     }
 
     /// Vertical wall displacement and velocity at time `t`.

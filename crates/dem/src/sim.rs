@@ -5,6 +5,7 @@ use simkit_backend::{Backend, Error, Result, Simulation};
 #[cfg(feature = "gpu")]
 use crate::Integrator;
 use crate::cpu::CpuEngine;
+use crate::diagnostics;
 use crate::engine::Engine;
 use crate::prepared::Prepared;
 use crate::{Config, Diagnostics, Precision, Scene};
@@ -52,6 +53,7 @@ impl Dem {
     /// Verlet on the GPU, or any GPU failure.
     pub fn new(scene: &Scene, config: &Config, backend: Backend<'_>) -> Result<Self> {
         let prep = Prepared::new(scene, config)?;
+        diagnostics::check_initial_overlaps(&prep)?;
         let engine: Box<dyn Engine> = match backend {
             Backend::Cpu => match (prep.axes, config.precision) {
                 (2, Precision::F64) => Box::new(CpuEngine::<2, f64>::new(prep)?),

@@ -19,3 +19,30 @@ pub(crate) trait Engine: Send {
         BlockField::from_lattice(&self.state()?, block)
     }
 }
+
+/// Implements [`simkit_backend::Simulation`] for a public backend type by forwarding to its
+/// [`Engine`] implementation (the type keeps its step count in a `steps` field).
+macro_rules! simulation_via_engine {
+    ($backend:ty) => {
+        impl simkit_backend::Simulation for $backend {
+            type State = $crate::Lattice;
+
+            fn step(&mut self, steps: u32) -> simkit_backend::Result<()> {
+                $crate::engine::Engine::step(self, steps)
+            }
+
+            fn state(&mut self) -> simkit_backend::Result<$crate::Lattice> {
+                $crate::engine::Engine::state(self)
+            }
+
+            fn steps_done(&self) -> u64 {
+                self.steps
+            }
+
+            fn backend_name(&self) -> String {
+                $crate::engine::Engine::name(self)
+            }
+        }
+    };
+}
+pub(crate) use simulation_via_engine;

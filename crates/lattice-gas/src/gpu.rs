@@ -12,7 +12,7 @@
 use bytemuck::{Pod, Zeroable};
 use simkit_backend::gpu::{DISPATCH_WGSL, Uniform};
 use simkit_backend::rng::RNG_WGSL;
-use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Result, Simulation};
+use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Result};
 
 use crate::engine;
 use crate::random::{FORCE_STREAM, RANDOM_WGSL, force_threshold};
@@ -265,25 +265,7 @@ impl engine::Engine for GpuLattice {
     }
 }
 
-impl Simulation for GpuLattice {
-    type State = Lattice;
-
-    fn step(&mut self, steps: u32) -> Result<()> {
-        engine::Engine::step(self, steps)
-    }
-
-    fn state(&mut self) -> Result<Lattice> {
-        engine::Engine::state(self)
-    }
-
-    fn steps_done(&self) -> u64 {
-        self.steps
-    }
-
-    fn backend_name(&self) -> String {
-        engine::Engine::name(self)
-    }
-}
+engine::simulation_via_engine!(GpuLattice);
 
 /// Six planes of 32-site words per row (`planes[(j * 6 + d) * nw + k]`) and the wall words.
 fn to_planes(lattice: &Lattice) -> (Vec<u32>, Vec<u32>) {

@@ -9,7 +9,7 @@
 //! (vectorisable gather pass, then one table load per site).
 
 use rayon::prelude::*;
-use simkit_backend::{Result, Simulation};
+use simkit_backend::Result;
 
 use crate::engine;
 use crate::random::{FORCE_STREAM, chirality_word, force_hit, force_threshold, step_key};
@@ -305,30 +305,13 @@ impl engine::Engine for LutCpu {
     }
 }
 
-impl Simulation for LutCpu {
-    type State = Lattice;
-
-    fn step(&mut self, steps: u32) -> Result<()> {
-        engine::Engine::step(self, steps)
-    }
-
-    fn state(&mut self) -> Result<Lattice> {
-        engine::Engine::state(self)
-    }
-
-    fn steps_done(&self) -> u64 {
-        self.steps
-    }
-
-    fn backend_name(&self) -> String {
-        engine::Engine::name(self)
-    }
-}
+engine::simulation_via_engine!(LutCpu);
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::{Obstacle, RuleSet};
+    use simkit_backend::Simulation;
 
     /// The VBMI path (where the CPU has it) and the scalar loop give the same lattice, for
     /// widths with and without a scalar tail, periodic and channel scenes, force and both

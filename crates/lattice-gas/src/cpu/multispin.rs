@@ -7,7 +7,7 @@
 
 use multiversion::multiversion;
 use rayon::prelude::*;
-use simkit_backend::{Error, Result, Simulation};
+use simkit_backend::{Error, Result};
 
 use crate::engine;
 use crate::field::{BlockField, CX, CY};
@@ -360,30 +360,13 @@ impl engine::Engine for MultiSpinCpu {
     }
 }
 
-impl Simulation for MultiSpinCpu {
-    type State = Lattice;
-
-    fn step(&mut self, steps: u32) -> Result<()> {
-        engine::Engine::step(self, steps)
-    }
-
-    fn state(&mut self) -> Result<Lattice> {
-        engine::Engine::state(self)
-    }
-
-    fn steps_done(&self) -> u64 {
-        self.steps
-    }
-
-    fn backend_name(&self) -> String {
-        engine::Engine::name(self)
-    }
-}
+engine::simulation_via_engine!(MultiSpinCpu);
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::CollisionTable;
+    use simkit_backend::Simulation;
 
     #[test]
     fn block_field_from_planes_equals_the_byte_version() {
