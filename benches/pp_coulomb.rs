@@ -16,7 +16,7 @@ use simkit::pp_coulomb::{
 
 /// The source's plasma (normalised), with `n` particles in its box.
 fn plasma(n: usize) -> (Particles, ForceLaw) {
-    let u = units::normalise(&units::PhysicalInputs::seed_plasma()).expect("seed inputs");
+    let u = units::normalise(&units::PhysicalInputs::source_plasma()).expect("source inputs");
     let mut p = Particles::new();
     let e = p
         .add_species(Species::new("electron", u.charge, u.mass))

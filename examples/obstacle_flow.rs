@@ -4,9 +4,10 @@
 //! and a VTK file, and prints the throughput.
 //!
 //! ```text
-//! cargo run --release --example obstacle_flow [-- --gpu] [-- --steps N] [-- --size WxH]
+//! cargo run --release --example obstacle_flow [-- --gpu --steps N --size WxH]
 //! ```
-//! Output under `out/obstacle_flow/`. Defaults: 1024 x 512 sites, 6000 steps, multi-spin CPU.
+//! Output under `out/obstacle_flow/`. Defaults: 1024 x 512 sites, 6000 steps, the CPU method
+//! `CpuMethod::Auto` picks.
 
 use std::path::PathBuf;
 use std::time::Instant;

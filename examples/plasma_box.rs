@@ -21,7 +21,7 @@ use simkit::pp_coulomb::{Config, Integrator, PpCoulomb, Precision, scenes};
 fn main() -> Result<()> {
     let flag = |f: &str| std::env::args().any(|a| a == f);
     let steps: u32 = arg("--steps", 10)?;
-    let mut inputs = PhysicalInputs::seed_plasma();
+    let mut inputs = PhysicalInputs::source_plasma();
     inputs.particles = arg("--n", inputs.particles)?;
     let precision = if flag("--f32") {
         Precision::F32

@@ -37,3 +37,38 @@ pub fn write_block_field_vti(field: &BlockField, path: &Path) -> Result<()> {
     img.write(path)?;
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lattice_gas::Lattice;
+
+    /// Width and height from a PNG's IHDR chunk (bytes 16..24, big-endian).
+    fn png_size(bytes: &[u8]) -> (u32, u32) {
+        assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "a PNG signature");
+        let be = |i: usize| u32::from_be_bytes(bytes[i..i + 4].try_into().unwrap());
+        (be(16), be(20))
+    }
+
+    #[test]
+    fn block_field_png_and_vti_are_written() {
+        let mut l = Lattice::new(128, 64).unwrap();
+        l.add_wall_rows();
+        l.fill_with(4, |_, _, k| if k == 0 { 0.5 } else { 0.2 })
+            .unwrap();
+        let f = BlockField::from_lattice(&l, 8).unwrap();
+        let (ux, _) = f.velocity();
+        assert!(ux.iter().sum::<f64>() > 0.0, "east-movers dominate");
+        let dir = std::env::temp_dir().join(format!("simkit_files_{}", std::process::id()));
+        let (png, vti) = (dir.join("u.png"), dir.join("u.vti"));
+        write_block_velocity_png(&f, &png, "test").unwrap();
+        write_block_field_vti(&f, &vti).unwrap();
+        // 16 x 8 blocks of 8 x 8 sites: 18 x 8 physically square cells, upscaled.
+        let (w, h) = png_size(&std::fs::read(&png).unwrap());
+        assert!(w >= 18 * 8 && h >= 8 * 8, "{w} x {h}");
+        let text = std::fs::read_to_string(&vti).unwrap();
+        assert!(text.contains("ImageData") && text.contains("velocity"));
+        assert!(text.contains("density") && text.contains("WholeExtent=\"0 15 0 7 0 0\""));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

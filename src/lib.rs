@@ -52,8 +52,8 @@ pub mod prelude {
     pub use crate::backend::GpuContext;
     pub use crate::backend::{Backend, Error, Precision, Real, Result, Simulation};
     pub use crate::dem::Dem;
-    pub use crate::lattice_gas::Lattice;
-    pub use crate::neighbor::{CellGrid, NeighborSearch, SortedCells};
+    pub use crate::lattice_gas::{Lattice, LatticeGas};
+    pub use crate::neighbor::{CellGrid, NeighborSearch, Neighbors, SortedCells};
     pub use crate::pp_coulomb::PpCoulomb;
     pub use crate::rd::Rd;
 }

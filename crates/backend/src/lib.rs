@@ -15,6 +15,9 @@
 //! The GPU half (everything wgpu) is the `gpu` cargo feature, on by default; without it the
 //! crate, and every simkit crate, builds its CPU side only. An example is in [`gpu`].
 
+// Links to the GPU items resolve when they are compiled (the `gpu` feature, on by default).
+#![cfg_attr(not(feature = "gpu"), allow(rustdoc::broken_intra_doc_links))]
+
 /// The WGSL source `shaders/<file>` of the crate that invokes it, embedded at compile time.
 ///
 /// This is how every simkit crate loads its shaders: each crate keeps its WGSL in its own

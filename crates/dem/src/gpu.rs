@@ -5,7 +5,7 @@
 //! drift, periodic wrap, predicted velocity), `neighbor`'s [`GpuCellList`] build,
 //! `dem_force` (one invocation per particle gathering contact forces over the full shell
 //! of neighbour cells, walls, gravity, second half kick) and `dem_tick` (device step
-//! counter for the wall motion). [`Engine::snapshot`] downloads the state.
+//! counter for the wall motion). [`Engine::state`] downloads the state.
 
 use bytemuck::{Pod, Zeroable};
 

@@ -32,6 +32,9 @@
 //! # }
 //! ```
 
+// Links to the GPU items resolve when they are compiled (the `gpu` feature, on by default).
+#![cfg_attr(not(feature = "gpu"), allow(rustdoc::broken_intra_doc_links))]
+
 mod config;
 mod contact;
 mod cpu;

@@ -177,7 +177,7 @@ where
 mod tests {
     use super::*;
 
-    /// The seed's table, transcribed as pairs and triples of exchanged states.
+    /// The source's table, transcribed as pairs and triples of exchanged states.
     fn source_changes(s: u8, r: u8) -> u8 {
         let triples: [[u8; 3]; 2] = [[9, 18, 36], [27, 54, 45]];
         for t in triples {

@@ -1,5 +1,5 @@
 //! GPU backend: device-resident sorted cell lists and CSR neighbour lists (wgpu, WGSL in
-//! `shaders/neighbor/`).
+//! this crate's `shaders/`, loaded with `simkit_backend::wgsl!`).
 //!
 //! See [`GpuCellList`] for the buffers other kernels can bind.
 

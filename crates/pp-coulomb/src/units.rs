@@ -37,7 +37,7 @@ pub struct PhysicalInputs {
 impl PhysicalInputs {
     /// The source's configuration: dt = 1.5e-11 s, n0 = 5e16 m^-3, box 64 x 1e-4 m,
     /// N = 50,000 electrons at 10 eV.
-    pub fn seed_plasma() -> Self {
+    pub fn source_plasma() -> Self {
         Self {
             dt: 1.5e-11,
             density: 5e16,
@@ -130,8 +130,8 @@ mod tests {
     }
 
     #[test]
-    fn spec_test_vector() {
-        let n = normalise(&PhysicalInputs::seed_plasma()).unwrap();
+    fn source_test_vector() {
+        let n = normalise(&PhysicalInputs::source_plasma()).unwrap();
         assert!(rel(n.weight, 262_144.0) < 1e-12, "w = {}", n.weight);
         assert!(rel(n.length, 2.4628155e-5) < 1e-7, "L = {}", n.length);
         assert!(
@@ -157,13 +157,13 @@ mod tests {
 
     #[test]
     fn bad_inputs_are_named() {
-        let mut p = PhysicalInputs::seed_plasma();
+        let mut p = PhysicalInputs::source_plasma();
         p.density = f64::NAN;
         assert!(normalise(&p).unwrap_err().to_string().contains("density"));
-        let mut p = PhysicalInputs::seed_plasma();
+        let mut p = PhysicalInputs::source_plasma();
         p.particles = 0;
         assert!(normalise(&p).unwrap_err().to_string().contains("particles"));
-        let mut p = PhysicalInputs::seed_plasma();
+        let mut p = PhysicalInputs::source_plasma();
         p.charge_number = 0.0;
         assert!(normalise(&p).is_err());
     }

@@ -69,7 +69,7 @@ impl MultiSpinCpu {
         })
     }
 
-    /// Particles per row (popcounts of the planes), cheaper than a full [`Simulation::state`].
+    /// Particles per row (popcounts of the planes), cheaper than a full [`Simulation::state`](simkit_backend::Simulation::state).
     pub fn row_counts(&self) -> Vec<[u64; 6]> {
         let nw = self.nw;
         (0..self.height)
@@ -86,7 +86,7 @@ impl MultiSpinCpu {
 
     /// Block sums of density and momentum over `block x block` sites straight from the
     /// bit-planes (popcounts of masked words): the same field as
-    /// [`BlockField::from_lattice`] on [`Simulation::state`], without building the bytes.
+    /// [`BlockField::from_lattice`] on [`Simulation::state`](simkit_backend::Simulation::state), without building the bytes.
     pub fn block_field(&self, block: usize) -> Result<BlockField> {
         let (w, h, nw) = (self.width, self.height, self.nw);
         let mut f = BlockField::zeros(w, h, block)?;
