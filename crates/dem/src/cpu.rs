@@ -261,6 +261,8 @@ fn block_forces<T: Real, const D: usize, const FRICTION: bool>(
     f.fill([T::ZERO; D]);
     let pos = inp.pos;
     let (start, end) = (nb.start(), nb.end());
+    let (offsets, partners) = (nb.offsets(), nb.partners());
+    let (img_offsets, img_partners) = (nb.image_offsets(), nb.image_partners());
     let mut next_wall = 0;
     for k in 0..f.len() {
         let i = start + k;
@@ -279,12 +281,12 @@ fn block_forces<T: Real, const D: usize, const FRICTION: bool>(
         }
         let xi = pos[i];
         // Same image: no periodic test per pair (positions are not wrapped between builds).
-        for &j in nb.partners_of(k) {
+        for &j in &partners[offsets[k] as usize..offsets[k + 1] as usize] {
             let j = j as usize;
             let sep: [T; D] = std::array::from_fn(|d| xi[d] - pos[j][d]);
             pair_contact::<T, D, FRICTION>(inp, i, j, sep, &mut fi, start, end, f, &mut b.ghosts);
         }
-        for &(j, shift) in nb.image_partners_of(k) {
+        for &(j, shift) in &img_partners[img_offsets[k] as usize..img_offsets[k + 1] as usize] {
             let j = j as usize;
             let sep: [T; D] = std::array::from_fn(|d| (xi[d] - pos[j][d]) - shift[d]);
             pair_contact::<T, D, FRICTION>(inp, i, j, sep, &mut fi, start, end, f, &mut b.ghosts);
