@@ -485,8 +485,21 @@ impl Scene {
         self.n_species
     }
     /// Material of species pair `(a, b)` (symmetric).
-    pub fn pair(&self, a: u32, b: u32) -> Material {
-        self.pairs[pair_index(a, b, self.n_species)]
+    ///
+    /// # Errors
+    ///
+    /// [`Error::InvalidParameter`] naming the pair when `a` or `b` is not below
+    /// [`species_count`](Self::species_count).
+    pub fn pair(&self, a: u32, b: u32) -> Result<Material> {
+        let n = self.n_species;
+        if a as usize >= n || b as usize >= n {
+            return Err(Error::invalid(
+                "species pair",
+                format!("({a}, {b})"),
+                format!("species must be < the species count {n}"),
+            ));
+        }
+        Ok(self.pairs[pair_index(a, b, n)])
     }
     /// The full species-pair table, row-major `n x n`, symmetric.
     pub fn pair_table(&self) -> &[Material] {

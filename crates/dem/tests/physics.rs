@@ -353,6 +353,31 @@ fn bad_input_is_refused_with_clear_errors() {
 }
 
 #[test]
+fn pair_lookup_checks_species_indices() {
+    let m = Material::new(0.9, 0.01);
+    let m2 = Material::new(0.5, 0.02);
+    let mut s = Scene::new(Dim::Two, [0.0; 3], [4.0, 4.0, 0.0], m).unwrap();
+    // One species: (0, 3) used to index past the 1 x 1 table and panic.
+    let err = s.pair(0, 3).unwrap_err();
+    assert!(matches!(err, Error::InvalidParameter { .. }), "{err}");
+    let msg = err.to_string();
+    assert!(
+        msg.contains("(0, 3)") && msg.contains("species count 1"),
+        "{msg}"
+    );
+    assert_eq!(s.pair(0, 0).unwrap(), m);
+    // Two species: (0, 3) used to land on row 1 (pair (1, 1)) and return its material.
+    s.set_species(2, m).unwrap();
+    s.set_pair(1, 1, m2).unwrap();
+    let err = s.pair(0, 3).unwrap_err();
+    assert!(err.to_string().contains("(0, 3)"), "{err}");
+    assert!(s.pair(3, 0).is_err());
+    assert!(s.pair(u32::MAX, u32::MAX).is_err());
+    assert_eq!(s.pair(1, 1).unwrap(), m2);
+    assert_eq!(s.pair(0, 1).unwrap(), m);
+}
+
+#[test]
 fn units_follow_the_source_normalisation() {
     // Source: d0 = 0.6 cm, m0 = 0.2 g, g = 980 cm/s^2; take f = 30 Hz, Gamma = 3.
     let u = Units::new(0.6, 0.2, 30.0).unwrap();

@@ -180,7 +180,11 @@ fn check_size(width: usize, height: usize) -> Result<()> {
             "width and height must both be at least 1",
         ));
     }
-    if (width as u64) * (height as u64) > u64::from(u32::MAX) {
+    // Overflow-safe: `1 << 32` by `1 << 32` must not wrap to a small (or zero) product.
+    if width
+        .checked_mul(height)
+        .is_none_or(|n| n > u32::MAX as usize)
+    {
         return Err(Error::invalid(
             "lattice size",
             format!("{width} x {height}"),

@@ -146,3 +146,18 @@ fn obstacle_from_data_mask() {
     };
     assert!(Lattice::new(w, h).unwrap().add_obstacle(&short).is_err());
 }
+
+#[test]
+fn overflowing_lattice_sizes_are_refused() {
+    // 2^32 x 2^32 = 2^64 used to wrap to 0 in the size check: accepted with no storage.
+    let big = 1usize << 32;
+    for (w, h) in [(big, big), (usize::MAX, 2), (big, 1), (65_536, 65_537)] {
+        let e = Lattice::new(w, h).unwrap_err().to_string();
+        assert!(e.contains(&format!("lattice size: {w} x {h}")), "{e}");
+        assert!(e.contains("more than 2^32 - 1 sites"), "{e}");
+        let e = Lattice::from_cells(w, h, Vec::new())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(&format!("lattice size: {w} x {h}")), "{e}");
+    }
+}

@@ -701,7 +701,8 @@ impl<const D: usize> NeighborSearch<D> for GpuNeighborSearch<D> {
 
     fn for_each_pair<F: FnMut(usize, usize, [f64; D], f64)>(&mut self, mut f: F) -> Result<()> {
         for i in 0..self.list.len() {
-            for &j in self.list.of(i) {
+            // `i < len()`, so `of` always has the list.
+            for &j in self.list.of(i).unwrap_or_default() {
                 let (sep, r2) = self
                     .grid
                     .separation(self.wrapped[i], self.wrapped[j as usize]);

@@ -51,9 +51,12 @@ impl NeighborLists {
         self.len() == 0
     }
 
-    /// Neighbours of particle `i`.
-    pub fn of(&self, i: usize) -> &[u32] {
-        &self.neighbors[self.offsets[i]..self.offsets[i + 1]]
+    /// Neighbours of particle `i` (ascending), or `None` if there is no particle `i`
+    /// (`i >= len()`) or the public `offsets` do not index into `neighbors`.
+    pub fn of(&self, i: usize) -> Option<&[u32]> {
+        let start = *self.offsets.get(i)?;
+        let end = *self.offsets.get(i.checked_add(1)?)?;
+        self.neighbors.get(start..end)
     }
 
     /// Number of neighbours of every particle.

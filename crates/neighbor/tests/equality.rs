@@ -429,7 +429,10 @@ fn gpu_cell_at_the_per_cell_limit_works_and_one_more_is_an_error() {
                 let lists = full.download(&ctx).unwrap();
                 for i in 0..n {
                     let others = (0..n as u32).filter(|&j| j as usize != i);
-                    assert!(lists.of(i).iter().copied().eq(others), "particle {i}");
+                    assert!(
+                        lists.of(i).unwrap().iter().copied().eq(others),
+                        "particle {i}"
+                    );
                 }
             }
         } else {
@@ -437,4 +440,22 @@ fn gpu_cell_at_the_per_cell_limit_works_and_one_more_is_an_error() {
             assert!(e.contains(&format!("more than {max} particles")), "{e}");
         }
     }
+}
+
+#[test]
+fn neighbor_lists_of_a_missing_particle_is_none() {
+    let lists = simkit_neighbor::NeighborLists::from_pairs(3, &[(0, 1), (1, 2)]);
+    assert_eq!(lists.len(), 3);
+    assert_eq!(lists.of(1), Some(&[0u32, 2][..]));
+    assert_eq!(lists.of(2), Some(&[1u32][..]));
+    // Particle 5 of 3 used to panic with an out-of-bounds index.
+    assert_eq!(lists.of(3), None);
+    assert_eq!(lists.of(5), None);
+    assert_eq!(lists.of(usize::MAX), None);
+    // Hand-built lists whose offsets point past `neighbors` are refused, not sliced.
+    let broken = simkit_neighbor::NeighborLists {
+        offsets: vec![0, 4],
+        neighbors: vec![1],
+    };
+    assert_eq!(broken.of(0), None);
 }

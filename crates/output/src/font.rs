@@ -120,19 +120,20 @@ fn capital(c: char) -> [u8; 7] {
     }
 }
 
-/// Width in image pixels of `text` drawn at `scale` (no trailing spacing column).
+/// Width in image pixels of `text` drawn at `scale` (no trailing spacing column); saturates
+/// at `u32::MAX` for text too long or a scale too large to measure in a `u32`.
 pub fn text_width(text: &str, scale: u32) -> u32 {
-    let n = text.chars().count() as u32;
+    let n = u32::try_from(text.chars().count()).unwrap_or(u32::MAX);
     if n == 0 {
         0
     } else {
-        (n * ADVANCE - 1) * scale.max(1)
+        (n.saturating_mul(ADVANCE) - 1).saturating_mul(scale.max(1))
     }
 }
 
-/// Height in image pixels of a line of text at `scale`.
+/// Height in image pixels of a line of text at `scale`; saturates at `u32::MAX`.
 pub fn text_height(scale: u32) -> u32 {
-    GLYPH_HEIGHT * scale.max(1)
+    GLYPH_HEIGHT.saturating_mul(scale.max(1))
 }
 
 /// Draws `text` with its top-left corner at `(x, y)`, each font pixel a `scale` x `scale`

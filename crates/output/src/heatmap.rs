@@ -96,7 +96,8 @@ impl HeatmapOptions {
         self.title = Some(title.into());
         self
     }
-    /// Sets the text scale factor (>= 1).
+    /// Sets the text scale factor (>= 1). Text, colour bar and margins grow with it, and
+    /// rendering refuses a scale that takes the image past [`MAX_SIDE`] pixels per side.
     pub fn text_scale(mut self, scale: u32) -> Self {
         self.text_scale = Some(scale);
         self
@@ -117,8 +118,9 @@ pub struct FieldPlacement {
 /// Renders `data` (`width` x `height`, row-major) to an image; returns it and the value range
 /// used. Use this to collect frames for [`crate::gif`].
 ///
-/// Errors on zero sizes, `data.len() != width * height`, a zero upscale, an image over
-/// [`MAX_SIDE`], a fixed range that is non-finite or has `min >= max`, or (automatic range)
+/// Errors on zero sizes, `data.len() != width * height`, a zero upscale or text scale, an
+/// image (field plus text, colour bar and margins) over [`MAX_SIDE`] per side (checked
+/// before it is allocated; the error names `text_scale` when one is set), a fixed range that is non-finite or has `min >= max`, or (automatic range)
 /// data with no finite value.
 pub fn render_heatmap<T: Copy + Into<f64>>(
     data: &[T],
@@ -249,29 +251,82 @@ pub(crate) fn render_field(
     let ts = opts
         .text_scale
         .unwrap_or(if fh.max(fw) >= 300 { 2 } else { 1 });
+    // The layout in u64 (text widths saturate at u32::MAX), so that a huge text scale or
+    // title is measured without overflow and refused below before anything is allocated.
+    let t = u64::from(ts);
     let decorated = opts.colorbar || opts.title.is_some();
-    let m = if decorated { 4 * ts } else { 0 };
+    let m = if decorated { 4 * t } else { 0 };
     let th = font::text_height(ts);
-    let title_h = if opts.title.is_some() { th + m } else { 0 };
-    let content_h = if opts.colorbar {
-        fh.max(2 * th + 4 * ts)
+    let title_h = if opts.title.is_some() {
+        u64::from(th) + m
     } else {
-        fh
+        0
+    };
+    let content_h = if opts.colorbar {
+        u64::from(fh).max(2 * u64::from(th) + 4 * t)
+    } else {
+        u64::from(fh)
     };
     let (min_label, max_label) = (numfmt::short(range.0), numfmt::short(range.1));
-    let bar_w = 10 * ts;
-    let bar_x = m + fw + 2 * m;
+    let bar_w = 10 * t;
+    let bar_x = m + u64::from(fw) + 2 * m;
     let label_x = bar_x + bar_w + m;
     let label_w = font::text_width(&min_label, ts).max(font::text_width(&max_label, ts));
     let mut canvas_w = if opts.colorbar {
-        label_x + label_w + m
+        label_x + u64::from(label_w) + m
     } else {
-        fw + 2 * m
+        u64::from(fw) + 2 * m
     };
-    if let Some(t) = &opts.title {
-        canvas_w = canvas_w.max(font::text_width(t, ts) + 2 * m);
-    }
+    let title_w = opts
+        .title
+        .as_ref()
+        .map_or(0, |title| u64::from(font::text_width(title, ts)) + 2 * m);
+    canvas_w = canvas_w.max(title_w);
     let canvas_h = m + title_h + content_h + m;
+    let limit = MAX_SIDE as u64;
+    if canvas_w > limit || canvas_h > limit {
+        let reason = format!(
+            "the image would be {canvas_w} x {canvas_h} pixels (the field, plus text, colour \
+             bar and margins that grow with the text scale), over the limit of {MAX_SIDE} \
+             pixels per side"
+        );
+        return Err(if let Some(scale) = opts.text_scale {
+            Error::invalid(
+                "text_scale",
+                scale,
+                format!("{reason}; use a smaller text_scale"),
+            )
+        } else if title_w > limit {
+            Error::invalid(
+                "title",
+                format!(
+                    "{} characters",
+                    opts.title.as_deref().unwrap_or("").chars().count()
+                ),
+                format!("{reason}; use a shorter title"),
+            )
+        } else {
+            Error::invalid(
+                "upscale",
+                opts.upscale,
+                format!("{reason}; use a smaller upscale or drop the colour bar and title"),
+            )
+        });
+    }
+    // Each of these is at most the canvas size, so it fits a u32.
+    let [
+        m,
+        title_h,
+        content_h,
+        bar_w,
+        bar_x,
+        label_x,
+        canvas_w,
+        canvas_h,
+    ] = [
+        m, title_h, content_h, bar_w, bar_x, label_x, canvas_w, canvas_h,
+    ]
+    .map(|v| v as u32);
     let mut img = RgbImage::from_pixel(canvas_w, canvas_h, Rgb(WHITE));
     let (x0, y0) = (m, m + title_h);
 

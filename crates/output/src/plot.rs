@@ -514,7 +514,13 @@ impl Axis {
     }
 
     fn frac(&self, t: f64) -> f64 {
-        (t - self.lo) / (self.hi - self.lo)
+        let span = self.hi - self.lo;
+        if span.is_finite() {
+            (t - self.lo) / span
+        } else {
+            // The span passes f64::MAX (data near ±1e308): halving is exact and keeps it finite.
+            (t / 2.0 - self.lo / 2.0) / (self.hi / 2.0 - self.lo / 2.0)
+        }
     }
 
     fn build(
@@ -548,13 +554,26 @@ impl Axis {
             Scale::Linear => {
                 if min == max {
                     let d = if min == 0.0 { 1.0 } else { min.abs() * 0.1 };
-                    (min, max) = (min - d, max + d);
+                    // Clamped: padding a value near ±f64::MAX must not reach infinity.
+                    (min, max) = ((min - d).max(f64::MIN), (max + d).min(f64::MAX));
                 }
-                let step = nice_step((max - min) / target as f64);
+                let span = max - min;
+                let raw = if span.is_finite() {
+                    span / target as f64
+                } else {
+                    // The span passes f64::MAX (e.g. data from -1e308 to 1e308): halve first.
+                    (max / 2.0 - min / 2.0) / target as f64 * 2.0
+                };
+                let step = nice_step(raw);
                 let (lo, hi) = if fixed.is_some() {
                     (min, max)
                 } else {
-                    ((min / step).floor() * step, (max / step).ceil() * step)
+                    // Rounding outward to a tick can pass f64::MAX; keep the data's end then.
+                    let (lo, hi) = ((min / step).floor() * step, (max / step).ceil() * step);
+                    (
+                        if lo.is_finite() { lo } else { min },
+                        if hi.is_finite() { hi } else { max },
+                    )
                 };
                 let ticks = linear_ticks(lo, hi, step)
                     .into_iter()
@@ -611,14 +630,18 @@ fn nice_step(raw: f64) -> f64 {
     nf * p
 }
 
+/// Multiples of `step` in `[lo, hi]`; just `[lo, hi]` when there would be none or more than
+/// 1001, or when the tick indices are not exact integers (checked in f64 before any integer
+/// conversion, so ranges near ±f64::MAX or infinite bounds cannot overflow).
 fn linear_ticks(lo: f64, hi: f64, step: f64) -> Vec<f64> {
+    const EXACT: f64 = (1u64 << 53) as f64;
     let eps = step * 1e-9;
-    let k0 = ((lo - eps) / step).ceil() as i64;
-    let k1 = ((hi + eps) / step).floor() as i64;
-    if k1 < k0 || k1 - k0 > 1000 {
+    let k0 = ((lo - eps) / step).ceil();
+    let k1 = ((hi + eps) / step).floor();
+    if !(k0.abs() <= EXACT && k1.abs() <= EXACT) || k1 < k0 || k1 - k0 > 1000.0 {
         return vec![lo, hi];
     }
-    (k0..=k1)
+    (k0 as i64..=k1 as i64)
         .map(|k| {
             let v = k as f64 * step;
             if v.abs() < eps { 0.0 } else { v }
@@ -686,5 +709,33 @@ mod tests {
         assert!(t.len() >= 3, "{t:?}");
         let t = log_ticks(0.0, 0.01, 6); // 1 .. 1.023
         assert!(t.len() >= 2, "{t:?}");
+    }
+
+    #[test]
+    fn ranges_near_f64_max_give_finite_ticks() {
+        // A span of 2e308 is past f64::MAX: it used to give i64-saturated tick indices whose
+        // difference overflowed ("capacity overflow").
+        let ys = [-1e308, 1e308];
+        let a = Axis::build("y", Scale::Linear, None, ys.into_iter(), 6).unwrap();
+        assert_eq!((a.lo, a.hi), (-1e308, 1e308));
+        let ticks: Vec<f64> = a.ticks.iter().map(|t| t.0).collect();
+        assert_eq!(ticks, [-1e308, -5e307, 0.0, 5e307, 1e308]);
+        assert_eq!(a.frac(0.0), 0.5);
+        assert_eq!(a.frac(1e308), 1.0);
+        for (values, fixed) in [
+            ([f64::MIN, f64::MAX], None),
+            ([1.7e308, 1.7e308], None),
+            ([0.0, 1.0], Some((f64::MIN, f64::MAX))),
+        ] {
+            let a = Axis::build("y", Scale::Linear, fixed, values.into_iter(), 6).unwrap();
+            assert!(a.lo.is_finite() && a.hi.is_finite() && a.lo < a.hi);
+            assert!(a.ticks.len() >= 2, "{:?}", a.ticks);
+            for (t, label) in &a.ticks {
+                assert!(t.is_finite() && (a.lo..=a.hi).contains(t), "{t} {label}");
+                assert!((0.0..=1.0).contains(&a.frac(*t)), "{t}");
+            }
+        }
+        assert_eq!(linear_ticks(0.0, f64::INFINITY, 1.0), [0.0, f64::INFINITY]);
+        assert_eq!(linear_ticks(-1e300, 1e300, 1.0), [-1e300, 1e300]);
     }
 }

@@ -71,6 +71,42 @@ fn heatmap_rejects_bad_input() {
 }
 
 #[test]
+fn heatmap_refuses_a_huge_text_scale_before_allocating() {
+    let o = HeatmapOptions::new().title("T");
+    // u32::MAX used to overflow the layout and abort on the image allocation.
+    for scale in [u32::MAX, 1 << 20, 5000] {
+        let e = render_heatmap(&[1.0; 4], 2, 2, &o.clone().text_scale(scale))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains(&format!("text_scale: {scale}")) && e.contains("32768"),
+            "{e}"
+        );
+    }
+    let e = render_heatmap(
+        &[1.0; 4],
+        2,
+        2,
+        &o.clone().colorbar(false).text_scale(u32::MAX),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("text_scale"), "{e}");
+    // A title too wide at the automatic scale names the title.
+    let long = "x".repeat(10_000);
+    let e = render_heatmap(&[1.0; 4], 2, 2, &HeatmapOptions::new().title(long))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("title: 10000 characters"), "{e}");
+    // Within the limit it renders; without text the scale is unused.
+    let (img, _) = render_heatmap(&[1.0; 4], 2, 2, &o.clone().text_scale(8)).unwrap();
+    assert!(img.height() >= 8 * 8);
+    let bare = HeatmapOptions::new().colorbar(false).text_scale(u32::MAX);
+    let (img, _) = render_heatmap(&[1.0; 4], 2, 2, &bare).unwrap();
+    assert_eq!(img.dimensions(), (2, 2));
+}
+
+#[test]
 fn vector_field_png() {
     let dir = tmp("vector");
     let (w, h) = (32, 24);
@@ -170,6 +206,35 @@ fn plot_rejects_bad_input() {
             .render()
             .is_err()
     );
+}
+
+#[test]
+fn plot_handles_values_near_f64_max() {
+    // y from -1e308 to 1e308 used to panic with "capacity overflow" in the tick computation.
+    let x = [0.0, 1.0, 2.0];
+    let color = [200, 0, 0];
+    let cases = [
+        Plot::new("huge").series(Series::line("y", &x, &[-1e308, 0.0, 1e308]).color(color)),
+        Plot::new("max").series(Series::line("y", &x, &[f64::MIN, 1.0, f64::MAX]).color(color)),
+        Plot::new("x").series(Series::line("y", &[-1e308, 1e308], &[1.0, 2.0]).color(color)),
+        Plot::new("flat").series(Series::line("y", &x, &[1.7e308; 3]).color(color)),
+        Plot::new("fixed")
+            .y_range(f64::MIN, f64::MAX)
+            .series(Series::line("y", &x, &[-1.0, 0.0, 1.0]).color(color)),
+        Plot::new("log")
+            .y_scale(Scale::Log10)
+            .series(Series::line("y", &x, &[1e308, 1.5e308, f64::MAX]).color(color)),
+    ];
+    for plot in cases {
+        let img = plot
+            .render()
+            .unwrap_or_else(|e| panic!("{}: {e}", plot.title));
+        assert!(
+            img.pixels().any(|p| p.0 == color),
+            "{}: no data drawn",
+            plot.title
+        );
+    }
 }
 
 #[test]

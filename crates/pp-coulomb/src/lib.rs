@@ -57,6 +57,6 @@ pub use config::{Config, ForceLaw, Integrator};
 pub use diagnostics::{Diagnostics, diagnostics, potential_energy, reference_accelerations};
 #[cfg(feature = "gpu")]
 pub use gpu::gpu_max_particles;
-pub use particles::{Particles, Region, Species, Velocities};
+pub use particles::{MAX_PARTICLES, Particles, Region, Species, Velocities};
 pub use sim::PpCoulomb;
 pub use simkit_backend::{Backend, Precision, Simulation};

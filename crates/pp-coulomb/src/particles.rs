@@ -62,6 +62,16 @@ pub enum Velocities {
     },
 }
 
+/// The most particles one [`Particles`] may hold: 2^26 = 67,108,864, about 4.6 GB of host
+/// arrays at 68 bytes a particle. The all-pairs force sum costs `N^2` pair terms a step, so
+/// this is already far past any practical run; [`Particles::fill`] and
+/// [`Particles::push`] refuse to grow past it.
+pub const MAX_PARTICLES: usize = 1 << 26;
+
+/// Host bytes per particle: position, velocity, charge, mass and species index.
+const BYTES_PER_PARTICLE: usize =
+    2 * size_of::<[f64; 3]>() + 2 * size_of::<f64>() + size_of::<u32>();
+
 /// Particles in structure-of-arrays form (host side, f64).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Particles {
@@ -119,7 +129,54 @@ impl Particles {
         })
     }
 
+    /// Checks that `count` more particles keep the total within [`MAX_PARTICLES`] (sizes in
+    /// overflow-safe arithmetic) and reserves room for them without aborting when the host
+    /// cannot provide it. Errors name `count`.
+    fn reserve(&mut self, count: usize) -> Result<()> {
+        let total = self.len().checked_add(count);
+        let bytes = total.and_then(|t| t.checked_mul(BYTES_PER_PARTICLE));
+        let (Some(total), Some(bytes)) = (total, bytes) else {
+            return Err(Error::invalid(
+                "particle count",
+                count,
+                format!(
+                    "{} existing particles plus {count} overflow the address space; at most \
+                     MAX_PARTICLES = {MAX_PARTICLES} particles are allowed",
+                    self.len()
+                ),
+            ));
+        };
+        if total > MAX_PARTICLES {
+            return Err(Error::invalid(
+                "particle count",
+                count,
+                format!(
+                    "{total} particles in all ({bytes} bytes of host arrays) exceed \
+                     MAX_PARTICLES = {MAX_PARTICLES} (the all-pairs force sum is O(N^2)); \
+                     use fewer particles"
+                ),
+            ));
+        }
+        let out_of_memory = |_| {
+            Error::invalid(
+                "particle count",
+                count,
+                format!("the host cannot allocate {bytes} bytes for {total} particles"),
+            )
+        };
+        self.position.try_reserve(count).map_err(out_of_memory)?;
+        self.velocity.try_reserve(count).map_err(out_of_memory)?;
+        self.charge.try_reserve(count).map_err(out_of_memory)?;
+        self.mass.try_reserve(count).map_err(out_of_memory)?;
+        self.species.try_reserve(count).map_err(out_of_memory)?;
+        Ok(())
+    }
+
     /// Adds one particle of `species`.
+    ///
+    /// # Errors
+    ///
+    /// An unknown species, a non-finite component, or a particle beyond [`MAX_PARTICLES`].
     pub fn push(&mut self, species: u32, position: [f64; 3], velocity: [f64; 3]) -> Result<()> {
         let s = self.species_ref(species)?.clone();
         for (k, c) in position.iter().enumerate() {
@@ -128,6 +185,7 @@ impl Particles {
         for (k, c) in velocity.iter().enumerate() {
             require_finite(&format!("velocity[{}][{k}]", self.len()), *c)?;
         }
+        self.reserve(1)?;
         self.position.push(position);
         self.velocity.push(velocity);
         self.charge.push(s.charge);
@@ -138,6 +196,12 @@ impl Particles {
 
     /// Adds `count` particles of `species`, uniform in `region`, with velocities drawn from
     /// `velocities` and their mean removed, from a `rand_pcg::Pcg64` seeded with `seed`.
+    ///
+    /// # Errors
+    ///
+    /// An unknown species, a bad region or velocity parameter, or a `count` that would take
+    /// the total past [`MAX_PARTICLES`] (checked before anything is allocated) or that the
+    /// host cannot allocate; the error names `count` ("particle count").
     pub fn fill(
         &mut self,
         species: u32,
@@ -170,6 +234,7 @@ impl Particles {
                 simkit_backend::require_non_negative("half_width", half_width)?;
             }
         }
+        self.reserve(count)?;
         let mut rng = Pcg64::seed_from_u64(seed);
         let start = self.len();
         for _ in 0..count {

@@ -9,7 +9,8 @@ use simkit_backend::testing::backends;
 use simkit_backend::testing::gpu_or_skip;
 use simkit_backend::{Backend, Simulation};
 use simkit_pp_coulomb::{
-    Config, ForceLaw, Particles, PpCoulomb, Precision, Species, reference_accelerations,
+    Config, ForceLaw, MAX_PARTICLES, Particles, PpCoulomb, Precision, Region, Species, Velocities,
+    reference_accelerations,
 };
 
 #[test]
@@ -86,6 +87,35 @@ fn bad_input_is_a_clear_error() {
     ] {
         assert!(PpCoulomb::new(p.clone(), &bad, Backend::Cpu).is_err());
     }
+}
+
+#[test]
+fn fill_refuses_a_huge_count_before_allocating() {
+    let mut p = Particles::new();
+    let e = p.add_species(Species::new("e", -1.0, 1.0)).unwrap();
+    let cube = Region::Cube {
+        min: [0.0; 3],
+        length: 1.0,
+    };
+    let v = Velocities::Maxwellian { thermal_speed: 1.0 };
+    // 1e10 particles used to abort on the allocation.
+    let err = p.fill(e, 10_000_000_000, cube, v, 1).unwrap_err();
+    let msg = err.to_string();
+    assert!(
+        msg.contains("particle count: 10000000000") && msg.contains("MAX_PARTICLES"),
+        "{msg}"
+    );
+    let err = p.fill(e, MAX_PARTICLES + 1, cube, v, 1).unwrap_err();
+    assert!(
+        err.to_string().contains(&(MAX_PARTICLES + 1).to_string()),
+        "{err}"
+    );
+    assert_eq!(p.position.capacity(), 0, "nothing may be allocated");
+    // With particles already present the total overflows usize: still a clear error.
+    p.fill(e, 2, cube, v, 1).unwrap();
+    let err = p.fill(e, usize::MAX, cube, v, 1).unwrap_err();
+    assert!(err.to_string().contains(&usize::MAX.to_string()), "{err}");
+    assert_eq!(p.len(), 2);
 }
 
 #[test]

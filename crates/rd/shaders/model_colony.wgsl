@@ -18,5 +18,10 @@ fn model_update(dt: real, ih2: real) {
 
 // Effective diffusivity at the current cell: max(d b n, 1) (b's kappa; n diffuses with D = 1).
 fn model_diffusivity() -> real {
-    return max(ld(2u, 0, 0) * ld(0u, 0, 0) * ld(1u, 0, 0), real(1.0));
+    let dbn = ld(2u, 0, 0) * ld(0u, 0, 0) * ld(1u, 0, 0);
+    // `max` may drop a NaN operand: pass a NaN (tested on the f32 bits) through unchanged.
+    if (bitcast<u32>(f32(dbn)) & 0x7fffffffu) > 0x7f800000u {
+        return dbn;
+    }
+    return max(dbn, real(1.0));
 }

@@ -8,7 +8,9 @@ use crate::config::Config;
 use crate::engine::Engine;
 use crate::grid::{Grid, pad};
 use crate::model::{Model, RowIn};
-use crate::stepper::{Integrator, Stepping, check_dt, check_dt_with, check_model, dt_bound};
+use crate::stepper::{
+    Integrator, Stepping, check_dt, check_dt_with, check_model, checked_bound, max_or_nan,
+};
 use crate::sweep::{ScratchPool, Sweep, can_fuse};
 
 /// Rows per band (the unit of parallel work).
@@ -143,7 +145,7 @@ impl<T: Real, M: Model> CpuRd<T, M> {
     }
 
     /// The model's largest effective diffusivity for the current fields, read in place from
-    /// the padded storage (rows in parallel).
+    /// the padded storage (rows in parallel); NaN if any row's is NaN.
     fn max_diffusivity(&self) -> f64 {
         let (nx, ny) = (self.grid.nx(), self.grid.ny());
         let w = nx + 2;
@@ -156,7 +158,7 @@ impl<T: Real, M: Model> CpuRd<T, M> {
                 let coef: Vec<&[T]> = self.coef.chunks(plane).map(|p| &p[at..at + nx]).collect();
                 self.model.max_cell_diffusivity(&species, &coef)
             })
-            .reduce(|| 0.0, f64::max)
+            .reduce(|| 0.0, max_or_nan)
     }
 
     /// `k` Euler steps in one sweep from `cur` into `tmp`, then the ghosts; with `want_max`,
@@ -272,6 +274,6 @@ impl<T: Real, M: Model> Engine<T, M> for CpuRd<T, M> {
     }
 
     fn stable_dt(&self) -> Result<f64> {
-        Ok(dt_bound(self.max_diffusivity(), self.grid.h()))
+        checked_bound(self.model.name(), self.max_diffusivity(), self.grid.h())
     }
 }

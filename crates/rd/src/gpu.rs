@@ -14,7 +14,7 @@ use crate::config::{Config, GpuKernel, GpuOptions};
 use crate::engine::Engine;
 use crate::grid::{Grid, pad};
 use crate::model::Model;
-use crate::stepper::{Integrator, Stepping, check_dt, check_dt_with, check_model, dt_bound};
+use crate::stepper::{Integrator, Stepping, check_dt, check_dt_with, check_model, checked_bound};
 
 const COMMON_WGSL: &str = simkit_backend::wgsl!("stencil_common.wgsl");
 const TILED_WGSL: &str = simkit_backend::wgsl!("stencil_tiled.wgsl");
@@ -574,7 +574,7 @@ impl<T: Real, M: Model> Engine<T, M> for GpuRd<T, M> {
     /// For models whose diffusivity depends on the fields, the maximum is reduced on the
     /// device (in f32) and read back.
     fn stable_dt(&self) -> Result<f64> {
-        Ok(dt_bound(self.max_diffusivity()?, self.grid.h()))
+        checked_bound(self.model.name(), self.max_diffusivity()?, self.grid.h())
     }
 
     fn name(&self) -> String {

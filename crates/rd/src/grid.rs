@@ -4,6 +4,7 @@ use rayon::prelude::*;
 use simkit_backend::{Error, Real, Result, require_positive};
 
 use crate::boundary::Boundaries;
+use crate::stepper::max_or_nan;
 
 /// One or more species fields on an `nx x ny` grid of square cells of side `h`.
 ///
@@ -27,20 +28,7 @@ impl<T: Real> Grid<T> {
         boundaries: Boundaries,
         fields: Vec<Vec<T>>,
     ) -> Result<Self> {
-        if nx == 0 || ny == 0 {
-            return Err(Error::invalid(
-                "grid size",
-                format!("{nx} x {ny}"),
-                "both dimensions must be >= 1",
-            ));
-        }
-        if nx.checked_mul(ny).is_none_or(|n| n > u32::MAX as usize / 8) {
-            return Err(Error::invalid(
-                "grid size",
-                format!("{nx} x {ny}"),
-                "too many cells for 32-bit indexing; split the domain",
-            ));
-        }
+        check_size(nx, ny)?;
         require_positive("grid spacing h", h)?;
         if fields.is_empty() {
             return Err(Error::invalid(
@@ -75,7 +63,8 @@ impl<T: Real> Grid<T> {
         })
     }
 
-    /// A grid with `species` fields, all set to `value`.
+    /// A grid with `species` fields, all set to `value`. The size is checked (as in
+    /// [`Grid::new`]) before anything is allocated.
     pub fn uniform(
         nx: usize,
         ny: usize,
@@ -84,7 +73,7 @@ impl<T: Real> Grid<T> {
         species: usize,
         value: T,
     ) -> Result<Self> {
-        let n = nx.saturating_mul(ny);
+        let n = check_size(nx, ny)?;
         Self::new(nx, ny, h, boundaries, vec![vec![value; n]; species])
     }
 
@@ -120,20 +109,24 @@ impl<T: Real> Grid<T> {
     pub fn field_mut(&mut self, s: usize) -> &mut [T] {
         &mut self.fields[s]
     }
-    /// Value of species `s` at cell `(i, j)`.
-    pub fn get(&self, s: usize, i: usize, j: usize) -> T {
-        self.fields[s][j * self.nx + i]
+    /// Value of species `s` at cell `(i, j)`, or `None` if there is no such species
+    /// (`s >= species()`) or cell (`i >= nx()` or `j >= ny()`).
+    pub fn get(&self, s: usize, i: usize, j: usize) -> Option<T> {
+        if i >= self.nx || j >= self.ny {
+            return None;
+        }
+        self.fields.get(s)?.get(j * self.nx + i).copied()
     }
     /// Integral of species `s` over the domain, `h^2 * sum`, accumulated in `f64`.
     pub fn total(&self, s: usize) -> f64 {
         self.fields[s].iter().map(|v| v.to_f64()).sum::<f64>() * self.h * self.h
     }
-    /// Largest absolute value of species `s`.
+    /// Largest absolute value of species `s`: NaN if any value is NaN (a blown-up run).
     pub fn max_abs(&self, s: usize) -> f64 {
         self.fields[s]
             .iter()
             .map(|v| v.to_f64().abs())
-            .fold(0.0, f64::max)
+            .fold(0.0, max_or_nan)
     }
     /// Converts to another precision.
     pub fn convert<U: Real>(&self) -> Grid<U> {
@@ -165,6 +158,26 @@ impl<T: Real> Grid<T> {
                 row.copy_from_slice(&p[r..r + nx]);
             });
         }
+    }
+}
+
+/// Checks `nx x ny` (both >= 1, cell count small enough for 32-bit indexing; overflow-safe)
+/// and returns the cell count.
+fn check_size(nx: usize, ny: usize) -> Result<usize> {
+    if nx == 0 || ny == 0 {
+        return Err(Error::invalid(
+            "grid size",
+            format!("{nx} x {ny}"),
+            "both dimensions must be >= 1",
+        ));
+    }
+    match nx.checked_mul(ny) {
+        Some(n) if n <= u32::MAX as usize / 8 => Ok(n),
+        _ => Err(Error::invalid(
+            "grid size",
+            format!("{nx} x {ny}"),
+            "too many cells for 32-bit indexing; split the domain",
+        )),
     }
 }
 

@@ -97,7 +97,8 @@ pub trait Model: Clone + Debug + Send + Sync + 'static {
         &[]
     }
     /// Largest effective diffusivity for the given fields (sets the stability bound
-    /// `dt <= h^2 / (4 D_max)`).
+    /// `dt <= h^2 / (4 D_max)`). Must be NaN if a value it depends on is NaN (`f64::max`
+    /// skips NaN): a NaN `D_max` makes `step` an error instead of an infinite bound.
     fn max_diffusivity<T: Real>(&self, grid: &Grid<T>) -> f64;
     /// Whether [`Model::max_diffusivity`] depends on the fields (then backends re-check the
     /// stability bound from the current fields before each `step` call).

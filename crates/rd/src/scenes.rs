@@ -96,7 +96,8 @@ pub fn count_spots<T: Real>(grid: &Grid<T>, s: usize, threshold: f64) -> usize {
 }
 
 /// Width (in length units) of the widest run of cells with `b < threshold` along row `j`
-/// strictly between columns `i_left` and `i_right`: the gap the two colonies leave.
+/// strictly between columns `i_left` and `i_right`: the gap the two colonies leave (0 if row
+/// `j` is outside the grid).
 pub fn gap_width<T: Real>(
     grid: &Grid<T>,
     j: usize,
@@ -107,7 +108,7 @@ pub fn gap_width<T: Real>(
     let mut best = 0;
     let mut run = 0;
     for i in i_left + 1..i_right.min(grid.nx()) {
-        if grid.get(0, i, j).to_f64() < threshold {
+        if grid.get(0, i, j).is_some_and(|b| b.to_f64() < threshold) {
             run += 1;
             best = best.max(run);
         } else {

@@ -74,17 +74,21 @@ impl Stepping {
 
 /// Largest stable time step for the current fields: `h^2 / (4 D_max)` with the model's
 /// largest effective diffusivity (5-point Laplacian, explicit Euler; Heun's real stability
-/// interval `[-2, 0]` is the same). `f64::INFINITY` when nothing diffuses.
+/// interval `[-2, 0]` is the same). `f64::INFINITY` when nothing diffuses; NaN when `D_max`
+/// is NaN (fields holding NaN in a model whose diffusivity depends on them).
 pub fn stable_dt<T: Real, M: Model>(model: &M, grid: &Grid<T>) -> f64 {
     dt_bound(model.max_diffusivity(grid), grid.h())
 }
 
 /// The explicit stability bound of the 5-point Laplacian, `h^2 / (4 d_max)` (forward Euler:
 /// the most negative Laplacian eigenvalue is `-8 / h^2`, and `dt * D * 8 / h^2 <= 2`);
-/// `f64::INFINITY` when `d_max <= 0` (nothing diffuses). Every stability check and every
-/// `stable_dt` of both backends goes through this one function.
+/// `f64::INFINITY` when `d_max <= 0` (nothing diffuses); NaN when `d_max` is NaN (never an
+/// infinite bound). Every stability check and every `stable_dt` of both backends goes
+/// through this one function.
 pub(crate) fn dt_bound(d_max: f64, h: f64) -> f64 {
-    if d_max > 0.0 {
+    if d_max.is_nan() {
+        f64::NAN
+    } else if d_max > 0.0 {
         h * h / (4.0 * d_max)
     } else {
         f64::INFINITY
@@ -96,10 +100,30 @@ pub(crate) fn check_dt<T: Real, M: Model>(model: &M, grid: &Grid<T>, s: &Steppin
     check_dt_with(model.name(), model.max_diffusivity(grid), grid.h(), s)
 }
 
-/// Checks `dt` against `h^2 / (4 d_max)` unless the guard is overridden.
+/// `max` that propagates NaN: NaN if either argument is NaN (`f64::max` skips NaN, which
+/// would let a blown-up field pass the stability check with an infinite bound).
+pub(crate) fn max_or_nan(a: f64, b: f64) -> f64 {
+    if b > a || b.is_nan() { b } else { a }
+}
+
+/// [`dt_bound`] for a backend's `stable_dt`: an error if `d_max` is NaN.
+pub(crate) fn checked_bound(model: &str, d_max: f64, h: f64) -> Result<f64> {
+    if d_max.is_nan() {
+        return Err(Error::invalid(
+            format!("largest diffusivity D_max of the {model} model"),
+            d_max,
+            "the fields hold NaN or infinite values (the run has blown up); \
+             rebuild the simulation from finite fields with a smaller dt",
+        ));
+    }
+    Ok(dt_bound(d_max, h))
+}
+
+/// Checks `dt` against `h^2 / (4 d_max)` unless the guard is overridden; a NaN `d_max`
+/// (blown-up fields) is an error even with the guard overridden.
 pub(crate) fn check_dt_with(model: &str, d_max: f64, h: f64, s: &Stepping) -> Result<()> {
     require_positive("dt", s.dt)?;
-    let bound = dt_bound(d_max, h);
+    let bound = checked_bound(model, d_max, h)?;
     if s.guard == Guard::Enforce && s.dt > bound {
         return Err(Error::Unstable {
             dt: s.dt,
@@ -153,5 +177,27 @@ mod tests {
             "{err}"
         );
         assert!(check_dt_with("diffusion", 1.0, 1.0, &Stepping::euler(0.3).unguarded()).is_ok());
+    }
+
+    #[test]
+    fn a_nan_diffusivity_is_an_error_never_an_infinite_bound() {
+        assert!(dt_bound(f64::NAN, 1.0).is_nan());
+        assert!(max_or_nan(f64::NAN, 1.0).is_nan());
+        assert!(max_or_nan(1.0, f64::NAN).is_nan());
+        assert_eq!(max_or_nan(1.0, 2.0), 2.0);
+        assert_eq!(max_or_nan(2.0, 1.0), 2.0);
+        assert_eq!([1.0, f64::NAN, 3.0].into_iter().fold(0.0, f64::max), 3.0);
+        assert!(
+            [1.0, f64::NAN, 3.0]
+                .into_iter()
+                .fold(0.0, max_or_nan)
+                .is_nan()
+        );
+        for s in [Stepping::euler(0.1), Stepping::euler(0.1).unguarded()] {
+            let e = check_dt_with("colony", f64::NAN, 1.0, &s)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("D_max of the colony model: NaN"), "{e}");
+        }
     }
 }

@@ -19,6 +19,7 @@ use rayon::prelude::*;
 
 use crate::boundary::{Boundaries, Boundary, ghost_value};
 use crate::model::{Model, RowIn};
+use crate::stepper::max_or_nan;
 use simkit_backend::Real;
 
 /// Scratch buffers kept between sweeps, one per parallel job at most.
@@ -116,7 +117,7 @@ impl<T: Real, M: Model> Sweep<'_, T, M> {
                     self.band(k, r0, r1, src, &mut out, r0, &mut lease.buf, want_max)
                 },
             )
-            .reduce(|| 0.0, f64::max);
+            .reduce(|| 0.0, max_or_nan);
         want_max.then_some(d)
     }
 
@@ -209,7 +210,7 @@ impl<T: Real, M: Model> Sweep<'_, T, M> {
                             .chunks(plane)
                             .map(|p| &p[g * w + 1..g * w + 1 + nx])
                             .collect();
-                        dmax = dmax.max(self.model.max_cell_diffusivity(&species, &coef));
+                        dmax = max_or_nan(dmax, self.model.max_cell_diffusivity(&species, &coef));
                     }
                 } else {
                     let level = &mut level[..lsize];

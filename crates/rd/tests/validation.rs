@@ -368,7 +368,7 @@ fn dirichlet_relaxes_to_linear_profile() {
         for j in 0..ny {
             for i in 0..nx {
                 let want = (i as f64 + 0.5) / nx as f64;
-                let got = f64::from(g.get(0, i, j));
+                let got = f64::from(g.get(0, i, j).unwrap());
                 assert!(
                     (got - want).abs() < 1e-5,
                     "{} ({i},{j}): {got} vs {want}",
@@ -482,4 +482,77 @@ fn gpu_rejects_bad_tiles() {
         let err = Rd::new(grid.clone(), model.clone(), &config, Backend::Gpu(&ctx)).unwrap_err();
         assert!(matches!(err, Error::InvalidParameter { .. }), "{err}");
     }
+}
+
+#[test]
+fn a_nan_field_makes_the_next_step_an_error() {
+    // Colony: the stability bound depends on the fields, so each `step` re-checks it. A run
+    // blown up with the guard overridden holds NaN; the NaN maximum used to be skipped
+    // (`f64::max`), giving D_max = 1 and `Ok` for the next step.
+    let (grid, model) = colony_scene::<f32>(64, 64, 3).unwrap();
+    let bound = stable_dt(&model, &grid);
+    assert!((bound - 0.0625).abs() < 1e-12, "bound {bound}");
+    for backend in backends("a_nan_field_makes_the_next_step_an_error") {
+        let config = Config::new(Stepping::euler(16.0 * bound).unguarded());
+        let mut sim = Rd::new(grid.clone(), model.clone(), &config, backend).unwrap();
+        sim.step(400).unwrap();
+        let state = sim.state().unwrap();
+        assert!(state.max_abs(0).is_nan(), "{}: no NaN", sim.backend_name());
+        assert!(stable_dt(&model, &state).is_nan());
+        for e in [sim.step(1).unwrap_err(), sim.stable_dt().unwrap_err()] {
+            let e = e.to_string();
+            assert!(
+                e.contains("largest diffusivity D_max of the bacterial colony model: NaN"),
+                "{}: {e}",
+                sim.backend_name()
+            );
+        }
+        assert_eq!(sim.steps_done(), 400);
+    }
+}
+
+#[test]
+fn max_abs_is_nan_if_any_value_is_nan() {
+    let mut grid = Grid::uniform(4, 3, 1.0, Boundaries::no_flux(), 1, 2.0f64).unwrap();
+    assert_eq!(grid.max_abs(0), 2.0);
+    grid.field_mut(0)[5] = -3.0;
+    assert_eq!(grid.max_abs(0), 3.0);
+    grid.field_mut(0).fill(f64::NAN);
+    assert!(grid.max_abs(0).is_nan(), "all NaN used to give 0");
+    grid.field_mut(0).fill(1.0);
+    grid.field_mut(0)[7] = f64::NAN;
+    assert!(grid.max_abs(0).is_nan());
+}
+
+#[test]
+fn grid_get_is_checked() {
+    let (nx, ny) = (4, 3);
+    let a: Vec<f64> = (0..nx * ny).map(|k| k as f64).collect();
+    let grid = Grid::new(nx, ny, 1.0, Boundaries::no_flux(), vec![a]).unwrap();
+    assert_eq!(grid.get(0, 1, 2), Some(9.0));
+    assert_eq!(grid.get(0, nx - 1, ny - 1), Some(11.0));
+    // x = nx + 1 used to read the next row's cell (1, 1); a bad species used to panic.
+    assert_eq!(grid.get(0, nx + 1, 0), None);
+    assert_eq!(grid.get(0, nx, 0), None);
+    assert_eq!(grid.get(0, 0, ny), None);
+    assert_eq!(grid.get(0, usize::MAX, usize::MAX), None);
+    assert_eq!(grid.get(1, 0, 0), None);
+}
+
+#[test]
+fn uniform_checks_the_size_before_allocating() {
+    // 100_000 x 100_000 used to allocate ~80 GB (and abort) before the size check.
+    for (nx, ny) in [(100_000, 100_000), (usize::MAX, 2), (1 << 32, 1 << 32)] {
+        let e = Grid::uniform(nx, ny, 1.0, Boundaries::no_flux(), 1, 0.0f64)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains(&format!("grid size: {nx} x {ny}")) && e.contains("too many cells"),
+            "{e}"
+        );
+    }
+    let e = Grid::uniform(0, 5, 1.0, Boundaries::no_flux(), 1, 0.0f64)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("grid size: 0 x 5"), "{e}");
 }

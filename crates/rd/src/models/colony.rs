@@ -7,6 +7,7 @@ use simkit_backend::{Error, Real, Result, require_non_negative};
 use crate::grid::Grid;
 use crate::model::{Model, RowIn, Stencil};
 use crate::models::store;
+use crate::stepper::max_or_nan;
 
 /// Bacteria `b` (species 0) feeding on nutrient `n` (species 1):
 ///
@@ -127,9 +128,9 @@ fn rows<T: Real, const AVG: bool>(
     }
 }
 
-/// Largest `d b n` over a row segment (0 if none is positive), multiplied in the same order
-/// as [`Colony::max_diffusivity`] (so in f64 the two agree exactly). Sixteen independent
-/// running maxima, so the loop vectorises without reordering anything.
+/// Largest `d b n` over a row segment (0 if none is positive, NaN if any is NaN), multiplied
+/// in the same order as [`Colony::max_diffusivity`] (so in f64 the two agree exactly).
+/// Sixteen independent running maxima, so the loop vectorises without reordering anything.
 #[multiversion(targets("x86_64+avx512f+avx512vl+avx2+fma+avx", "x86_64+avx2+fma+avx"))]
 fn max_kappa<T: Real>(b: &[T], n: &[T], d: &[T]) -> f64 {
     const LANES: usize = 16;
@@ -140,13 +141,16 @@ fn max_kappa<T: Real>(b: &[T], n: &[T], d: &[T]) -> f64 {
         let (b, n, d) = (&b[k..k + LANES], &n[k..k + LANES], &d[k..k + LANES]);
         for j in 0..LANES {
             let v = d[j] * b[j] * n[j];
-            acc[j] = if v > acc[j] { v } else { acc[j] };
+            // A NaN is taken, and then kept (`v > NaN` is false), as in `max_or_nan`; an
+            // unordered self-comparison is the NaN test.
+            let nan = v.partial_cmp(&v).is_none();
+            acc[j] = if v > acc[j] || nan { v } else { acc[j] };
         }
         k += LANES;
     }
-    let mut m = acc.iter().fold(0.0, |m: f64, v| m.max(v.to_f64()));
+    let mut m = acc.iter().fold(0.0, |m, v| max_or_nan(m, v.to_f64()));
     for i in k..len {
-        m = m.max((d[i] * b[i] * n[i]).to_f64());
+        m = max_or_nan(m, (d[i] * b[i] * n[i]).to_f64());
     }
     m
 }
@@ -208,8 +212,8 @@ impl Model for Colony {
             .par_iter()
             .zip(b.par_iter().zip(n.par_iter()))
             .map(|(d, (b, n))| d * b.to_f64() * n.to_f64())
-            .reduce(|| 0.0, f64::max);
-        kappa.max(1.0)
+            .reduce(|| 0.0, max_or_nan);
+        max_or_nan(kappa, 1.0)
     }
     fn field_dependent_diffusivity(&self) -> bool {
         true
@@ -219,7 +223,7 @@ impl Model for Colony {
         let ([b, n, ..], [d, ..]) = (species, coefficients) else {
             return f64::INFINITY;
         };
-        max_kappa(b, n, d).max(1.0)
+        max_or_nan(max_kappa(b, n, d), 1.0)
     }
     fn update_row<T: Real>(
         &self,

@@ -6,6 +6,7 @@ use simkit_backend::{Error, Real, Result};
 use crate::grid::Grid;
 use crate::model::{Model, RowIn, Stencil};
 use crate::models::store;
+use crate::stepper::max_or_nan;
 
 /// `du_s/dt = D_s lap u_s` for 1 to 4 independent species: the validation workhorse.
 #[derive(Clone, Debug, PartialEq)]
@@ -84,10 +85,10 @@ impl Model for Diffusion {
         self.check()
     }
     fn max_diffusivity<T: Real>(&self, _grid: &Grid<T>) -> f64 {
-        self.diffusivity.iter().copied().fold(0.0, f64::max)
+        self.diffusivity.iter().copied().fold(0.0, max_or_nan)
     }
     fn max_cell_diffusivity<T: Real>(&self, _species: &[&[T]], _coefficients: &[&[T]]) -> f64 {
-        self.diffusivity.iter().copied().fold(0.0, f64::max)
+        self.diffusivity.iter().copied().fold(0.0, max_or_nan)
     }
     fn update_row<T: Real>(
         &self,

@@ -6,6 +6,7 @@ use simkit_backend::{Error, Real, Result, require_finite};
 use crate::grid::Grid;
 use crate::model::{Model, RowIn, Stencil};
 use crate::models::store;
+use crate::stepper::max_or_nan;
 
 /// Gray–Scott: `du/dt = Du lap u - u v^2 + F (1 - u)`, `dv/dt = Dv lap v + u v^2 - (F + k) v`.
 ///
@@ -136,10 +137,10 @@ impl Model for GrayScott {
         self.check()
     }
     fn max_diffusivity<T: Real>(&self, _grid: &Grid<T>) -> f64 {
-        self.du.max(self.dv)
+        max_or_nan(self.du, self.dv)
     }
     fn max_cell_diffusivity<T: Real>(&self, _species: &[&[T]], _coefficients: &[&[T]]) -> f64 {
-        self.du.max(self.dv)
+        max_or_nan(self.du, self.dv)
     }
     fn update_row<T: Real>(
         &self,
