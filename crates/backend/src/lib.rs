@@ -48,5 +48,5 @@ pub mod testing;
 pub use error::{Error, Result, require_finite, require_non_negative, require_positive};
 #[cfg(feature = "gpu")]
 pub use gpu::{GpuBuffer, GpuContext, GpuScan, Kernel, KernelDesc};
-pub use real::{Precision, Real};
+pub use real::{Precision, Real, max_or_nan};
 pub use simulation::{Backend, Simulation};

@@ -24,6 +24,13 @@ impl Precision {
     }
 }
 
+/// `max` that propagates NaN: NaN if either argument is NaN. `f64::max` skips NaN, so a fold
+/// with it lets a blown-up field pass a check; fold with this one instead.
+#[inline]
+pub fn max_or_nan(a: f64, b: f64) -> f64 {
+    if b > a || b.is_nan() { b } else { a }
+}
+
 /// A real scalar type: implemented for `f32` and `f64` only.
 ///
 /// One law written once is a function generic over `T: Real`, called by the f32 and the
@@ -118,5 +125,18 @@ mod tests {
         assert_eq!(Precision::F32.wgsl(), "f32");
         assert_eq!(<f32 as Real>::PRECISION, Precision::F32);
         assert_eq!(Real::mul_add(2.0f64, 3.0, 1.0), 7.0);
+    }
+
+    #[test]
+    fn max_or_nan_keeps_a_nan() {
+        assert!(max_or_nan(f64::NAN, 1.0).is_nan());
+        assert!(max_or_nan(1.0, f64::NAN).is_nan());
+        assert_eq!((max_or_nan(1.0, 2.0), max_or_nan(2.0, 1.0)), (2.0, 2.0));
+        assert!(
+            [1.0, f64::NAN, 3.0]
+                .into_iter()
+                .fold(0.0, max_or_nan)
+                .is_nan()
+        );
     }
 }

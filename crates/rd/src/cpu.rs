@@ -8,10 +8,9 @@ use crate::config::Config;
 use crate::engine::Engine;
 use crate::grid::{Grid, pad};
 use crate::model::{Model, RowIn};
-use crate::stepper::{
-    Integrator, Stepping, check_dt, check_dt_with, check_model, checked_bound, max_or_nan,
-};
+use crate::stepper::{Integrator, Stepping, check_dt, check_dt_with, check_model, checked_bound};
 use crate::sweep::{ScratchPool, Sweep, can_fuse};
+use simkit_backend::max_or_nan;
 
 /// Rows per band (the unit of parallel work).
 const BAND_ROWS: usize = 16;

@@ -4,7 +4,7 @@ use rayon::prelude::*;
 use simkit_backend::{Error, Real, Result, require_positive};
 
 use crate::boundary::Boundaries;
-use crate::stepper::max_or_nan;
+use simkit_backend::max_or_nan;
 
 /// One or more species fields on an `nx x ny` grid of square cells of side `h`.
 ///

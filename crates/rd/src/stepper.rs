@@ -100,12 +100,6 @@ pub(crate) fn check_dt<T: Real, M: Model>(model: &M, grid: &Grid<T>, s: &Steppin
     check_dt_with(model.name(), model.max_diffusivity(grid), grid.h(), s)
 }
 
-/// `max` that propagates NaN: NaN if either argument is NaN (`f64::max` skips NaN, which
-/// would let a blown-up field pass the stability check with an infinite bound).
-pub(crate) fn max_or_nan(a: f64, b: f64) -> f64 {
-    if b > a || b.is_nan() { b } else { a }
-}
-
 /// [`dt_bound`] for a backend's `stable_dt`: an error if `d_max` is NaN.
 pub(crate) fn checked_bound(model: &str, d_max: f64, h: f64) -> Result<f64> {
     if d_max.is_nan() {
@@ -162,6 +156,7 @@ pub(crate) fn check_model<T: Real, M: Model>(model: &M, grid: &Grid<T>) -> Resul
 #[cfg(test)]
 mod tests {
     use super::*;
+    use simkit_backend::max_or_nan;
 
     #[test]
     fn the_bound_is_h2_over_4d_and_infinite_without_diffusion() {

@@ -19,8 +19,8 @@ use rayon::prelude::*;
 
 use crate::boundary::{Boundaries, Boundary, ghost_value};
 use crate::model::{Model, RowIn};
-use crate::stepper::max_or_nan;
 use simkit_backend::Real;
+use simkit_backend::max_or_nan;
 
 /// Scratch buffers kept between sweeps, one per parallel job at most.
 #[derive(Debug, Default)]

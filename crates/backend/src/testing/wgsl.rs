@@ -4,7 +4,7 @@
 
 use bytemuck::Pod;
 
-use crate::gpu::{GpuBuffer, Kernel, KernelDesc, run_pass};
+use crate::gpu::{DISPATCH_WGSL, GpuBuffer, Kernel, KernelDesc, run_pass};
 use crate::{Error, GpuContext, Result};
 
 /// Size and member offsets of a WGSL struct, as the WGSL rules lay it out.
@@ -93,15 +93,17 @@ pub fn eval_wgsl<I: Pod, O: Pod>(
         "@group(0) @binding(0) var<storage, read> law_in: array<{input_type}>;\n\
          @group(0) @binding(1) var<storage, read_write> law_out: array<{output_type}>;\n\
          @compute @workgroup_size(64)\n\
-         fn law_main(@builtin(global_invocation_id) gid: vec3<u32>, \
-                     @builtin(num_workgroups) nwg: vec3<u32>) {{\n\
-             let i = gid.x + gid.y * nwg.x * 64u;\n\
+         fn law_main(@builtin(workgroup_id) wid: vec3<u32>, \
+                     @builtin(num_workgroups) nwg: vec3<u32>, \
+                     @builtin(local_invocation_index) lid: u32) {{\n\
+             let i = linear_workgroup(wid, nwg) * 64u + lid;\n\
              if i >= arrayLength(&law_in) {{ return; }}\n\
              let x = law_in[i];\n\
              law_out[i] = {expression};\n\
          }}\n"
     );
-    let mut all: Vec<&str> = sources.to_vec();
+    let mut all: Vec<&str> = vec![DISPATCH_WGSL];
+    all.extend_from_slice(sources);
     all.push(&harness);
     let kernel = Kernel::new(
         ctx,

@@ -37,13 +37,7 @@ pub fn max_error_over_rms(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
         .zip(b)
         .map(|(x, y)| norm([x[0] - y[0], x[1] - y[1], x[2] - y[2]]))
         // A NaN anywhere must fail every tolerance (`f64::max` would skip it).
-        .fold(0.0f64, |m, e| {
-            if e.is_nan() || m.is_nan() {
-                f64::NAN
-            } else {
-                m.max(e)
-            }
-        })
+        .fold(0.0, simkit_backend::max_or_nan)
         / rms
 }
 

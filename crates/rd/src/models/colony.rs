@@ -7,7 +7,7 @@ use simkit_backend::{Error, Real, Result, require_non_negative};
 use crate::grid::Grid;
 use crate::model::{Model, RowIn, Stencil};
 use crate::models::store;
-use crate::stepper::max_or_nan;
+use simkit_backend::max_or_nan;
 
 /// Bacteria `b` (species 0) feeding on nutrient `n` (species 1):
 ///

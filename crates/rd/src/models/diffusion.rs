@@ -6,7 +6,7 @@ use simkit_backend::{Error, Real, Result};
 use crate::grid::Grid;
 use crate::model::{Model, RowIn, Stencil};
 use crate::models::store;
-use crate::stepper::max_or_nan;
+use simkit_backend::max_or_nan;
 
 /// `du_s/dt = D_s lap u_s` for 1 to 4 independent species: the validation workhorse.
 #[derive(Clone, Debug, PartialEq)]

@@ -6,7 +6,7 @@ use simkit_backend::{Error, Real, Result, require_finite};
 use crate::grid::Grid;
 use crate::model::{Model, RowIn, Stencil};
 use crate::models::store;
-use crate::stepper::max_or_nan;
+use simkit_backend::max_or_nan;
 
 /// Gray–Scott: `du/dt = Du lap u - u v^2 + F (1 - u)`, `dv/dt = Dv lap v + u v^2 - (F + k) v`.
 ///
