@@ -58,6 +58,35 @@ pub enum Error {
     /// A feature the request needs is not present on this device or build.
     #[error("unsupported: {0}")]
     Unsupported(String),
+    /// A run turned non-finite or left its physical limits during `step(n)`.
+    ///
+    /// The simulation is rolled back to `rolled_back_to`, the last step whose state passed the
+    /// check: `state()` returns that state and `steps_done()` that step.
+    #[error(
+        "blow-up detected by step {step}: {what}; likely cause: {cause}. The run was rolled \
+         back to step {rolled_back_to}, the last state that passed the check (state() returns \
+         it); fix the cause and step again, or resume from a checkpoint"
+    )]
+    BlowUp {
+        /// The step at which the check found the bad state (the damage happened after
+        /// `rolled_back_to` and at or before this step).
+        step: u64,
+        /// The first bad particle, cell or quantity and its value.
+        what: String,
+        /// The likely cause and the usual fix (time step too large, overlap, ...).
+        cause: String,
+        /// The step of the state the simulation now holds.
+        rolled_back_to: u64,
+    },
+    /// A checkpoint could not be read: not a checkpoint, another format version or model,
+    /// or a corrupt file.
+    #[error("checkpoint {source_name}: {reason}")]
+    Checkpoint {
+        /// The file (or `"<bytes>"` for an in-memory checkpoint).
+        source_name: String,
+        /// What is wrong and what to do.
+        reason: String,
+    },
     /// An I/O failure while writing outputs.
     #[error("I/O error on {path}: {message}")]
     Io {

@@ -11,6 +11,9 @@
 //! - [`Real`], [`Precision`]: the `f32`/`f64` scalar every CPU law is generic over.
 //! - [`Simulation`], [`Backend`], [`Error`]: the common trait, backend selector and error type.
 //! - [`pool::on_pool`]: runs a stepping loop on the rayon pool (no thread hand-over per pass).
+//! - [`guard`]: the blow-up check every `step(n)` runs (finite state at an interval, rollback
+//!   to the last good state); [`checkpoint`]: the versioned, checksummed checkpoint format
+//!   and the [`Restart`] trait; [`atomic`]: atomic file writes.
 //!
 //! The GPU half (everything wgpu) is the `gpu` cargo feature, on by default; without it the
 //! crate, and every simkit crate, builds its CPU side only. An example is in [`gpu`].
@@ -35,7 +38,10 @@ macro_rules! wgsl {
     };
 }
 
+pub mod atomic;
+pub mod checkpoint;
 pub mod error;
+pub mod guard;
 #[cfg(feature = "gpu")]
 pub mod gpu;
 pub mod pool;
@@ -49,4 +55,5 @@ pub use error::{Error, Result, require_finite, require_non_negative, require_pos
 #[cfg(feature = "gpu")]
 pub use gpu::{GpuBuffer, GpuContext, GpuScan, Kernel, KernelDesc};
 pub use real::{Precision, Real, max_or_nan};
+pub use checkpoint::Restart;
 pub use simulation::{Backend, Simulation};

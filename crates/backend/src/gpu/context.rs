@@ -1,6 +1,6 @@
 //! Adapter choice and the device/queue pair every GPU backend runs on.
 
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 use crate::{Error, Result};
 
@@ -48,6 +48,21 @@ struct Inner {
     info: wgpu::AdapterInfo,
     limits: wgpu::Limits,
     features: wgpu::Features,
+    faults: Arc<Faults>,
+}
+
+/// GPU failures that wgpu reports outside an error scope, kept for the next call.
+#[derive(Default)]
+struct Faults {
+    /// The first error no scope captured since the last [`GpuContext::health`] call.
+    uncaptured: Mutex<Option<String>>,
+    /// Set for good when the device is lost.
+    lost: Mutex<Option<String>>,
+}
+
+fn note(slot: &Mutex<Option<String>>, message: String) {
+    let mut slot = slot.lock().unwrap_or_else(|p| p.into_inner());
+    slot.get_or_insert(message);
 }
 
 /// A GPU device and queue with the limits and features simkit needs.
@@ -179,6 +194,17 @@ impl GpuContext {
             ..Default::default()
         }))
         .map_err(|e| Error::NoAdapter(format!("adapter {} refused a device: {e}", info.name)))?;
+        // wgpu's default handler for errors outside an error scope panics; keep them instead
+        // and return them as `Err` from the next call (see `health`).
+        let faults = Arc::new(Faults::default());
+        let sink = Arc::clone(&faults);
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            note(&sink.uncaptured, e.to_string());
+        }));
+        let sink = Arc::clone(&faults);
+        device.set_device_lost_callback(move |reason, message| {
+            note(&sink.lost, format!("{reason:?}: {message}"));
+        });
         let limits = device.limits();
         let features = device.features();
         Ok(Self {
@@ -189,6 +215,7 @@ impl GpuContext {
                 info,
                 limits,
                 features,
+                faults,
             }),
         })
     }
@@ -262,13 +289,46 @@ impl GpuContext {
         l.max_storage_buffer_binding_size.min(l.max_buffer_size)
     }
 
-    /// Blocks until all submitted work has finished.
+    /// `Err` when the device was lost (for good: every later call fails too) or an error
+    /// was raised outside an error scope since the last call (reported once), naming the
+    /// adapter. [`GpuContext::checked`], [`GpuContext::wait`] and every download call it, so
+    /// a failure surfaces as `Err` from the next simkit call instead of a panic.
+    pub fn health(&self) -> Result<()> {
+        let name = &self.inner.info.name;
+        let lost = self.inner.faults.lost.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some(msg) = lost.as_ref() {
+            return Err(Error::Gpu(format!(
+                "the device on adapter '{name}' was lost ({msg}); create a new GpuContext \
+                 and resume from a checkpoint"
+            )));
+        }
+        drop(lost);
+        let mut uncaptured = self
+            .inner
+            .faults
+            .uncaptured
+            .lock()
+            .unwrap_or_else(|p| p.into_inner());
+        match uncaptured.take() {
+            Some(msg) => Err(Error::Gpu(format!("adapter '{name}': {msg}"))),
+            None => Ok(()),
+        }
+    }
+
+    /// Blocks until all submitted work has finished; errors as [`GpuContext::health`].
     pub fn wait(&self) -> Result<()> {
+        self.health()?;
         self.inner
             .device
             .poll(wgpu::PollType::wait_indefinitely())
             .map(|_| ())
-            .map_err(|e| Error::Gpu(format!("waiting for the device failed: {e}")))
+            .map_err(|e| {
+                Error::Gpu(format!(
+                    "waiting for the device on adapter '{}' failed: {e}",
+                    self.inner.info.name
+                ))
+            })?;
+        self.health()
     }
 
     /// Runs `f` inside a validation error scope and turns any captured validation or
@@ -286,8 +346,11 @@ impl GpuContext {
         let v = pollster::block_on(validation.pop());
         let o = pollster::block_on(oom.pop());
         match v.or(o) {
-            None => Ok(out),
-            Some(e) => Err(Error::Gpu(format!("{what}: {e}"))),
+            None => self.health().map(|()| out),
+            Some(e) => Err(Error::Gpu(format!(
+                "{what} on adapter '{}': {e}",
+                self.inner.info.name
+            ))),
         }
     }
 

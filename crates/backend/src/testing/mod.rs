@@ -14,7 +14,7 @@ pub use wgsl::{FieldOffset, WgslStruct, assert_mirrors, eval_wgsl, wgsl_struct};
 #[cfg(feature = "gpu")]
 use std::sync::OnceLock;
 
-use crate::Backend;
+use crate::{Backend, Restart};
 #[cfg(feature = "gpu")]
 use crate::{Error, GpuContext};
 
@@ -89,6 +89,105 @@ pub fn max_rel_diff(a: &[f64], b: &[f64], reference: &[f64]) -> f64 {
         worst = worst.max(d);
     }
     if scale > 0.0 { worst / scale } else { worst }
+}
+
+/// Environment variable through which [`check_restart`] tells its child process what to do.
+const RESTART_CHILD_ENV: &str = "SIMKIT_RESTART_CHILD";
+
+/// Checks that a checkpoint resumes bit for bit, in a new process: a run of `2 * steps`
+/// steps and a run of `steps` steps, checkpoint file, resume in a child process, and
+/// `steps` more steps must give byte-identical checkpoints (the complete state, counters
+/// included). The in-process resume is checked the same way first.
+///
+/// Call it from the `#[test]` function whose full name in the test binary is `test` (e.g.
+/// `"restart_is_bit_exact"`): the child is that test binary, run with `--exact test` and an
+/// environment variable that makes this call resume, step and write instead. `make` builds
+/// the run on `backend` (several calls in one test are told apart by the backend's name and
+/// `label`).
+///
+/// # Panics
+/// When a step fails, the states differ (the message gives the first differing byte) or the
+/// child process fails.
+pub fn check_restart<S: Restart>(
+    test: &str,
+    label: &str,
+    backend: Backend<'_>,
+    steps: u32,
+    make: impl Fn(Backend<'_>) -> crate::Result<S>,
+) {
+    let tag = format!("{label} on {}", backend.name());
+    if let Ok(job) = std::env::var(RESTART_CHILD_ENV) {
+        let Some((want, dir)) = job.split_once('|') else {
+            panic!("{RESTART_CHILD_ENV}={job}: expected <tag>|<directory>");
+        };
+        if want == tag {
+            let dir = std::path::Path::new(dir);
+            let mut run = S::resume_file(dir.join("half.ckpt"), backend)
+                .unwrap_or_else(|e| panic!("{tag}: resume failed: {e}"));
+            run.step(steps)
+                .unwrap_or_else(|e| panic!("{tag}: stepping the resumed run failed: {e}"));
+            run.write_checkpoint(dir.join("resumed.ckpt"))
+                .unwrap_or_else(|e| panic!("{tag}: writing the checkpoint failed: {e}"));
+        }
+        return;
+    }
+    let ok = |r: crate::Result<()>, what: &str| {
+        r.unwrap_or_else(|e| panic!("{tag}: {what} failed: {e}"));
+    };
+    let mut whole = make(backend).unwrap_or_else(|e| panic!("{tag}: building failed: {e}"));
+    ok(whole.step(steps.saturating_mul(2)), "the uninterrupted run");
+    let expected = whole.checkpoint().expect("checkpoint of the uninterrupted run");
+    let mut half = make(backend).unwrap_or_else(|e| panic!("{tag}: building failed: {e}"));
+    ok(half.step(steps), "the first half");
+    let dir = std::env::temp_dir().join(format!(
+        "simkit-restart-{}-{}",
+        std::process::id(),
+        tag.replace(|c: char| !c.is_ascii_alphanumeric(), "_")
+    ));
+    ok(half.write_checkpoint(dir.join("half.ckpt")), "writing the checkpoint");
+    // In this process first (clearer failures), then in a new one.
+    let bytes = std::fs::read(dir.join("half.ckpt")).expect("reading the checkpoint back");
+    let mut resumed = S::resume(&bytes, backend).unwrap_or_else(|e| panic!("{tag}: {e}"));
+    ok(resumed.step(steps), "the resumed run");
+    let here = resumed.checkpoint().expect("checkpoint of the resumed run");
+    assert_same_state(&tag, "resumed in this process", &expected, &here);
+    let exe = std::env::current_exe().expect("the test binary's path");
+    let out = std::process::Command::new(exe)
+        .args([test, "--exact", "--nocapture", "--test-threads=1"])
+        .env(RESTART_CHILD_ENV, format!("{tag}|{}", dir.display()))
+        .output()
+        .expect("starting the child test process");
+    assert!(
+        out.status.success(),
+        "{tag}: the child process failed: {}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let there = std::fs::read(dir.join("resumed.ckpt")).unwrap_or_else(|e| {
+        panic!(
+            "{tag}: the child wrote no checkpoint ({e}); is `{test}` the exact test name? \
+             child output: {}",
+            String::from_utf8_lossy(&out.stdout)
+        )
+    });
+    assert_same_state(&tag, "resumed in a new process", &expected, &there);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+fn assert_same_state(tag: &str, how: &str, expected: &[u8], got: &[u8]) {
+    if expected != got {
+        let at = expected
+            .iter()
+            .zip(got)
+            .position(|(a, b)| a != b)
+            .unwrap_or(expected.len().min(got.len()));
+        panic!(
+            "{tag}: the run {how} differs from the uninterrupted one: checkpoints of {} and {} \
+             bytes first differ at byte {at}",
+            expected.len(),
+            got.len()
+        );
+    }
 }
 
 #[cfg(test)]
