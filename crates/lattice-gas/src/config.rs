@@ -8,7 +8,7 @@ use crate::{Lattice, RuleSet};
 
 /// Which CPU backend [`crate::LatticeGas`] runs on `Backend::Cpu`. All give the same lattice
 /// bit for bit; they differ in speed and in the widths they accept.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum CpuMethod {
     /// The lookup table where the CPU has AVX-512 VBMI ([`crate::cpu::lut::has_vbmi`]: as
     /// fast per step as multi-spin, and its snapshot is a plain copy), else multi-spin when
@@ -23,7 +23,7 @@ pub enum CpuMethod {
 }
 
 /// How the GPU backend stores the lattice (ignored on the CPU).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum GpuLayout {
     /// One byte per site, four per `u32`, collision by table lookup (any width).
     Bytes,
@@ -47,7 +47,7 @@ impl GpuLayout {
 /// random bits, boundaries, inflow/outflow columns, body force) and which backend variant
 /// runs it. Every backend reads the physics fields; `cpu` is read only on the CPU and
 /// `gpu_layout` only on the GPU.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Config {
     /// Collision rules.
     pub rules: RuleSet,

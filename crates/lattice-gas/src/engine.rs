@@ -13,6 +13,9 @@ pub(crate) trait Engine: Send {
     fn state(&mut self) -> Result<Lattice>;
     /// Short backend name with the instruction set or layout that runs.
     fn name(&self) -> String;
+    /// Sets the step counter that keys the random bits (a resumed run continues the
+    /// random streams where the checkpointed run stopped).
+    fn set_steps(&mut self, steps: u64) -> Result<()>;
     /// Block sums of density and momentum over `block x block` sites of the current lattice
     /// (by default from [`Engine::state`]; multi-spin counts its bit-planes directly).
     fn block_field(&mut self, block: usize) -> Result<BlockField> {

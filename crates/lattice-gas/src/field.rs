@@ -55,8 +55,10 @@ pub struct BlockField {
 
 impl BlockField {
     /// An all-zero field of one sample over a `width x height` lattice in `block x block`
-    /// blocks; errors unless `1 <= block <= max(width, height)`.
+    /// blocks; errors unless the size is a valid lattice size (as [`Lattice::new`] checks)
+    /// and `1 <= block <= max(width, height)`.
     pub fn zeros(width: usize, height: usize, block: usize) -> Result<Self> {
+        crate::lattice::check_size(width, height)?;
         if block == 0 || block > width.max(height) {
             return Err(Error::invalid(
                 "block",

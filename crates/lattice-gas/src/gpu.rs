@@ -60,10 +60,11 @@ pub struct GpuLattice {
     n_words: u64,
     current: usize,
     steps: u64,
+    /// The device-side step counter that keys the random bits.
+    counter: GpuBuffer<u32>,
     // Kept alive for the bind groups.
     _table: GpuBuffer<u32>,
     _params: Uniform<GpuParams>,
-    _counter: GpuBuffer<u32>,
 }
 
 impl GpuLattice {
@@ -197,7 +198,7 @@ impl GpuLattice {
             steps: 0,
             _table: table,
             _params: uniform,
-            _counter: counter,
+            counter,
         })
     }
 }
@@ -229,6 +230,13 @@ impl engine::Engine for GpuLattice {
             self.steps += u64::from(batch);
             left -= batch;
         }
+        Ok(())
+    }
+
+    fn set_steps(&mut self, steps: u64) -> Result<()> {
+        // The device counter is the low 32 bits, as the CPU backends' `steps as u32`.
+        self.counter.upload(&self.ctx, &[steps as u32])?;
+        self.steps = steps;
         Ok(())
     }
 

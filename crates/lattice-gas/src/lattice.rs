@@ -172,7 +172,8 @@ impl Lattice {
     }
 }
 
-fn check_size(width: usize, height: usize) -> Result<()> {
+/// Checks a lattice size: both sides at least 1, at most 2^32 - 1 sites (overflow-safe).
+pub(crate) fn check_size(width: usize, height: usize) -> Result<()> {
     if width == 0 || height == 0 {
         return Err(Error::invalid(
             "lattice size",

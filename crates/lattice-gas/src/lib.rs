@@ -14,6 +14,9 @@
 //!   [`MultiSpinCpu`] (64-site bit-planes, boolean collisions, AVX-512/AVX2 dispatch) and,
 //!   with the `gpu` feature, `GpuLattice` (WGSL, [`GpuLayout::BitPlanes`] or
 //!   [`GpuLayout::Bytes`]).
+//! - Checkpoints: [`LatticeGas`] implements [`simkit_backend::Restart`] (`checkpoint`,
+//!   `write_checkpoint`, `resume`, `resume_file`): the settings, the lattice and the step
+//!   counter that keys the random bits, so a resumed run continues bit for bit, on any backend.
 //! - [`viscosity`]: the shear-wave viscosity measurement and the FHP-I theory.
 //! - [`field`]: the lattice vectors and [`field::BlockField`], block sums of density and
 //!   momentum (filled from site bytes or straight from the multi-spin bit-planes).

@@ -17,7 +17,7 @@ use crate::WALL;
 const MOMENTUM: [(i32, i32); 6] = [(2, 0), (1, -1), (-1, -1), (-2, 0), (-1, 1), (1, 1)];
 
 /// Which collisions are active.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum RuleSet {
     /// Classic FHP-I: head-on pairs rotate by +-60 degrees at random, symmetric triples
     /// rotate by 60 degrees. Viscosity `1/(12 d (1-d)^3) - 1/8`.

@@ -292,6 +292,11 @@ impl engine::Engine for LutCpu {
         Ok(())
     }
 
+    fn set_steps(&mut self, steps: u64) -> Result<()> {
+        self.steps = steps;
+        Ok(())
+    }
+
     fn state(&mut self) -> Result<Lattice> {
         Ok(self.lattice.clone())
     }

@@ -336,6 +336,11 @@ impl engine::Engine for MultiSpinCpu {
         Ok(())
     }
 
+    fn set_steps(&mut self, steps: u64) -> Result<()> {
+        self.steps = steps;
+        Ok(())
+    }
+
     fn state(&mut self) -> Result<Lattice> {
         let (w, h, nw) = (self.width, self.height, self.nw);
         let mut cells = vec![0u8; w * h];
