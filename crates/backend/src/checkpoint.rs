@@ -286,7 +286,13 @@ mod tests {
     use super::*;
 
     fn sample() -> Vec<u8> {
-        encode("simkit-x", "0.1.0", "X<f64>", &(7u64, vec![1.5f64, f64::MIN_POSITIVE])).unwrap()
+        encode(
+            "simkit-x",
+            "0.1.0",
+            "X<f64>",
+            &(7u64, vec![1.5f64, f64::MIN_POSITIVE]),
+        )
+        .unwrap()
     }
 
     fn reason(e: Error) -> String {

@@ -105,7 +105,7 @@ mod tests {
             for &n in calls {
                 for s in chunks(done, n, 40) {
                     done += u64::from(s);
-                    if done % 40 == 0 {
+                    if done.is_multiple_of(40) {
                         out.push(done);
                     }
                 }
@@ -126,6 +126,9 @@ mod tests {
         assert_eq!(first_non_finite(&long), Some(150_001));
         let e = blow_up(300, 200, "cell (3, 4): u = NaN", "dt over the bound");
         let s = e.to_string();
-        assert!(s.contains("300") && s.contains("(3, 4)") && s.contains("step 200"), "{s}");
+        assert!(
+            s.contains("300") && s.contains("(3, 4)") && s.contains("step 200"),
+            "{s}"
+        );
     }
 }

@@ -41,9 +41,9 @@ macro_rules! wgsl {
 pub mod atomic;
 pub mod checkpoint;
 pub mod error;
-pub mod guard;
 #[cfg(feature = "gpu")]
 pub mod gpu;
+pub mod guard;
 pub mod pool;
 pub mod prefix;
 mod real;
@@ -51,9 +51,9 @@ pub mod rng;
 mod simulation;
 pub mod testing;
 
+pub use checkpoint::Restart;
 pub use error::{Error, Result, require_finite, require_non_negative, require_positive};
 #[cfg(feature = "gpu")]
 pub use gpu::{GpuBuffer, GpuContext, GpuScan, Kernel, KernelDesc};
 pub use real::{Precision, Real, max_or_nan};
-pub use checkpoint::Restart;
 pub use simulation::{Backend, Simulation};

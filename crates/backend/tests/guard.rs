@@ -40,7 +40,10 @@ fn finite_tests_on_bits_match_rust() {
         &xs,
     )
     .unwrap();
-    let want: Vec<u32> = special_f32().iter().map(|x| u32::from(x.is_finite())).collect();
+    let want: Vec<u32> = special_f32()
+        .iter()
+        .map(|x| u32::from(x.is_finite()))
+        .collect();
     assert_eq!(got, want);
     let doubles = [
         0.0f64,
@@ -134,8 +137,7 @@ fn guard_finds_the_first_bad_value_and_rolls_back() {
 
 #[test]
 fn errors_outside_scopes_and_lost_devices_are_errs_naming_the_adapter() {
-    if gpu_or_skip("errors_outside_scopes_and_lost_devices_are_errs_naming_the_adapter").is_none()
-    {
+    if gpu_or_skip("errors_outside_scopes_and_lost_devices_are_errs_naming_the_adapter").is_none() {
         return;
     }
     // A context of its own: this test destroys its device.

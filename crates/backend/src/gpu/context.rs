@@ -295,7 +295,12 @@ impl GpuContext {
     /// a failure surfaces as `Err` from the next simkit call instead of a panic.
     pub fn health(&self) -> Result<()> {
         let name = &self.inner.info.name;
-        let lost = self.inner.faults.lost.lock().unwrap_or_else(|p| p.into_inner());
+        let lost = self
+            .inner
+            .faults
+            .lost
+            .lock()
+            .unwrap_or_else(|p| p.into_inner());
         if let Some(msg) = lost.as_ref() {
             return Err(Error::Gpu(format!(
                 "the device on adapter '{name}' was lost ({msg}); create a new GpuContext \

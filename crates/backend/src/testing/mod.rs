@@ -136,7 +136,9 @@ pub fn check_restart<S: Restart>(
     };
     let mut whole = make(backend).unwrap_or_else(|e| panic!("{tag}: building failed: {e}"));
     ok(whole.step(steps.saturating_mul(2)), "the uninterrupted run");
-    let expected = whole.checkpoint().expect("checkpoint of the uninterrupted run");
+    let expected = whole
+        .checkpoint()
+        .expect("checkpoint of the uninterrupted run");
     let mut half = make(backend).unwrap_or_else(|e| panic!("{tag}: building failed: {e}"));
     ok(half.step(steps), "the first half");
     let dir = std::env::temp_dir().join(format!(
@@ -144,7 +146,10 @@ pub fn check_restart<S: Restart>(
         std::process::id(),
         tag.replace(|c: char| !c.is_ascii_alphanumeric(), "_")
     ));
-    ok(half.write_checkpoint(dir.join("half.ckpt")), "writing the checkpoint");
+    ok(
+        half.write_checkpoint(dir.join("half.ckpt")),
+        "writing the checkpoint",
+    );
     // In this process first (clearer failures), then in a new one.
     let bytes = std::fs::read(dir.join("half.ckpt")).expect("reading the checkpoint back");
     let mut resumed = S::resume(&bytes, backend).unwrap_or_else(|e| panic!("{tag}: {e}"));
