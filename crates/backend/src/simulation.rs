@@ -12,10 +12,15 @@ pub trait Simulation {
     /// Host-side snapshot of the simulation state.
     type State;
     /// Advances the simulation by `steps` time steps (GPU backends: without host round trips).
+    ///
+    /// Time-stepping crates check the state while they step (see [`crate::guard`]): a run
+    /// that turns non-finite or leaves its model's limits returns [`Error::BlowUp`] and is
+    /// put back to the last state that passed the check.
     fn step(&mut self, steps: u32) -> Result<(), Error>;
     /// Returns a snapshot of the current state (GPU backends download it).
     fn state(&mut self) -> Result<Self::State, Error>;
-    /// Number of steps taken since construction.
+    /// Number of steps of this run (a run resumed from a checkpoint counts from the
+    /// checkpoint's step).
     fn steps_done(&self) -> u64;
     /// Short human-readable backend name, e.g. `"cpu"`, `"cpu-multispin"`, `"gpu (llvmpipe)"`.
     fn backend_name(&self) -> String;
