@@ -12,7 +12,7 @@
 use simkit_backend::{Error, Real, Result};
 
 /// The condition on one edge of the grid.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Boundary {
     /// Zero normal gradient (mirror): nothing flows through the edge.
     NoFlux,
@@ -36,7 +36,7 @@ impl Boundary {
 
 /// Boundary conditions on the four edges (west = `i = 0`, east = `i = nx - 1`,
 /// south = `j = 0`, north = `j = ny - 1`).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Boundaries {
     /// Edge at `i = 0`.
     pub west: Boundary,

@@ -1,5 +1,7 @@
 //! Run configuration: time stepping, CPU temporal blocking and the GPU kernel options.
 
+use serde::{Deserialize, Serialize};
+use simkit_backend::guard::DEFAULT_CHECK_EVERY;
 use simkit_backend::{Error, Result, require_positive};
 
 use crate::stepper::Stepping;
@@ -11,7 +13,7 @@ pub const DEFAULT_STEPS_PER_SWEEP: u32 = 4;
 pub(crate) const MAX_STEPS_PER_SWEEP: u32 = 16;
 
 /// Which stencil kernel the GPU backend runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum GpuKernel {
     /// Tile plus one-cell halo staged in workgroup memory.
     #[default]
@@ -21,7 +23,7 @@ pub enum GpuKernel {
 }
 
 /// GPU backend options (plain data: the CPU backend ignores them).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct GpuOptions {
     /// Stencil kernel.
     pub kernel: GpuKernel,
@@ -44,7 +46,7 @@ impl Default for GpuOptions {
 }
 
 /// Everything a run needs besides the grid and the model.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Config {
     /// Time step, integrator and stability guard.
     pub stepping: Stepping,
@@ -55,16 +57,32 @@ pub struct Config {
     /// value, only the speed changes. Ignored by the GPU backend. Default
     /// [`DEFAULT_STEPS_PER_SWEEP`].
     pub steps_per_sweep: u32,
+    /// Interval, in steps counted from step 0, of the blow-up check inside `step(n)`: every
+    /// field finite and, for a model whose diffusivity depends on the fields (with the guard
+    /// enforced), `dt` still within the stability bound of the current fields. A failed
+    /// check returns [`simkit_backend::Error::BlowUp`] (see [`crate::Rd`]). `0` turns the
+    /// interval checks off; the check at the end of every `step(n)` call stays. Checks never
+    /// change the results. Default [`DEFAULT_CHECK_EVERY`] (100).
+    pub check_every: u32,
 }
 
 impl Config {
-    /// The given stepping with default GPU options and [`DEFAULT_STEPS_PER_SWEEP`].
+    /// The given stepping with default GPU options, [`DEFAULT_STEPS_PER_SWEEP`] and a
+    /// blow-up check every [`DEFAULT_CHECK_EVERY`] steps.
     pub fn new(stepping: Stepping) -> Self {
         Self {
             stepping,
             gpu: GpuOptions::default(),
             steps_per_sweep: DEFAULT_STEPS_PER_SWEEP,
+            check_every: DEFAULT_CHECK_EVERY,
         }
+    }
+
+    /// Sets the interval of the blow-up check (see [`Config::check_every`]; 0 = only at the
+    /// end of each `step(n)` call).
+    pub fn with_check_every(mut self, check_every: u32) -> Self {
+        self.check_every = check_every;
+        self
     }
 
     /// Sets the GPU options.
@@ -81,7 +99,7 @@ impl Config {
     }
 
     /// Checks the settings that do not depend on the grid, the model or the device: `dt`
-    /// finite and positive, `steps_per_sweep` in 1..=16, a GPU tile of at least 1 x 1 and at
+    /// finite and positive, `steps_per_sweep` in 1..=16 (every `check_every` is valid), a GPU tile of at least 1 x 1 and at
     /// least one step per submission. The stability bound is checked when the simulation is
     /// built (it needs the fields), the tile against the device limits when the GPU backend
     /// is built.

@@ -1,14 +1,18 @@
 //! CPU backend: cache-blocked tiles of the padded grid, processed in parallel with rayon.
 
 use rayon::prelude::*;
-use simkit_backend::{Real, Result};
+use simkit_backend::guard::{blow_up, chunks};
+use simkit_backend::{Error, Real, Result};
 
 use crate::boundary::fill_ghosts;
 use crate::config::Config;
 use crate::engine::Engine;
-use crate::grid::{Grid, pad};
+use crate::grid::{Grid, first_bad_cell, pad};
 use crate::model::{Model, RowIn};
-use crate::stepper::{Integrator, Stepping, check_dt, check_dt_with, check_model, checked_bound};
+use crate::stepper::{
+    Integrator, Stepping, check_dt, check_dt_with, check_model, checked_bound, divergence_cause,
+    dt_bound, recheck_bound,
+};
 use crate::sweep::{ScratchPool, Sweep, can_fuse};
 use simkit_backend::max_or_nan;
 
@@ -33,6 +37,9 @@ const FUSED_BAND_ROWS: usize = 64;
 /// (temporal blocking: intermediate steps of a band of rows stay in a small per-thread
 /// buffer), bit-identical to one pass per step; Heun and grids with periodic south/north
 /// edges take one pass per stage.
+///
+/// The blow-up check keeps a copy of the padded fields as they were at the last check that
+/// passed (`good`, one copy per check) and puts it back when a check fails.
 #[derive(Debug)]
 pub(crate) struct CpuRd<T: Real, M: Model> {
     model: M,
@@ -41,18 +48,21 @@ pub(crate) struct CpuRd<T: Real, M: Model> {
     cur: Vec<T>,
     tmp: Vec<T>,
     coef: Vec<T>,
+    /// The padded fields at the last check that passed.
+    good: Vec<T>,
     steps: u64,
     snapshot_fresh: bool,
     steps_per_sweep: u32,
+    check_every: u32,
     scratch: ScratchPool<T>,
     /// Largest effective diffusivity of the current fields, when the last sweep found it.
     next_dmax: Option<f64>,
 }
 
 impl<T: Real, M: Model> CpuRd<T, M> {
-    /// Builds the simulation from a validated `config`; checks the model against the grid
-    /// and `dt` against the stability bound (unless overridden).
-    pub(crate) fn new(grid: Grid<T>, model: M, config: &Config) -> Result<Self> {
+    /// Builds the simulation from a validated `config`, `steps` steps into the run; checks
+    /// the model against the grid and `dt` against the stability bound (unless overridden).
+    pub(crate) fn new(grid: Grid<T>, model: M, config: &Config, steps: u64) -> Result<Self> {
         let stepping = config.stepping;
         check_model(&model, &grid)?;
         check_dt(&model, &grid, &stepping)?;
@@ -73,6 +83,7 @@ impl<T: Real, M: Model> CpuRd<T, M> {
             fill_ghosts(f, nx, ny, 0, &cbc);
         }
         let tmp = cur.clone();
+        let good = cur.clone();
         Ok(Self {
             model,
             grid,
@@ -80,9 +91,11 @@ impl<T: Real, M: Model> CpuRd<T, M> {
             cur,
             tmp,
             coef,
-            steps: 0,
+            good,
+            steps,
             snapshot_fresh: true,
             steps_per_sweep: config.steps_per_sweep,
+            check_every: config.check_every,
             scratch: ScratchPool::default(),
             next_dmax: None,
         })
@@ -183,6 +196,43 @@ impl<T: Real, M: Model> CpuRd<T, M> {
         d
     }
 
+    /// Advances `steps >= 1` steps in stretches that end on multiples of `check_every`,
+    /// checks after each (see [`Engine::step`]), and puts the last state that passed back
+    /// when a finite check fails.
+    fn checked_run(&mut self, steps: u32) -> Result<()> {
+        let (nx, ny, h) = (self.grid.nx(), self.grid.ny(), self.grid.h());
+        let recheck = self.model.field_dependent_diffusivity();
+        self.good.copy_from_slice(&self.cur);
+        let mut good_step = self.steps;
+        let mut stretches = chunks(self.steps, steps, self.check_every).peekable();
+        while let Some(n) = stretches.next() {
+            self.advance(n);
+            self.snapshot_fresh = false;
+            self.steps += u64::from(n);
+            if let Some(what) = first_bad_cell(&self.cur, nx, ny) {
+                let failed = self.steps;
+                self.cur.copy_from_slice(&self.good);
+                self.steps = good_step;
+                self.next_dmax = None;
+                let bound = dt_bound(self.max_diffusivity(), h);
+                let cause = divergence_cause(self.model.name(), &self.stepping, bound);
+                return Err(blow_up(failed, good_step, what, cause));
+            }
+            if stretches.peek().is_some() {
+                if recheck {
+                    let d = match self.next_dmax {
+                        Some(d) => d,
+                        None => self.max_diffusivity(),
+                    };
+                    recheck_bound(self.model.name(), d, h, &self.stepping, self.steps)?;
+                }
+                self.good.copy_from_slice(&self.cur);
+                good_step = self.steps;
+            }
+        }
+        Ok(())
+    }
+
     /// Advances `steps` steps.
     fn advance(&mut self, steps: u32) {
         let mut cur = std::mem::take(&mut self.cur);
@@ -224,6 +274,17 @@ impl<T: Real, M: Model> CpuRd<T, M> {
 
 impl<T: Real, M: Model> Engine<T, M> for CpuRd<T, M> {
     fn step(&mut self, steps: u32) -> Result<()> {
+        let end = self.steps.checked_add(u64::from(steps));
+        if end.is_none() {
+            return Err(Error::invalid(
+                "steps",
+                steps,
+                format!(
+                    "{} steps are done: the step counter would overflow",
+                    self.steps
+                ),
+            ));
+        }
         if self.model.field_dependent_diffusivity() {
             let d = match self.next_dmax {
                 Some(d) => d,
@@ -231,15 +292,12 @@ impl<T: Real, M: Model> Engine<T, M> for CpuRd<T, M> {
             };
             check_dt_with(self.model.name(), d, self.grid.h(), &self.stepping)?;
         }
-        // The whole loop on a pool thread: no hand-over to the pool per sweep.
-        simkit_backend::pool::on_pool(|| self.advance(steps));
-        if steps > 0 {
-            self.snapshot_fresh = false;
+        if steps == 0 {
+            return Ok(());
         }
-        self.steps += u64::from(steps);
-        Ok(())
+        // The whole loop on a pool thread: no hand-over to the pool per sweep.
+        simkit_backend::pool::on_pool(|| self.checked_run(steps))
     }
-
     fn state(&mut self) -> Result<Grid<T>> {
         self.refresh_snapshot();
         Ok(self.grid.clone())

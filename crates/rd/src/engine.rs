@@ -9,8 +9,11 @@ use crate::stepper::Stepping;
 
 /// One backend instance (CPU or GPU) advancing a grid of `T` under model `M`.
 pub(crate) trait Engine<T: Real, M: Model>: Send {
-    /// Advances `steps` steps; for models whose diffusivity depends on the fields, the
-    /// stability bound is re-checked first from the current fields.
+    /// Advances `steps` steps with the blow-up checks (see [`crate::Rd`]): the bound from
+    /// the current fields first (`Error::Unstable`, nothing done), then in stretches ending
+    /// on multiples of `check_every` and at the end of the call, each followed by the finite
+    /// check (on failure: back to the last state that passed, `Error::BlowUp`) and, inside
+    /// the call, the bound re-check (on failure: stop there, `Error::BlowUp`).
     fn step(&mut self, steps: u32) -> Result<()>;
     /// The current fields.
     fn state(&mut self) -> Result<Grid<T>>;

@@ -6,15 +6,19 @@
 
 use std::fmt::Write as _;
 
-use simkit_backend::gpu::DISPATCH_WGSL;
+use simkit_backend::gpu::{DISPATCH_WGSL, GpuGuard, GuardReport, Watch};
+use simkit_backend::guard::{blow_up, chunks};
 use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Real, Result};
 
 use crate::boundary::{Boundary, fill_ghosts};
 use crate::config::{Config, GpuKernel, GpuOptions};
 use crate::engine::Engine;
-use crate::grid::{Grid, pad};
+use crate::grid::{Grid, first_bad_cell, pad};
 use crate::model::Model;
-use crate::stepper::{Integrator, Stepping, check_dt, check_dt_with, check_model, checked_bound};
+use crate::stepper::{
+    Guard, Integrator, Stepping, check_dt, check_dt_with, check_model, checked_bound,
+    divergence_cause, dt_bound, recheck_bound,
+};
 
 const COMMON_WGSL: &str = simkit_backend::wgsl!("stencil_common.wgsl");
 const TILED_WGSL: &str = simkit_backend::wgsl!("stencil_tiled.wgsl");
@@ -75,7 +79,11 @@ fn header_wgsl<T: Real>() -> String {
 /// The stability bound is checked at construction, at `set_stepping` and, for models whose
 /// diffusivity depends on the fields, again before each `step` call from the current fields:
 /// a reduction kernel finds the largest effective diffusivity on the device (in f32) and only
-/// that one number is read back.
+/// that one number is read back; inside a call the same reduction runs at every check (one
+/// number read back per `check_every` steps) when the guard is enforced.
+///
+/// The finite checks run on the device ([`GpuGuard`], watching both ping-pong buffers of
+/// every species), with one small download per `step` call.
 pub(crate) struct GpuRd<T: Real, M: Model> {
     ctx: GpuContext,
     model: M,
@@ -94,6 +102,8 @@ pub(crate) struct GpuRd<T: Real, M: Model> {
     stencil_avg: Kernel,
     cur_is_a: bool,
     reduce: Option<Reduce>,
+    guard: GpuGuard,
+    check_every: u32,
     steps: u64,
     snapshot_fresh: bool,
     // Kept alive for the bind groups.
@@ -208,7 +218,14 @@ impl<T: Real, M: Model> GpuRd<T, M> {
     /// Uploads the grid and builds the kernels from a validated `config` (its stepping and
     /// GPU options). Errors: bad model/grid/dt (as on the CPU), `f64` without `SHADER_F64`, a
     /// tile over the device's workgroup limits, a grid over the buffer or dispatch limits.
-    pub(crate) fn new(ctx: &GpuContext, grid: Grid<T>, model: M, config: &Config) -> Result<Self> {
+    /// The run starts `steps` steps in.
+    pub(crate) fn new(
+        ctx: &GpuContext,
+        grid: Grid<T>,
+        model: M,
+        config: &Config,
+        steps: u64,
+    ) -> Result<Self> {
         let (stepping, options) = (config.stepping, config.gpu);
         check_model(&model, &grid)?;
         check_dt(&model, &grid, &stepping)?;
@@ -230,7 +247,8 @@ impl<T: Real, M: Model> GpuRd<T, M> {
         let nf = ns + model.coefficients().len();
         let (tx, ty) = options.tile;
         let lim = ctx.limits();
-        let tile_bytes = u64::from(tx + 2) * u64::from(ty + 2) * nf as u64 * size_of::<T>() as u64;
+        let tile_bytes =
+            (u64::from(tx) + 2) * (u64::from(ty) + 2) * nf as u64 * size_of::<T>() as u64;
         if tx == 0
             || ty == 0
             || tx > lim.max_compute_workgroup_size_x
@@ -398,6 +416,12 @@ impl<T: Real, M: Model> GpuRd<T, M> {
         } else {
             None
         };
+        let watches: Vec<Watch<'_>> = a
+            .iter()
+            .chain(&b)
+            .map(|buf| Watch::checked(buf, T::PRECISION))
+            .collect();
+        let guard = GpuGuard::new(ctx, &watches)?;
         Ok(Self {
             ctx: ctx.clone(),
             model,
@@ -416,7 +440,9 @@ impl<T: Real, M: Model> GpuRd<T, M> {
             stencil_avg,
             cur_is_a: true,
             reduce,
-            steps: 0,
+            guard,
+            check_every: config.check_every,
+            steps,
             snapshot_fresh: true,
             b,
             _coef: coef,
@@ -479,6 +505,76 @@ impl<T: Real, M: Model> GpuRd<T, M> {
         Ok(())
     }
 
+    /// Records `n` steps into `enc`, submitting it (and starting a new one) whenever
+    /// `steps_per_submit` steps are in it; `in_encoder` counts the steps already there.
+    fn record_steps(
+        &mut self,
+        enc: &mut wgpu::CommandEncoder,
+        in_encoder: &mut u32,
+        n: u32,
+    ) -> Result<()> {
+        let mut left = n;
+        while left > 0 {
+            let m = left.min(self.options.steps_per_submit - *in_encoder);
+            {
+                let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("rd steps"),
+                    timestamp_writes: None,
+                });
+                for _ in 0..m {
+                    self.record_step(&mut pass)?;
+                }
+            }
+            left -= m;
+            *in_encoder += m;
+            if *in_encoder == self.options.steps_per_submit {
+                self.ctx
+                    .submit(std::mem::replace(enc, self.ctx.encoder("rd steps")));
+                *in_encoder = 0;
+            }
+        }
+        Ok(())
+    }
+
+    /// After a failed finite check: puts the buffers back to the last check that passed
+    /// (`report.passed` of `checks`), names the first bad cell (by running the failed stretch
+    /// again from there and reading the fields, then going back again) and returns the
+    /// [`Error::BlowUp`].
+    fn roll_back(&mut self, report: &GuardReport, checks: &[(u64, bool)]) -> Result<()> {
+        let passed = report.passed as usize;
+        let Some(&(good_step, good_a)) = passed.checked_sub(1).and_then(|k| checks.get(k)) else {
+            return Err(Error::Gpu(format!(
+                "the blow-up check found the state at the start of the step call non-finite \
+                 ({:?}); rebuild the simulation from finite fields",
+                report.bad
+            )));
+        };
+        let failed = checks.get(passed).map_or(self.steps, |c| c.0);
+        self.guard.rollback(&self.ctx)?;
+        self.steps = good_step;
+        self.cur_is_a = good_a;
+        self.snapshot_fresh = false;
+        let mut enc = self.ctx.encoder("rd steps (locating the blow-up)");
+        let mut in_encoder = 0;
+        // At most one stretch: at most u32::MAX steps.
+        self.record_steps(&mut enc, &mut in_encoder, (failed - good_step) as u32)?;
+        self.ctx.submit(enc);
+        let mut data = Vec::new();
+        for buf in self.current() {
+            data.extend(buf.download(&self.ctx)?);
+        }
+        self.guard.rollback(&self.ctx)?;
+        self.cur_is_a = good_a;
+        let (nx, ny) = (self.grid.nx(), self.grid.ny());
+        let what = first_bad_cell(&data, nx, ny).unwrap_or_else(|| match &report.bad {
+            Some((label, i)) => format!("buffer '{label}' at index {i} is not finite"),
+            None => "a non-finite value".into(),
+        });
+        let bound = dt_bound(self.max_diffusivity()?, self.grid.h());
+        let cause = divergence_cause(self.model.name(), &self.stepping, bound);
+        Err(blow_up(failed, good_step, what, cause))
+    }
+
     fn current(&self) -> &[GpuBuffer<T>] {
         if self.cur_is_a { &self.a } else { &self.b }
     }
@@ -499,7 +595,18 @@ impl<T: Real, M: Model> GpuRd<T, M> {
 
 impl<T: Real, M: Model> Engine<T, M> for GpuRd<T, M> {
     fn step(&mut self, steps: u32) -> Result<()> {
-        if self.model.field_dependent_diffusivity() {
+        if self.steps.checked_add(u64::from(steps)).is_none() {
+            return Err(Error::invalid(
+                "steps",
+                steps,
+                format!(
+                    "{} steps are done: the step counter would overflow",
+                    self.steps
+                ),
+            ));
+        }
+        let field_dependent = self.model.field_dependent_diffusivity();
+        if field_dependent {
             check_dt_with(
                 self.model.name(),
                 self.max_diffusivity()?,
@@ -507,33 +614,55 @@ impl<T: Real, M: Model> Engine<T, M> for GpuRd<T, M> {
                 &self.stepping,
             )?;
         }
+        if steps == 0 {
+            return Ok(());
+        }
         if self.stepping.integrator == Integrator::Heun {
             self.settle_in_a()?;
         }
-        let mut left = steps;
-        while left > 0 {
-            let n = left.min(self.options.steps_per_submit);
-            let mut enc = self.ctx.encoder("rd steps");
-            {
-                let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("rd steps"),
-                    timestamp_writes: None,
-                });
-                for _ in 0..n {
-                    self.record_step(&mut pass)?;
+        let recheck = field_dependent && self.stepping.guard == Guard::Enforce;
+        self.guard.begin(&self.ctx)?;
+        // Step and ping-pong side of every recorded check, in order (the first is the start).
+        let mut checks = vec![(self.steps, self.cur_is_a)];
+        let mut enc = self.ctx.encoder("rd steps");
+        self.guard.record(&self.ctx, &mut enc)?;
+        let mut in_encoder = 0;
+        let mut stretches = chunks(self.steps, steps, self.check_every).peekable();
+        while let Some(n) = stretches.next() {
+            self.record_steps(&mut enc, &mut in_encoder, n)?;
+            self.steps += u64::from(n);
+            self.snapshot_fresh = false;
+            self.guard.record(&self.ctx, &mut enc)?;
+            checks.push((self.steps, self.cur_is_a));
+            if recheck && stretches.peek().is_some() {
+                self.ctx
+                    .submit(std::mem::replace(&mut enc, self.ctx.encoder("rd steps")));
+                in_encoder = 0;
+                let d = self.max_diffusivity()?;
+                let bound = recheck_bound(
+                    self.model.name(),
+                    d,
+                    self.grid.h(),
+                    &self.stepping,
+                    self.steps,
+                );
+                if let Err(e) = bound {
+                    // A non-finite state also gives a NaN D_max: the finite check decides.
+                    let report = self.guard.report(&self.ctx)?;
+                    if report.bad.is_some() {
+                        return self.roll_back(&report, &checks);
+                    }
+                    return Err(e);
                 }
             }
-            self.ctx.submit(enc);
-            left -= n;
         }
-        self.ctx.wait()?;
-        if steps > 0 {
-            self.snapshot_fresh = false;
+        self.ctx.submit(enc);
+        let report = self.guard.report(&self.ctx)?;
+        if report.bad.is_some() {
+            return self.roll_back(&report, &checks);
         }
-        self.steps += u64::from(steps);
         Ok(())
     }
-
     fn state(&mut self) -> Result<Grid<T>> {
         if !self.snapshot_fresh {
             let mut data = Vec::new();

@@ -4,6 +4,7 @@ use rayon::prelude::*;
 use simkit_backend::{Error, Real, Result, require_positive};
 
 use crate::boundary::Boundaries;
+use simkit_backend::guard::first_non_finite;
 use simkit_backend::max_or_nan;
 
 /// One or more species fields on an `nx x ny` grid of square cells of side `h`.
@@ -28,15 +29,9 @@ impl<T: Real> Grid<T> {
         boundaries: Boundaries,
         fields: Vec<Vec<T>>,
     ) -> Result<Self> {
-        check_size(nx, ny)?;
+        let n = check_size(nx, ny)?;
         require_positive("grid spacing h", h)?;
-        if fields.is_empty() {
-            return Err(Error::invalid(
-                "fields",
-                0,
-                "give at least one species field",
-            ));
-        }
+        check_values(n, fields.len())?;
         for (s, f) in fields.iter().enumerate() {
             if f.len() != nx * ny {
                 return Err(Error::invalid(
@@ -63,8 +58,8 @@ impl<T: Real> Grid<T> {
         })
     }
 
-    /// A grid with `species` fields, all set to `value`. The size is checked (as in
-    /// [`Grid::new`]) before anything is allocated.
+    /// A grid with `species` fields, all set to `value`. The size (`nx * ny * species`
+    /// values, overflow-safe) is checked before anything is allocated.
     pub fn uniform(
         nx: usize,
         ny: usize,
@@ -74,6 +69,7 @@ impl<T: Real> Grid<T> {
         value: T,
     ) -> Result<Self> {
         let n = check_size(nx, ny)?;
+        check_values(n, species)?;
         Self::new(nx, ny, h, boundaries, vec![vec![value; n]; species])
     }
 
@@ -101,13 +97,22 @@ impl<T: Real> Grid<T> {
     pub fn fields(&self) -> &[Vec<T>] {
         &self.fields
     }
-    /// Field `s` (row-major, `j * nx + i`); panics if `s >= species()`.
+    /// Field `s` (row-major, `j * nx + i`); the empty slice if there is no species `s`
+    /// (`s >= species()`; [`Grid::try_field`] tells the two apart).
     pub fn field(&self, s: usize) -> &[T] {
-        &self.fields[s]
+        self.try_field(s).unwrap_or(&[])
+    }
+    /// Field `s` (row-major, `j * nx + i`), or `None` if `s >= species()`.
+    pub fn try_field(&self, s: usize) -> Option<&[T]> {
+        self.fields.get(s).map(Vec::as_slice)
     }
     /// Mutable field `s`: values written here are checked again when a simulation is built.
+    /// The empty slice if there is no species `s` (`s >= species()`).
     pub fn field_mut(&mut self, s: usize) -> &mut [T] {
-        &mut self.fields[s]
+        match self.fields.get_mut(s) {
+            Some(f) => f,
+            None => &mut [],
+        }
     }
     /// Value of species `s` at cell `(i, j)`, or `None` if there is no such species
     /// (`s >= species()`) or cell (`i >= nx()` or `j >= ny()`).
@@ -117,16 +122,21 @@ impl<T: Real> Grid<T> {
         }
         self.fields.get(s)?.get(j * self.nx + i).copied()
     }
-    /// Integral of species `s` over the domain, `h^2 * sum`, accumulated in `f64`.
+    /// Integral of species `s` over the domain, `h^2 * sum`, accumulated in `f64`; NaN if
+    /// there is no species `s` or a value is NaN.
     pub fn total(&self, s: usize) -> f64 {
-        self.fields[s].iter().map(|v| v.to_f64()).sum::<f64>() * self.h * self.h
+        match self.fields.get(s) {
+            Some(f) => f.iter().map(|v| v.to_f64()).sum::<f64>() * self.h * self.h,
+            None => f64::NAN,
+        }
     }
-    /// Largest absolute value of species `s`: NaN if any value is NaN (a blown-up run).
+    /// Largest absolute value of species `s`: NaN if any value is NaN (a blown-up run) or
+    /// if there is no species `s`.
     pub fn max_abs(&self, s: usize) -> f64 {
-        self.fields[s]
-            .iter()
-            .map(|v| v.to_f64().abs())
-            .fold(0.0, max_or_nan)
+        match self.fields.get(s) {
+            Some(f) => f.iter().map(|v| v.to_f64().abs()).fold(0.0, max_or_nan),
+            None => f64::NAN,
+        }
     }
     /// Converts to another precision.
     pub fn convert<U: Real>(&self) -> Grid<U> {
@@ -161,9 +171,36 @@ impl<T: Real> Grid<T> {
     }
 }
 
+/// Most values (cells times species) a grid may hold: 32-bit indexing of the padded planes
+/// with room to spare, and at most 4 GiB of `f64` per copy of the state.
+const MAX_VALUES: usize = u32::MAX as usize / 8;
+
+/// Checks `species` fields of `cells` cells each: at least one field, and at most
+/// [`MAX_VALUES`] values in all (overflow-safe).
+fn check_values(cells: usize, species: usize) -> Result<()> {
+    if species == 0 {
+        return Err(Error::invalid(
+            "fields",
+            0,
+            "give at least one species field",
+        ));
+    }
+    match cells.checked_mul(species) {
+        Some(n) if n <= MAX_VALUES => Ok(()),
+        _ => Err(Error::invalid(
+            "number of species fields",
+            species,
+            format!(
+                "{species} fields of {cells} cells exceed {MAX_VALUES} values; use fewer \
+                 species or a smaller grid"
+            ),
+        )),
+    }
+}
+
 /// Checks `nx x ny` (both >= 1, cell count small enough for 32-bit indexing; overflow-safe)
 /// and returns the cell count.
-fn check_size(nx: usize, ny: usize) -> Result<usize> {
+pub(crate) fn check_size(nx: usize, ny: usize) -> Result<usize> {
     if nx == 0 || ny == 0 {
         return Err(Error::invalid(
             "grid size",
@@ -172,7 +209,7 @@ fn check_size(nx: usize, ny: usize) -> Result<usize> {
         ));
     }
     match nx.checked_mul(ny) {
-        Some(n) if n <= u32::MAX as usize / 8 => Ok(n),
+        Some(n) if n <= MAX_VALUES => Ok(n),
         _ => Err(Error::invalid(
             "grid size",
             format!("{nx} x {ny}"),
@@ -193,4 +230,39 @@ pub(crate) fn pad<T: Real>(fields: &[Vec<T>], nx: usize, ny: usize) -> Vec<T> {
         }
     }
     out
+}
+
+/// Where padded storage (species planes of `(nx + 2) x (ny + 2)`, as [`pad`] lays them out)
+/// first holds a non-finite value: the first bad interior cell in species, row, column
+/// order, as `"species s at cell (x, y) = value"`, or, when every interior value is finite,
+/// the first bad ghost cell. `None` when every value is finite.
+pub(crate) fn first_bad_cell<T: Real>(padded: &[T], nx: usize, ny: usize) -> Option<String> {
+    first_non_finite(padded)?;
+    let w = nx + 2;
+    let plane = w * (ny + 2);
+    let mut ghost = None;
+    for (s, p) in padded.chunks(plane).enumerate() {
+        let mut from = 0;
+        while let Some(k) = first_non_finite(&p[from..]) {
+            let k = from + k;
+            let (i, j) = (k % w, k / w);
+            if (1..=nx).contains(&i) && (1..=ny).contains(&j) {
+                return Some(format!(
+                    "species {s} at cell ({}, {}) = {}",
+                    i - 1,
+                    j - 1,
+                    p[k]
+                ));
+            }
+            ghost.get_or_insert_with(|| {
+                let (x, y) = (i.clamp(1, nx) - 1, j.clamp(1, ny) - 1);
+                format!(
+                    "species {s} in the ghost cell next to cell ({x}, {y}) = {}",
+                    p[k]
+                )
+            });
+            from = k + 1;
+        }
+    }
+    ghost
 }

@@ -9,13 +9,49 @@
 //!   above [`stable_dt`] (`h^2 / (4 D_max)` from the current fields) is refused with
 //!   [`simkit_backend::Error::Unstable`] unless overridden.
 //! - [`Config`]: the [`Stepping`], the CPU's temporal blocking depth
-//!   ([`Config::steps_per_sweep`]) and the [`GpuOptions`] (plain data, ignored by the CPU).
+//!   ([`Config::steps_per_sweep`]), the interval of the blow-up check
+//!   ([`Config::check_every`]) and the [`GpuOptions`] (plain data, ignored by the CPU).
 //! - [`Rd`]: the simulation behind [`simkit_backend::Simulation`], built as
 //!   `Rd::new(grid, model, &config, backend)` on the backend the [`simkit_backend::Backend`]
 //!   value names: the CPU (cache-blocked tiles in parallel, vectorised with run-time CPU
 //!   feature dispatch, several Euler steps fused per sweep over the grid) or the GPU (WGSL;
 //!   tile + halo in workgroup memory, or a plain global-memory kernel; many steps per
 //!   submission).
+//!
+//! # Blow-up checks
+//!
+//! Inside `step(n)` the run is checked every [`Config::check_every`] steps (default
+//! [`simkit_backend::guard::DEFAULT_CHECK_EVERY`] = 100, counted from step 0; 0 = interval
+//! checks off) and at the end of the call: every field value must be finite, and for the
+//! colony (with the guard enforced) `dt` must still be within `h^2 / (4 D_max)` of the
+//! current fields. A failed check returns [`simkit_backend::Error::BlowUp`] naming the step,
+//! the first bad cell `(x, y)` with its species and value (or `D_max` and the bound) and the
+//! fix, with the run back at the last state that passed (`steps_done()` = `rolled_back_to`);
+//! see [`Rd`]. The checks never change the results.
+//!
+//! # Checkpoints
+//!
+//! [`Rd`] implements [`simkit_backend::Restart`]: the checkpoint holds the grid, the model,
+//! the [`Config`], the step counter and the simulated time, and a resumed run continues bit
+//! for bit on the same backend.
+//!
+//! ```
+//! use simkit_backend::{Backend, Restart, Simulation};
+//! use simkit_rd::{Config, GrayScott, Rd, Stepping, scenes::gray_scott_square};
+//! # fn main() -> simkit_backend::Result<()> {
+//! let grid = gray_scott_square::<f64>(32, 1.0, 8, 1)?;
+//! let model = GrayScott::new(1.0, 0.5, 0.04, 0.06)?;
+//! let mut sim = Rd::new(grid, model, &Config::new(Stepping::euler(0.2)), Backend::Cpu)?;
+//! sim.step(50)?;
+//! let bytes = sim.checkpoint()?;
+//! let mut resumed = Rd::<f64, GrayScott>::resume(&bytes, Backend::Cpu)?;
+//! assert_eq!((resumed.steps_done(), resumed.time()), (50, sim.time()));
+//! sim.step(50)?;
+//! resumed.step(50)?;
+//! assert_eq!(resumed.state()?, sim.state()?);
+//! # Ok(())
+//! # }
+//! ```
 //!
 //! ```
 //! use simkit_backend::{Backend, Simulation};

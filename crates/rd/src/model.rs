@@ -2,6 +2,8 @@
 
 use std::fmt::Debug;
 
+use serde::Serialize;
+use serde::de::DeserializeOwned;
 use simkit_backend::{Real, Result};
 
 use crate::grid::Grid;
@@ -84,8 +86,10 @@ impl<'a, T: Real> RowIn<'a, T> {
 /// The CPU backend calls [`Model::update_row`] on cache-blocked row segments; the GPU backend
 /// compiles [`Model::wgsl`] into its tiled and global-memory kernels with [`Model::gpu_params`]
 /// as run-time parameters. Both evaluate the same formula. A model owns its parameters and
-/// coefficient fields (`'static`): the simulation keeps it for the whole run.
-pub trait Model: Clone + Debug + Send + Sync + 'static {
+/// coefficient fields (`'static`): the simulation keeps it for the whole run. A model is
+/// part of every checkpoint, hence the serde bounds (derive `Serialize` and `Deserialize`);
+/// [`Model::validate`] is run again on a model read from a checkpoint.
+pub trait Model: Clone + Debug + Send + Sync + Serialize + DeserializeOwned + 'static {
     /// Short name, e.g. `"gray-scott"`.
     fn name(&self) -> &'static str;
     /// Number of species fields the model advances.

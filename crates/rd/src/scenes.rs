@@ -4,7 +4,7 @@
 use simkit_backend::{Real, Result, rng::rng_uniform};
 
 use crate::boundary::Boundaries;
-use crate::grid::Grid;
+use crate::grid::{Grid, check_size};
 use crate::models::Colony;
 
 /// The source's bacterial-colony scene scaled to `nx x ny` (the original is 512 x 512):
@@ -14,7 +14,7 @@ use crate::models::Colony;
 /// y, the source's 1-based ranges 96..112, 144..160 and 120..136); no-flux edges. Random values come from the shared RNG with
 /// `seed`.
 pub fn colony_scene<T: Real>(nx: usize, ny: usize, seed: u32) -> Result<(Grid<T>, Colony)> {
-    let d = Colony::random_d(nx, ny, 0.75, 0.4, seed);
+    let d = Colony::random_d(nx, ny, 0.75, 0.4, seed)?;
     let model = Colony::new(0.5, nx, ny, d)?;
     let n: Vec<T> = (0..nx * ny)
         .map(|k| {
@@ -38,7 +38,9 @@ pub fn colony_scene<T: Real>(nx: usize, ny: usize, seed: u32) -> Result<(Grid<T>
 /// Pearson's initial condition on a periodic `n x n` grid: `u = 1`, `v = 0`, except a centred
 /// square of `side` cells (clamped to `n`) with `u = 0.5`, `v = 0.25`; both perturbed by 1 %
 /// noise (shared RNG, `seed`).
+/// Errors for a size the [`Grid`] refuses (checked before allocating).
 pub fn gray_scott_square<T: Real>(n: usize, h: f64, side: usize, seed: u32) -> Result<Grid<T>> {
+    check_size(n, n)?;
     let mut u = vec![1.0f64; n * n];
     let mut v = vec![0.0f64; n * n];
     let side = side.min(n);
@@ -118,7 +120,7 @@ pub fn gap_width<T: Real>(
     best as f64 * grid.h()
 }
 
-/// Population variance of species `s`.
+/// Population variance of species `s` (NaN if there is no species `s`).
 pub fn variance<T: Real>(grid: &Grid<T>, s: usize) -> f64 {
     let f = grid.field(s);
     let n = f.len() as f64;

@@ -1,12 +1,13 @@
 //! Time integration settings and the stability guard.
 
+use simkit_backend::guard::blow_up;
 use simkit_backend::{Error, Real, Result, require_positive};
 
 use crate::grid::Grid;
 use crate::model::Model;
 
 /// Explicit time integrator.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub enum Integrator {
     /// Forward Euler (first order; the source's scheme): one stencil pass per step.
     #[default]
@@ -26,7 +27,7 @@ impl Integrator {
 }
 
 /// What to do when `dt` exceeds the stability bound.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub enum Guard {
     /// Refuse with [`Error::Unstable`] (default).
     #[default]
@@ -36,7 +37,7 @@ pub enum Guard {
 }
 
 /// Time-stepping settings.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Stepping {
     /// Time step.
     pub dt: f64,
@@ -89,7 +90,15 @@ pub(crate) fn dt_bound(d_max: f64, h: f64) -> f64 {
     if d_max.is_nan() {
         f64::NAN
     } else if d_max > 0.0 {
-        h * h / (4.0 * d_max)
+        let (hh, dd) = (h * h, 4.0 * d_max);
+        if hh.is_finite() && dd.is_finite() {
+            hh / dd
+        } else {
+            // `h^2` or `4 D_max` overflows (inf / inf would be NaN, a bound that passes
+            // every comparison): the same quantity without the overflowing intermediates.
+            let r = h / (2.0 * d_max.sqrt());
+            r * r
+        }
     } else {
         f64::INFINITY
     }
@@ -130,6 +139,54 @@ pub(crate) fn check_dt_with(model: &str, d_max: f64, h: f64, s: &Stepping) -> Re
     Ok(())
 }
 
+/// The re-check of the bound at a check inside `step(n)` (for models whose diffusivity
+/// depends on the fields): with the guard enforced, `dt` must stay within
+/// `h^2 / (4 d_max)` of the fields at step `step`, else the run stops there (that state is
+/// finite: it passed the finite check) with [`Error::BlowUp`] naming `D_max`, the bound and
+/// the fix. A NaN `d_max` fails too. With the guard overridden this check is skipped (the
+/// finite check still stops a diverging run).
+pub(crate) fn recheck_bound(
+    model: &str,
+    d_max: f64,
+    h: f64,
+    s: &Stepping,
+    step: u64,
+) -> Result<()> {
+    let bound = dt_bound(d_max, h);
+    if s.guard == Guard::Override || s.dt <= bound {
+        return Ok(());
+    }
+    Err(blow_up(
+        step,
+        step,
+        format!(
+            "the largest diffusivity of the current fields, D_max = {d_max:e}, gives the \
+             stability bound h^2 / (4 D_max) = {bound:e} (h = {h:e}), now below dt = {:e}",
+            s.dt
+        ),
+        format!(
+            "the {model} model's diffusivity grew with the fields during the run, so the \
+             explicit step is no longer stable (no step was taken from this state); continue \
+             with a smaller dt: set_stepping with dt <= {bound:e}"
+        ),
+    ))
+}
+
+/// The likely cause of fields that turned non-finite, for [`Error::BlowUp`]: `bound` is
+/// the stability bound of the rolled-back state.
+pub(crate) fn divergence_cause(model: &str, s: &Stepping, bound: f64) -> String {
+    let guard = match s.guard {
+        Guard::Override => " with the stability guard overridden",
+        Guard::Enforce => "",
+    };
+    format!(
+        "the explicit {:?} scheme diverged at dt = {:e}{guard} ({model} model; the stability \
+         bound h^2 / (4 D_max) of the rolled-back state is {bound:e}), or the reaction terms \
+         are too stiff for this dt; use a smaller dt (set_stepping) and step again",
+        s.integrator, s.dt
+    )
+}
+
 /// Checks the model against the grid (species count, parameters, coefficient sizes).
 pub(crate) fn check_model<T: Real, M: Model>(model: &M, grid: &Grid<T>) -> Result<()> {
     model.validate(grid.nx(), grid.ny())?;
@@ -163,6 +220,12 @@ mod tests {
         assert_eq!(dt_bound(2.0, 0.5), 0.5 * 0.5 / 8.0);
         assert_eq!(dt_bound(0.0, 1.0), f64::INFINITY);
         assert_eq!(dt_bound(-1.0, 1.0), f64::INFINITY);
+        // Overflowing intermediates: h^2 = inf and 4 D = inf used to give inf / inf = NaN.
+        let b = dt_bound(f64::MAX, 1e300); // 1e600 / 7.19e308
+        assert!((b / 1.390_671_161_567e291 - 1.0).abs() < 1e-12, "{b}");
+        assert_eq!(dt_bound(f64::INFINITY, 1e300), 0.0);
+        assert_eq!(dt_bound(1e308, 1e154), 0.25);
+        assert_eq!(dt_bound(f64::INFINITY, 1.0), 0.0);
         let s = Stepping::euler(0.2);
         assert!(check_dt_with("diffusion", 1.0, 1.0, &s).is_ok());
         assert!(check_dt_with("diffusion", 1.0, 1.0, &Stepping::euler(0.25)).is_ok());
@@ -181,7 +244,6 @@ mod tests {
         assert!(max_or_nan(1.0, f64::NAN).is_nan());
         assert_eq!(max_or_nan(1.0, 2.0), 2.0);
         assert_eq!(max_or_nan(2.0, 1.0), 2.0);
-        assert_eq!([1.0, f64::NAN, 3.0].into_iter().fold(0.0, f64::max), 3.0);
         assert!(
             [1.0, f64::NAN, 3.0]
                 .into_iter()

@@ -4,7 +4,7 @@ use multiversion::multiversion;
 use rayon::prelude::*;
 use simkit_backend::{Error, Real, Result, require_non_negative};
 
-use crate::grid::Grid;
+use crate::grid::{Grid, check_size};
 use crate::model::{Model, RowIn, Stencil};
 use crate::models::store;
 use simkit_backend::max_or_nan;
@@ -20,7 +20,7 @@ use simkit_backend::max_or_nan;
 /// and what leaves one cell enters its neighbour, so diffusion alone conserves the total of `b`
 /// to round-off. (The expanded form `d (b n lap b + b grad b . grad n + n |grad b|^2)` with
 /// central differences is consistent but not conservative, and it drops the `grad d` term.)
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Colony {
     gamma: f64,
     nx: usize,
@@ -43,14 +43,22 @@ impl Colony {
     }
 
     /// The coefficient `d = mean * (1 + amplitude * U(-1, 1))`, drawn per cell from the shared
-    /// counter-based RNG with `seed` (reproducible on any machine).
-    pub fn random_d(nx: usize, ny: usize, mean: f64, amplitude: f64, seed: u32) -> Vec<f64> {
-        (0..nx * ny)
+    /// counter-based RNG with `seed` (reproducible on any machine). Errors for a grid size the
+    /// [`Grid`] would refuse (checked before allocating).
+    pub fn random_d(
+        nx: usize,
+        ny: usize,
+        mean: f64,
+        amplitude: f64,
+        seed: u32,
+    ) -> Result<Vec<f64>> {
+        let cells = check_size(nx, ny)?;
+        Ok((0..cells)
             .map(|k| {
                 let u = f64::from(simkit_backend::rng::rng_uniform(seed, 0, k as u32));
                 mean * (1.0 + amplitude * (2.0 * u - 1.0))
             })
-            .collect()
+            .collect())
     }
 
     /// Saturation constant `gamma`.
@@ -60,7 +68,7 @@ impl Colony {
 
     /// The coefficient field `d` (row-major).
     pub fn d(&self) -> &[f64] {
-        &self.d[0]
+        self.d.first().map_or(&[], Vec::as_slice)
     }
 
     /// The reaction term `n b / (1 + gamma n)` at one cell.
@@ -181,22 +189,27 @@ impl Model for Colony {
     }
     fn validate(&self, nx: usize, ny: usize) -> Result<()> {
         require_non_negative("gamma", self.gamma)?;
-        if (nx, ny) != (self.nx, self.ny) || self.d[0].len() != nx * ny {
+        let d = self.d();
+        if self.d.len() != 1
+            || (nx, ny) != (self.nx, self.ny)
+            || Some(d.len()) != nx.checked_mul(ny)
+        {
             return Err(Error::invalid(
                 "coefficient field d",
                 format!(
-                    "{} values for a {} x {} model",
-                    self.d[0].len(),
+                    "{} fields, {} values for a {} x {} model",
+                    self.d.len(),
+                    d.len(),
                     self.nx,
                     self.ny
                 ),
-                format!("must have nx * ny = {nx} x {ny} values, matching the grid"),
+                format!("must be one field of nx * ny = {nx} x {ny} values, matching the grid"),
             ));
         }
-        if let Some(k) = self.d[0].iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
+        if let Some(k) = d.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
             return Err(Error::invalid(
                 format!("d at cell ({}, {})", k % nx, k / nx),
-                self.d[0][k],
+                d[k],
                 "must be finite and >= 0",
             ));
         }
@@ -207,8 +220,13 @@ impl Model for Colony {
     }
     fn max_diffusivity<T: Real>(&self, grid: &Grid<T>) -> f64 {
         let (b, n) = (grid.field(0), grid.field(1));
+        if b.len() != self.d().len() || n.len() != self.d().len() {
+            // Not this model's grid (the backends check the model against the grid first).
+            return f64::NAN;
+        }
         // Re-checked before every `step` call: a parallel pass over the fields.
-        let kappa = self.d[0]
+        let kappa = self
+            .d()
             .par_iter()
             .zip(b.par_iter().zip(n.par_iter()))
             .map(|(d, (b, n))| d * b.to_f64() * n.to_f64())

@@ -9,7 +9,7 @@ use crate::models::store;
 use simkit_backend::max_or_nan;
 
 /// `du_s/dt = D_s lap u_s` for 1 to 4 independent species: the validation workhorse.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Diffusion {
     diffusivity: Vec<f64>,
 }

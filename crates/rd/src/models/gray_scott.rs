@@ -13,7 +13,7 @@ use simkit_backend::max_or_nan;
 /// Species 0 is `u` (the substrate), species 1 is `v` (the autocatalyst). The named
 /// constructors use Pearson's (1993) set-up: `Du = 2e-5`, `Dv = 1e-5` on a domain of side 2.5
 /// (so `h = 2.5 / 256` on his 256 x 256 grid, see [`GrayScott::PEARSON_H`]) with `dt = 1`.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct GrayScott {
     /// Diffusivity of `u`.
     pub du: f64,
