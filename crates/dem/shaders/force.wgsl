@@ -1,5 +1,7 @@
 // Contact forces by gathering over the full shell of neighbour cells (one invocation per
 // particle, writing only its own acceleration), walls, gravity, and the second half kick.
+// acc.w receives the deepest overlap of the particle's contacts over the smaller radius
+// (against a wall: its radius), which the blow-up check (check.wgsl) reads.
 // Variants (override constants, chosen once): FRICTION, INIT (initial accelerations only).
 // The contact law is contact.wgsl, the wall geometry walls.wgsl (one copy each, shared by
 // the particle and the wall contacts).
@@ -38,6 +40,7 @@ fn dem_force(
     let mi = vi.w;
     let row = species[i] * prm.n_species;
     var f = prm.gravity.xyz * mi;
+    var deepest = 0.0;
     let c = nb_cell_coord(grid, ti);
     let lo = nb_shell_lo(grid, c);
     let hi = nb_shell_hi(grid, c);
@@ -63,6 +66,7 @@ fn dem_force(
                     let vrel = vi.xyz - vj.xyz;
                     let vn = dot(vrel, n);
                     let fnorm = dem_normal_force(cf, mij, rsum - dist, vn);
+                    deepest = max(deepest, (rsum - dist) / min(ri, pj.w));
                     f += fnorm * n;
                     if (FRICTION) {
                         f += dem_friction_force(cf, n, vn, vrel, fnorm, mij);
@@ -102,6 +106,7 @@ fn dem_force(
             let vrel = vi.xyz - wv;
             let vn = dot(vrel, n);
             let fnorm = dem_normal_force(cf, mi, delta, vn);
+            deepest = max(deepest, delta / ri);
             f += fnorm * n;
             if (FRICTION) {
                 f += dem_friction_force(cf, n, vn, vrel, fnorm, mi);
@@ -109,7 +114,7 @@ fn dem_force(
         }
     }
     let a = f / mi;
-    acc[i] = vec4<f32>(a, 0.0);
+    acc[i] = vec4<f32>(a, deepest);
     if (!INIT) {
         let v = vel[i];
         vel[i] = vec4<f32>(v.xyz + a * prm.half_dt, v.w);

@@ -16,10 +16,12 @@
 use multiversion::multiversion;
 use rayon::prelude::*;
 
+use simkit_backend::guard::{blow_up, chunks, first_non_finite};
 use simkit_backend::{Error, Real, Result};
 
 use simkit_neighbor::{BlockedHalfList, HalfListBlock};
 
+use crate::engine::EngineState;
 use crate::prepared::Prepared;
 use crate::{
     ContactCoefficients, Integrator, State, cylinder_overlap, friction_force, normal_force,
@@ -72,11 +74,38 @@ struct Particles<T, const D: usize> {
     reference: Vec<[T; D]>,
 }
 
+/// The dynamic state at the last check that passed (the blow-up guard's copy): the
+/// per-particle arrays in sorted order, the order itself, the clock.
+struct Snapshot<T, const D: usize> {
+    pos: Vec<[T; D]>,
+    vel: Vec<[T; D]>,
+    acc: Vec<[T; D]>,
+    aux: Vec<[T; D]>,
+    reference: Vec<[T; D]>,
+    id: Vec<u32>,
+    time: f64,
+    started: bool,
+    steps: u64,
+}
+
+/// What the blow-up check found first.
+enum Contact {
+    /// Particle–particle contact with the particle in this slot.
+    Pair(usize),
+    /// Particle–wall contact with this wall.
+    Wall(usize),
+}
+
+const AXES: [&str; 3] = ["x", "y", "z"];
+
 /// The CPU engine for dimension `D` and precision `T`.
 pub(crate) struct CpuEngine<const D: usize, T: Real> {
     prep: Prepared,
     time: f64,
     started: bool,
+    steps: u64,
+    /// The state at the last check that passed.
+    snap: Snapshot<T, D>,
     p: Particles<T, D>,
     n_species: usize,
     coeff: Vec<ContactCoefficients<T>>,
@@ -359,25 +388,16 @@ fn permute<X: Copy + Send + Sync>(v: &mut Vec<X>, order: &[u32], parallel: bool)
 }
 
 impl<const D: usize, T: Real> CpuEngine<D, T> {
-    pub fn new(prep: Prepared) -> Result<Self> {
+    /// The engine for `prep`, at its initial state or, with `saved`, at a checkpointed
+    /// one.
+    pub fn new(prep: Prepared, saved: Option<&EngineState>) -> Result<Self> {
         let n = prep.n;
         let cv = |a: &[f64; 3]| -> [T; D] { std::array::from_fn(|d| T::from_f64(a[d])) };
         let lo: [f64; D] = std::array::from_fn(|d| prep.lo[d]);
         let len: [f64; D] = std::array::from_fn(|d| prep.len[d]);
         let periodic: [bool; D] = std::array::from_fn(|d| prep.periodic[d]);
         let range = prep.cutoff + prep.skin;
-        if let Some(d) = (0..D).find(|&d| periodic[d] && len[d] < 2.0 * range) {
-            // A pair keeps the periodic image it had at the list build; that image stays the
-            // nearest one until the next build only if no pair is within range twice.
-            return Err(Error::invalid(
-                format!("periodic box length along axis {d}"),
-                len[d],
-                format!(
-                    "must be at least twice the largest contact distance plus the skin \
-                     (2 x {range}) on the CPU backend; enlarge the box or reduce the skin"
-                ),
-            ));
-        }
+        // Periodic lengths were checked in `Prepared::new` (shared by both backends).
         let list = BlockedHalfList::new(lo, len, periodic, range, n)?;
         let n_blocks = list.blocks().len();
         let work = (0..n_blocks)
@@ -445,9 +465,313 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
             prep,
             time: 0.0,
             started: false,
+            steps: 0,
+            snap: Snapshot {
+                pos: Vec::new(),
+                vel: Vec::new(),
+                acc: Vec::new(),
+                aux: Vec::new(),
+                reference: Vec::new(),
+                id: Vec::new(),
+                time: 0.0,
+                started: false,
+                steps: 0,
+            },
         };
-        e.rebuild()?;
+        match saved {
+            None => e.rebuild()?,
+            Some(s) => e.load(s)?,
+        }
+        e.keep();
         Ok(e)
+    }
+
+    /// Copies the state into the guard's snapshot (a memcpy per array).
+    fn keep(&mut self) {
+        let (s, p) = (&mut self.snap, &self.p);
+        s.pos.clone_from(&p.pos);
+        s.vel.clone_from(&p.vel);
+        s.acc.clone_from(&p.acc);
+        s.aux.clone_from(&p.aux);
+        s.reference.clone_from(&p.reference);
+        s.id.clone_from(&p.id);
+        (s.time, s.started, s.steps) = (self.time, self.started, self.steps);
+    }
+
+    /// Puts the state back to the guard's snapshot.
+    fn restore(&mut self) -> Result<()> {
+        let (s, p) = (&self.snap, &mut self.p);
+        p.pos.clone_from(&s.pos);
+        p.vel.clone_from(&s.vel);
+        p.acc.clone_from(&s.acc);
+        p.aux.clone_from(&s.aux);
+        p.reference.clone_from(&s.reference);
+        p.id.clone_from(&s.id);
+        (self.time, self.started, self.steps) = (s.time, s.started, s.steps);
+        self.relist()
+    }
+
+    /// Sets the state from a checkpoint (validated: lengths, a permutation of the
+    /// particles).
+    fn load(&mut self, s: &EngineState) -> Result<()> {
+        let n = self.prep.n;
+        let bad = |what: String| Error::Checkpoint {
+            source_name: "<bytes>".into(),
+            reason: format!("{what}; the file does not belong to this scene"),
+        };
+        if s.width as usize != D {
+            return Err(bad(format!(
+                "{} values per particle, expected {D}",
+                s.width
+            )));
+        }
+        let mut seen = vec![false; n];
+        if s.id.len() != n {
+            return Err(bad(format!(
+                "{} particle slots for {n} particles",
+                s.id.len()
+            )));
+        }
+        for &i in &s.id {
+            match seen.get_mut(i as usize) {
+                Some(f) if !*f => *f = true,
+                _ => {
+                    return Err(bad(format!(
+                        "particle order lists {i} twice or out of range"
+                    )));
+                }
+            }
+        }
+        let arrays = |v: &[f64], name: &str| -> Result<Vec<[T; D]>> {
+            if v.len() != n * D {
+                return Err(bad(format!(
+                    "{name} holds {} values, expected {}",
+                    v.len(),
+                    n * D
+                )));
+            }
+            Ok(v.chunks_exact(D)
+                .map(|c| std::array::from_fn(|d| T::from_f64(c[d])))
+                .collect())
+        };
+        let p = &mut self.p;
+        p.pos = arrays(&s.pos, "positions")?;
+        p.vel = arrays(&s.vel, "velocities")?;
+        p.acc = arrays(&s.acc, "accelerations")?;
+        p.aux = arrays(&s.aux, "half-step velocities")?;
+        p.reference = arrays(&s.reference, "list-build positions")?;
+        p.id.clone_from(&s.id);
+        (self.time, self.started, self.steps) = (s.time, s.started, s.steps);
+        self.relist()
+    }
+
+    /// After `p.id` changed (rollback, resume): the per-particle constants in slot order,
+    /// and the neighbour list and wall candidates rebuilt from the positions of the last
+    /// list build (`p.reference`, wrapped and in cell order: the stable sort keeps the
+    /// order), so the list is the one the run had.
+    fn relist(&mut self) -> Result<()> {
+        let prep = &self.prep;
+        let p = &mut self.p;
+        for (k, &i) in p.id.iter().enumerate() {
+            let i = i as usize;
+            p.radius[k] = T::from_f64(prep.radius[i]);
+            p.mass[k] = T::from_f64(prep.mass[i]);
+            p.inv_mass[k] = T::from_f64(1.0 / prep.mass[i]);
+            p.species[k] = prep.species[i];
+        }
+        let order = self.list.sort(&p.reference)?;
+        if order.iter().enumerate().any(|(k, &o)| o as usize != k) {
+            // Not reached for a state this engine wrote; kept consistent all the same.
+            let par = self.parallel;
+            permute(&mut p.pos, &order, par);
+            permute(&mut p.vel, &order, par);
+            permute(&mut p.acc, &order, par);
+            permute(&mut p.aux, &order, par);
+            permute(&mut p.radius, &order, par);
+            permute(&mut p.mass, &order, par);
+            permute(&mut p.inv_mass, &order, par);
+            permute(&mut p.species, &order, par);
+            permute(&mut p.id, &order, par);
+            permute(&mut p.reference, &order, par);
+        }
+        self.list.build(&p.reference, self.parallel)?;
+        std::mem::swap(&mut p.pos, &mut p.reference);
+        self.find_wall_candidates();
+        std::mem::swap(&mut self.p.pos, &mut self.p.reference);
+        Ok(())
+    }
+
+    /// The blow-up check of the current state: `(what, cause)` of the first failure, in
+    /// the order non-finite position, non-finite velocity, particle outside the box by
+    /// more than its radius, contact deeper than `max_overlap` of the smaller radius.
+    fn check(&self) -> Option<(String, String)> {
+        let p = &self.p;
+        for (name, v) in [("position", &p.pos), ("velocity", &p.vel)] {
+            if let Some(k) = first_non_finite(v.as_flattened()) {
+                let (slot, d) = (k / D, k % D);
+                return Some((
+                    format!(
+                        "particle {}: {name} {} = {}",
+                        p.id[slot], AXES[d], v[slot][d]
+                    ),
+                    self.prep.non_finite_cause(),
+                ));
+            }
+        }
+        for d in (0..D).filter(|&d| !self.periodic[d]) {
+            let lo = self.prep.lo[d];
+            let hi = lo + self.prep.len[d];
+            for (k, x) in p.pos.iter().enumerate() {
+                let (x, r) = (x[d].to_f64(), p.radius[k].to_f64());
+                if x < lo - r || x > hi + r {
+                    return Some((
+                        format!(
+                            "particle {}: position {} = {x}, outside the box [{lo}, {hi}] by \
+                             more than its radius {r}",
+                            p.id[k], AXES[d]
+                        ),
+                        self.prep.escape_cause(),
+                    ));
+                }
+            }
+        }
+        let limit = self.prep.max_overlap;
+        if limit.is_finite() {
+            let (ratio, i, with) = self.deepest_contact();
+            if ratio > limit {
+                let other = match with {
+                    Contact::Pair(j) => format!("particle {}", p.id[j]),
+                    Contact::Wall(w) => format!("wall {w}"),
+                };
+                return Some((
+                    format!(
+                        "particle {} overlaps {other} by {ratio} of the smaller radius \
+                         (limit Config::max_overlap = {limit})",
+                        p.id[i]
+                    ),
+                    self.prep.overlap_cause(),
+                ));
+            }
+        }
+        None
+    }
+
+    /// The deepest contact now, as overlap over the smaller radius (against a wall: the
+    /// particle's radius), its slot and what it touches; `(0, 0, Pair(0))` without
+    /// contacts. Walks the neighbour list and the wall candidates, like the force pass.
+    fn deepest_contact(&self) -> (f64, usize, Contact) {
+        let p = &self.p;
+        let (zw, _) = self.prep.wall_motion(self.time);
+        let vert = self.prep.vertical;
+        let (per, lo, len) = (self.periodic, self.lo, self.len);
+        let block = |(nb, b): (&HalfListBlock<T, D>, &BlockWork<T, D>)| {
+            let mut best = (0.0f64, 0usize, Contact::Pair(0));
+            let (start, offsets, partners) = (nb.start(), nb.offsets(), nb.partners());
+            let (img_offsets, img_partners) = (nb.image_offsets(), nb.image_partners());
+            let mut consider = |i: usize, j: usize, shift: [T; D]| {
+                let mut r2 = 0.0;
+                for ((xi, xj), sh) in p.pos[i].iter().zip(&p.pos[j]).zip(&shift) {
+                    let s = (*xi - *xj - *sh).to_f64();
+                    r2 += s * s;
+                }
+                let (ri, rj) = (p.radius[i].to_f64(), p.radius[j].to_f64());
+                let depth = ri + rj - r2.sqrt();
+                let ratio = depth / ri.min(rj);
+                if ratio > best.0 {
+                    best = (ratio, i, Contact::Pair(j));
+                }
+            };
+            for k in 0..nb.len() {
+                let i = start + k;
+                for &j in &partners[offsets[k] as usize..offsets[k + 1] as usize] {
+                    consider(i, j as usize, [T::ZERO; D]);
+                }
+                for &(j, shift) in
+                    &img_partners[img_offsets[k] as usize..img_offsets[k + 1] as usize]
+                {
+                    consider(i, j as usize, shift);
+                }
+            }
+            for &(k, w) in &b.walls {
+                let i = start + k as usize;
+                let mut x = p.pos[i];
+                if self.walls[w as usize].wrap {
+                    wrap(&mut x, per, lo, len);
+                }
+                let x: [f64; D] = std::array::from_fn(|d| x[d].to_f64());
+                let r = p.radius[i].to_f64();
+                let ratio = self.prep.walls[w as usize].overlap(&x, r, zw, vert) / r;
+                if ratio > best.0 {
+                    best = (ratio, i, Contact::Wall(w as usize));
+                }
+            }
+            best
+        };
+        let deeper = |a: (f64, usize, Contact), b: (f64, usize, Contact)| {
+            if b.0 > a.0 { b } else { a }
+        };
+        let blocks = self.list.blocks();
+        if self.parallel {
+            blocks
+                .par_iter()
+                .zip(self.work.par_iter())
+                .map(block)
+                .reduce(|| (0.0, 0, Contact::Pair(0)), deeper)
+        } else {
+            blocks
+                .iter()
+                .zip(&self.work)
+                .map(block)
+                .fold((0.0, 0, Contact::Pair(0)), deeper)
+        }
+    }
+
+    /// Advances `steps` steps without checks.
+    fn advance(&mut self, steps: u32) -> Result<()> {
+        match self.prep.integrator {
+            Integrator::VelocityVerlet => self.advance_velocity_verlet(steps),
+            Integrator::PositionVerlet => {
+                for _ in 0..steps {
+                    self.step_position_verlet()?;
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// `steps` steps in stretches ending on multiples of `check_every`, each followed by
+    /// the blow-up check; a failed check puts the state back to the last one that passed.
+    fn guarded(&mut self, steps: u32) -> Result<()> {
+        for n in chunks(self.steps, steps, self.prep.check_every) {
+            self.advance(n)?;
+            self.steps += u64::from(n);
+            if let Some((what, cause)) = self.check() {
+                let bad = self.steps;
+                self.restore()?;
+                return Err(blow_up(bad, self.steps, what, cause));
+            }
+            self.keep();
+        }
+        Ok(())
+    }
+
+    /// The dynamic state for a checkpoint.
+    fn to_saved(&self) -> EngineState {
+        let flat =
+            |v: &[[T; D]]| -> Vec<f64> { v.as_flattened().iter().map(|x| x.to_f64()).collect() };
+        let p = &self.p;
+        EngineState {
+            steps: self.steps,
+            time: self.time,
+            started: self.started,
+            width: D as u32,
+            id: p.id.clone(),
+            pos: flat(&p.pos),
+            vel: flat(&p.vel),
+            acc: flat(&p.acc),
+            aux: flat(&p.aux),
+            reference: flat(&p.reference),
+        }
     }
 
     /// Wraps the periodic coordinates into the box, sorts the particles by cell and
@@ -801,15 +1125,7 @@ fn wrap<T: Real, const D: usize>(x: &mut [T; D], per: [bool; D], lo: [T; D], len
 
 impl<const D: usize, T: Real> crate::engine::Engine for CpuEngine<D, T> {
     fn step(&mut self, steps: u32) -> Result<()> {
-        let run = |e: &mut Self| match e.prep.integrator {
-            Integrator::VelocityVerlet => e.advance_velocity_verlet(steps),
-            Integrator::PositionVerlet => {
-                for _ in 0..steps {
-                    e.step_position_verlet()?;
-                }
-                Ok(())
-            }
-        };
+        let run = |e: &mut Self| e.guarded(steps);
         if self.parallel {
             // The whole loop on a pool thread: no hand-over to the pool per pass.
             simkit_backend::pool::on_pool(|| run(self))
@@ -848,6 +1164,18 @@ impl<const D: usize, T: Real> crate::engine::Engine for CpuEngine<D, T> {
         &self.prep
     }
 
+    fn steps_done(&self) -> u64 {
+        self.steps
+    }
+
+    fn model(&self) -> String {
+        format!("Dem<cpu {}, {D}>", T::WGSL)
+    }
+
+    fn save(&mut self) -> Result<EngineState> {
+        Ok(self.to_saved())
+    }
+
     fn name(&self) -> String {
         let precision = if std::mem::size_of::<T>() == 4 {
             "f32"
@@ -876,8 +1204,8 @@ mod tests {
     /// with every wall tested against every particle.
     fn listed_and_all<const D: usize>(scene: &Scene, steps: u32) -> (State, State) {
         let run = |all: bool| {
-            let prep = Prepared::new(scene, &Config::default()).expect("prepared");
-            let mut e = CpuEngine::<D, f64>::new(prep).expect("engine");
+            let prep = Prepared::new(scene, &Config::default(), false).expect("prepared");
+            let mut e = CpuEngine::<D, f64>::new(prep, None).expect("engine");
             if all {
                 e.wall_margin = f64::INFINITY;
                 e.rebuild().expect("rebuild");
@@ -935,12 +1263,12 @@ mod tests {
         scene
             .add_particle(Particle::new([0.5, 3.0, 0.0], 0.5, 1.0))
             .expect("particle");
-        let prep = Prepared::new(&scene, &Config::default()).expect("prepared");
-        let Err(e) = CpuEngine::<2, f64>::new(prep) else {
+        // Refused in the shared preparation, so by both backends alike.
+        let Err(e) = Prepared::new(&scene, &Config::default(), false) else {
             panic!("a 1.5-long periodic axis with list range 1.1 was accepted");
         };
         let msg = e.to_string();
-        assert!(msg.contains("axis 0") && msg.contains("1.5"), "{msg}");
+        assert!(msg.contains("along x") && msg.contains("1.5"), "{msg}");
     }
 
     /// 150 grains of radius 0.3 on a 5 x 5 x 6 lattice in an 8^3 box, thrown along

@@ -1,13 +1,13 @@
 //! Diagnostics of a state: energies, momentum, overlaps, contacts, granular temperature.
 
-use simkit_neighbor::{CellGrid, OutOfBox, SortedCells};
-
-use simkit_backend::{Error, Result};
+use simkit_backend::{Error, Result, max_or_nan};
 
 use crate::prepared::Prepared;
 
 /// Scalar observables of one state (computed on the host from a [`crate::State`], so they
-/// are identical for both backends).
+/// are identical for both backends). For a state with a non-finite position or velocity
+/// (`finite == false`) every energy, the momentum, the overlaps, the temperature and the
+/// centre-of-mass height are NaN, and the contact counts 0.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Diagnostics {
     /// Simulation time.
@@ -37,38 +37,113 @@ pub struct Diagnostics {
 }
 
 /// Calls `f(i, j, sep, r2)` once per unordered pair closer than the largest contact
-/// distance, with minimum-image separations, using `neighbor`'s sorted cells.
+/// distance, with minimum-image separations `x_i - x_j`.
+///
+/// Works for any valid box, however sparse: particles are sorted by the key of a cell one
+/// contact distance wide (periodic axes: the box split into whole cells), and each looks up
+/// its neighbour cells by binary search, so the cost is `O(N log N)` in time and `O(N)` in
+/// memory whatever the box size. Positions outside the box (no walls) are fine.
 pub(crate) fn for_each_close_pair(
     p: &Prepared,
     positions: &[[f64; 3]],
     mut f: impl FnMut(usize, usize, [f64; 3], f64),
-) -> Result<()> {
-    fn run<const D: usize>(
-        p: &Prepared,
-        positions: &[[f64; 3]],
-        f: &mut dyn FnMut(usize, usize, [f64; 3], f64),
-    ) -> Result<()> {
-        let lo: [f64; D] = std::array::from_fn(|d| p.lo[d]);
-        let len: [f64; D] = std::array::from_fn(|d| p.len[d]);
-        let per: [bool; D] = std::array::from_fn(|d| p.periodic[d]);
-        let grid = CellGrid::new(lo, len, per, p.cutoff)?.with_out_of_box(OutOfBox::Clamp);
-        let mut cells = SortedCells::new(&grid);
-        let pos: Vec<[f64; D]> = positions
-            .iter()
-            .map(|x| std::array::from_fn(|d| x[d]))
-            .collect();
-        cells.build(&pos)?;
-        cells.for_each_pair(|i, j, sep, r2| {
-            let mut s = [0.0; 3];
-            s[..D].copy_from_slice(&sep);
-            f(i, j, s, r2)
-        });
-        Ok(())
+) {
+    let cut = p.cutoff;
+    let axes = p.axes;
+    // Cells per periodic axis (at least one contact distance wide); non-periodic axes are
+    // unbounded (keys may be any i64).
+    let mut cells = [1i64; 3];
+    let mut width = [cut; 3];
+    for d in 0..axes {
+        if p.periodic[d] {
+            let c = (p.len[d] / cut).floor().clamp(1.0, (1u64 << 40) as f64);
+            cells[d] = c as i64;
+            width[d] = p.len[d] / c;
+        }
     }
-    if p.axes == 2 {
-        run::<2>(p, positions, &mut f)
-    } else {
-        run::<3>(p, positions, &mut f)
+    let key = |x: &[f64; 3]| -> [i64; 3] {
+        let mut k = [0i64; 3];
+        for d in 0..axes {
+            let t = x[d] - p.lo[d];
+            k[d] = if p.periodic[d] {
+                ((t.rem_euclid(p.len[d]) / width[d]).floor() as i64).min(cells[d] - 1)
+            } else {
+                // Saturating conversion: keys stay ordered even for far-away positions.
+                (t / width[d]).floor() as i64
+            };
+        }
+        k
+    };
+    let mut sorted: Vec<([i64; 3], u32)> = positions
+        .iter()
+        .enumerate()
+        .map(|(i, x)| (key(x), i as u32))
+        .collect();
+    sorted.sort_unstable();
+    let cut2 = cut * cut;
+    for &(ki, i) in &sorted {
+        let i = i as usize;
+        let xi = positions[i];
+        // The distinct neighbour keys along each axis.
+        let mut near = [[0i64; 3]; 3];
+        let mut count = [1usize; 3];
+        for d in 0..axes {
+            let c = ki[d];
+            let (list, k): ([i64; 3], usize) = if p.periodic[d] {
+                match cells[d] {
+                    1 => ([c, 0, 0], 1),
+                    2 => ([c, 1 - c, 0], 2),
+                    n => ([(c + n - 1) % n, c, (c + 1) % n], 3),
+                }
+            } else {
+                let mut out = [c; 3];
+                let mut k = 0;
+                for o in [c.checked_sub(1), Some(c), c.checked_add(1)]
+                    .into_iter()
+                    .flatten()
+                {
+                    out[k] = o;
+                    k += 1;
+                }
+                (out, k)
+            };
+            near[d] = list;
+            count[d] = k;
+        }
+        for a in 0..count[0] {
+            for b in 0..count[1] {
+                for c in 0..count[2] {
+                    let cell = [
+                        near[0][a],
+                        near[1][b],
+                        if axes == 3 { near[2][c] } else { 0 },
+                    ];
+                    let from = sorted.partition_point(|e| e.0 < cell);
+                    for &(kj, j) in &sorted[from..] {
+                        if kj != cell {
+                            break;
+                        }
+                        let j = j as usize;
+                        if j <= i {
+                            continue;
+                        }
+                        let mut sep = [0.0; 3];
+                        let mut r2 = 0.0;
+                        for d in 0..axes {
+                            let mut s = xi[d] - positions[j][d];
+                            if p.periodic[d] {
+                                s -= p.len[d] * (s / p.len[d]).round();
+                            }
+                            sep[d] = s;
+                            r2 += s * s;
+                        }
+                        if r2 < cut2 {
+                            f(i, j, sep, r2);
+                        }
+                    }
+                }
+            }
+        }
     }
 }
 
@@ -76,9 +151,31 @@ pub(crate) fn for_each_close_pair(
 pub const MAX_INITIAL_OVERLAP: f64 = 0.1;
 
 /// Refuses initial particle–particle overlaps deeper than [`MAX_INITIAL_OVERLAP`] of the
-/// smaller radius (they would release a large elastic energy at once).
+/// smaller radius, and particle–wall overlaps deeper than that fraction of the radius
+/// (they would release a large elastic energy at once).
 pub(crate) fn check_initial_overlaps(p: &Prepared) -> Result<()> {
-    let worst = deepest_overlap(p, &p.positions)?;
+    let (zw, _) = p.wall_motion(0.0);
+    for (i, (x, &r)) in p.positions.iter().zip(&p.radius).enumerate() {
+        for (k, w) in p.walls.iter().enumerate() {
+            let depth = if p.axes == 2 {
+                w.overlap(&[x[0], x[1]], r, zw, p.vertical)
+            } else {
+                w.overlap(x, r, zw, p.vertical)
+            };
+            // Positions are finite here (validated), so the depth is a number.
+            if depth > MAX_INITIAL_OVERLAP * r {
+                return Err(Error::invalid(
+                    format!("initial position of particle {i} against wall {k}"),
+                    format!("overlap {depth:e}"),
+                    format!(
+                        "deeper than {MAX_INITIAL_OVERLAP} of its radius ({r}); place the \
+                         particle inside the walls, at least a radius from each"
+                    ),
+                ));
+            }
+        }
+    }
+    let worst = deepest_overlap(p, &p.positions);
     if let Some((i, j, depth)) = worst {
         let rmin = p.radius[i].min(p.radius[j]);
         if depth > MAX_INITIAL_OVERLAP * rmin {
@@ -96,18 +193,15 @@ pub(crate) fn check_initial_overlaps(p: &Prepared) -> Result<()> {
 }
 
 /// The deepest particle–particle overlap `(i, j, depth)`, if any pair overlaps.
-pub(crate) fn deepest_overlap(
-    p: &Prepared,
-    positions: &[[f64; 3]],
-) -> Result<Option<(usize, usize, f64)>> {
+pub(crate) fn deepest_overlap(p: &Prepared, positions: &[[f64; 3]]) -> Option<(usize, usize, f64)> {
     let mut worst: Option<(usize, usize, f64)> = None;
     for_each_close_pair(p, positions, |i, j, _, r2| {
         let depth = p.radius[i] + p.radius[j] - r2.sqrt();
         if depth > 0.0 && worst.is_none_or(|w| depth > w.2) {
             worst = Some((i.min(j), i.max(j), depth));
         }
-    })?;
-    Ok(worst)
+    });
+    worst
 }
 
 pub(crate) fn compute(
@@ -125,7 +219,19 @@ pub(crate) fn compute(
         ..Default::default()
     };
     if !out.finite {
-        return Ok(out);
+        // A blown-up state has no meaningful energy: NaN, never a plausible 0.
+        let nan = f64::NAN;
+        return Ok(Diagnostics {
+            kinetic: nan,
+            elastic: nan,
+            potential: nan,
+            momentum: [nan; 3],
+            max_overlap: nan,
+            max_overlap_ratio: nan,
+            granular_temperature: nan,
+            com_height: nan,
+            ..out
+        });
     }
     let mut mtot = 0.0;
     let mut mz = 0.0;
@@ -158,10 +264,10 @@ pub(crate) fn compute(
             let mij = crate::reduced_mass(p.mass[i], p.mass[j]);
             out.elastic += crate::spring_energy(c, mij, depth);
             out.contacts += 1;
-            worst = worst.max(depth);
-            worst_ratio = worst_ratio.max(depth / p.radius[i].min(p.radius[j]));
+            worst = max_or_nan(worst, depth);
+            worst_ratio = max_or_nan(worst_ratio, depth / p.radius[i].min(p.radius[j]));
         }
-    })?;
+    });
     let (zw, _) = p.wall_motion(time);
     for ((&xi, &r), &m) in x.iter().zip(&p.radius).zip(&p.mass) {
         for w in &p.walls {
@@ -173,8 +279,8 @@ pub(crate) fn compute(
             if depth > 0.0 {
                 out.elastic += crate::spring_energy(&w.coeff, m, depth);
                 out.wall_contacts += 1;
-                worst = worst.max(depth);
-                worst_ratio = worst_ratio.max(depth / r);
+                worst = max_or_nan(worst, depth);
+                worst_ratio = max_or_nan(worst_ratio, depth / r);
             }
         }
     }

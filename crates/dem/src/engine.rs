@@ -1,5 +1,7 @@
-//! The backend-neutral engine interface behind [`crate::Dem`].
+//! The backend-neutral engine interface behind [`crate::Dem`], and the engine part of a
+//! checkpoint.
 
+use serde::{Deserialize, Serialize};
 use simkit_backend::Result;
 
 use crate::State;
@@ -7,7 +9,9 @@ use crate::prepared::Prepared;
 
 /// One backend instance (CPU at some dimension and precision, or GPU).
 pub(crate) trait Engine: Send {
-    /// Advances `steps` time steps.
+    /// Advances `steps` time steps with the blow-up check (see [`simkit_backend::guard`]);
+    /// on a failed check the engine is back at the last state that passed and returns
+    /// [`simkit_backend::Error::BlowUp`].
     fn step(&mut self, steps: u32) -> Result<()>;
     /// Time, positions and velocities (scene order, `[x, y, 0]` in 2D).
     fn state(&mut self) -> Result<State>;
@@ -15,4 +19,39 @@ pub(crate) trait Engine: Send {
     fn prepared(&self) -> &Prepared;
     /// Backend description (device, precision, threads).
     fn name(&self) -> String;
+    /// Steps done since the start of the run (checkpoints included).
+    fn steps_done(&self) -> u64;
+    /// The checkpoint model string (backend kind, precision, dimension).
+    fn model(&self) -> String;
+    /// The complete dynamic state (downloaded on the GPU).
+    fn save(&mut self) -> Result<EngineState>;
+}
+
+/// The dynamic state of an engine, as a checkpoint stores it: everything beyond the scene
+/// and the settings that the next steps read. Vectors are flat, `width` values per slot,
+/// and hold the engine's numbers exactly (`f32` widens to `f64` without rounding).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub(crate) struct EngineState {
+    /// Steps done.
+    pub steps: u64,
+    /// Simulated time (the CPU accumulates `t += dt`; the GPU derives it from `steps`).
+    pub time: f64,
+    /// Whether the first force evaluation has happened (CPU).
+    pub started: bool,
+    /// Values per slot in the vectors below.
+    pub width: u32,
+    /// Scene index of every slot (CPU: the cell-sorted order of the last list build).
+    pub id: Vec<u32>,
+    /// Positions (CPU: not wrapped since the last list build; GPU: `(x, y, z, radius)`).
+    pub pos: Vec<f64>,
+    /// Velocities (GPU: `(vx, vy, vz, mass)`).
+    pub vel: Vec<f64>,
+    /// Accelerations of the last force evaluation (GPU: `w` the deepest overlap ratio).
+    pub acc: Vec<f64>,
+    /// CPU: predicted velocities (velocity Verlet) or last displacements (position
+    /// Verlet); empty on the GPU.
+    pub aux: Vec<f64>,
+    /// CPU: positions at the last list build (the list is rebuilt from them on resume, so
+    /// it is the same list); empty on the GPU.
+    pub reference: Vec<f64>,
 }

@@ -6,22 +6,33 @@
 //! `dem_force` (one invocation per particle gathering contact forces over the full shell
 //! of neighbour cells, walls, gravity, second half kick) and `dem_tick` (device step
 //! counter for the wall motion). [`Engine::state`] downloads the state.
+//!
+//! Blow-up check: at every check step (`Config::check_every`, and at the end of a call)
+//! `dem_check` (shaders/check.wgsl) tests every particle for non-finite positions and
+//! velocities, a centre more than its radius outside the box along a closed axis, and a
+//! contact deeper than `Config::max_overlap` (the force kernel leaves the deepest overlap
+//! ratio of each particle in `acc.w`); then a [`GpuGuard`] checks the state buffers and the
+//! check's alarm for non-finite values and snapshots them while all is well. One small
+//! download per `step(n)` call reads the outcome; after a failure the evidence is read and
+//! the snapshots are copied back.
 
 use bytemuck::{Pod, Zeroable};
 
-use simkit_neighbor::{CELLS_WGSL, CellGrid, GPU_LOOP_RESERVE, GpuCellList, OutOfBox};
+use simkit_neighbor::{CELLS_WGSL, CellGrid, GPU_LOOP_RESERVE, GpuCellList, MAX_CELLS, OutOfBox};
 
-use simkit_backend::gpu::{DISPATCH_WGSL, Uniform};
-use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Result};
+use simkit_backend::gpu::{DISPATCH_WGSL, GUARD_WGSL, GpuGuard, Uniform, Watch};
+use simkit_backend::guard::{blow_up, chunks};
+use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Precision, Result};
 
 use crate::State;
-use crate::engine::Engine;
+use crate::engine::{Engine, EngineState};
 use crate::prepared::Prepared;
 
 const PARAMS_WGSL: &str = simkit_backend::wgsl!("params.wgsl");
 const DRIFT_WGSL: &str = simkit_backend::wgsl!("drift.wgsl");
 const FORCE_WGSL: &str = simkit_backend::wgsl!("force.wgsl");
 const TICK_WGSL: &str = simkit_backend::wgsl!("tick.wgsl");
+const CHECK_WGSL: &str = simkit_backend::wgsl!("check.wgsl");
 /// The contact law (twin of [`crate::normal_force`], [`crate::friction_force`]).
 const CONTACT_WGSL: &str = simkit_backend::wgsl!("contact.wgsl");
 /// The wall geometry (twin of [`crate::plane_overlap`], [`crate::cylinder_overlap`],
@@ -50,6 +61,19 @@ struct GpuParams {
     dim: u32,
     _pad0: u32,
     _pad1: u32,
+}
+
+/// Mirror of `DemCheck` in `shaders/check.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct GpuCheck {
+    lo: [f32; 4],
+    hi: [f32; 4],
+    closed: [u32; 4],
+    max_overlap: f32,
+    epoch: u32,
+    begin: u32,
+    pad: u32,
 }
 
 /// Mirror of `DemWall` in `shaders/params.wgsl`: one wall record, 4 consecutive entries of
@@ -87,7 +111,18 @@ impl Cells {
             let lo: [f64; D] = std::array::from_fn(|d| p.lo[d]);
             let len: [f64; D] = std::array::from_fn(|d| p.len[d]);
             let per: [bool; D] = std::array::from_fn(|d| p.periodic[d]);
-            Ok(CellGrid::new(lo, len, per, p.cutoff)?.with_out_of_box(OutOfBox::Clamp))
+            // Cells at least a contact distance wide; a sparse box gets wider cells (at most
+            // about 8 n + 4096 of them), which only costs distance tests.
+            let limit = (8 * p.n + 4096).min(MAX_CELLS) as f64;
+            let mut width = p.cutoff;
+            while (0..D)
+                .map(|d| (len[d] / width).floor().max(1.0))
+                .product::<f64>()
+                > limit
+            {
+                width *= 1.25;
+            }
+            Ok(CellGrid::new(lo, len, per, width)?.with_out_of_box(OutOfBox::Clamp))
         }
         Ok(if p.axes == 2 {
             Cells::Two(GpuCellList::new(ctx, &grid::<2>(p)?, pos)?)
@@ -139,13 +174,20 @@ pub(crate) struct GpuEngine {
     drift: (Kernel, wgpu::BindGroup),
     force: (Kernel, wgpu::BindGroup),
     tick: (Kernel, wgpu::BindGroup),
+    check: (Kernel, wgpu::BindGroup),
+    guard: GpuGuard,
+    check_params: Uniform<GpuCheck>,
+    check_host: GpuCheck,
+    acc: GpuBuffer<[f32; 4]>,
+    evidence: GpuBuffer<[u32; 4]>,
+    first: GpuBuffer<u32>,
     steps: u64,
     _bound: BoundOnly,
 }
 
 /// Buffers only the kernels touch (held so they live as long as the bind groups).
 struct BoundOnly {
-    _acc: GpuBuffer<[f32; 4]>,
+    _alarm: GpuBuffer<u32>,
     _vpred: GpuBuffer<[f32; 4]>,
     _species: GpuBuffer<u32>,
     _table: GpuBuffer<[f32; 4]>,
@@ -188,7 +230,9 @@ fn in_pass(
 }
 
 impl GpuEngine {
-    pub fn new(ctx: &GpuContext, prep: Prepared) -> Result<Self> {
+    /// The engine for `prep`, at its initial state or, with `saved`, at a checkpointed
+    /// one.
+    pub fn new(ctx: &GpuContext, prep: Prepared, saved: Option<&EngineState>) -> Result<Self> {
         let have = ctx.limits().max_storage_buffers_per_shader_stage;
         if have < STORAGE_BUFFERS_NEEDED {
             return Err(Error::Unsupported(format!(
@@ -230,9 +274,19 @@ impl GpuEngine {
                 [v[0] as f32, v[1] as f32, v[2] as f32, prep.mass[i] as f32]
             })
             .collect();
+        let (pos_h, vel_h, acc_h, steps) = match saved {
+            None => (pos_h, vel_h, vec![[0.0f32; 4]; n], 0),
+            Some(s) => {
+                let (p, v, a) = load(s, n)?;
+                // Radii and masses from the scene (the same numbers the run had).
+                let p = p.iter().zip(&pos_h).map(|(x, h)| [x[0], x[1], x[2], h[3]]);
+                let v = v.iter().zip(&vel_h).map(|(x, h)| [x[0], x[1], x[2], h[3]]);
+                (p.collect(), v.collect(), a, s.steps)
+            }
+        };
         let pos = GpuBuffer::from_slice(ctx, "dem pos", &pos_h)?;
         let vel = GpuBuffer::from_slice(ctx, "dem vel", &vel_h)?;
-        let acc = GpuBuffer::<[f32; 4]>::zeroed(ctx, "dem acc", n)?;
+        let acc = GpuBuffer::from_slice(ctx, "dem acc", &acc_h)?;
         let vpred = GpuBuffer::from_slice(ctx, "dem vpred", &vel_h)?;
         let species = GpuBuffer::from_slice(ctx, "dem species", &prep.species)?;
         let mut table: Vec<[f32; 4]> = prep
@@ -267,7 +321,9 @@ impl GpuEngine {
             table.extend_from_slice(&bytemuck::cast::<GpuWall, [[f32; 4]; 4]>(record));
         }
         let table = GpuBuffer::from_slice(ctx, "dem table", &table)?;
-        let clock = GpuBuffer::<u32>::zeroed(ctx, "dem clock", 1)?;
+        // The device step counter keys the wall phase (wrapping at 2^32 steps, as on the
+        // device).
+        let clock = GpuBuffer::from_slice(ctx, "dem clock", &[steps as u32])?;
         let (amp, omega) = prep
             .vibration
             .map_or((0.0, 0.0), |v| (v.amplitude, v.omega));
@@ -345,14 +401,69 @@ impl GpuEngine {
         let k = kernel(ctx, &[TICK_WGSL], "dem_tick", 1, &[])?;
         let b = k.bind(ctx, &[clock.binding()])?;
         let tick = (k, b);
-        // Initial accelerations a(0) with the initial velocities.
-        let mut encoder = ctx.encoder("dem init");
-        in_pass(&mut encoder, "dem init forces", |pass| {
-            cells.encode(ctx, pass)?;
-            init.dispatch_items(ctx, pass, &init_bind, n as u64)
-        })?;
-        ctx.submit(encoder);
-        cells.check(ctx)?;
+        let mut closed = [0u32; 4];
+        let (mut lo, mut hi) = ([0.0f32; 4], [0.0f32; 4]);
+        for d in 0..prep.axes {
+            closed[d] = u32::from(!prep.periodic[d]);
+            lo[d] = prep.lo[d] as f32;
+            hi[d] = (prep.lo[d] + prep.len[d]) as f32;
+        }
+        closed[3] = u32::from(prep.max_overlap.is_finite());
+        let check_host = GpuCheck {
+            lo,
+            hi,
+            closed,
+            max_overlap: if prep.max_overlap.is_finite() {
+                prep.max_overlap as f32
+            } else {
+                0.0
+            },
+            epoch: 0,
+            begin: 0,
+            pad: 0,
+        };
+        let check_params = Uniform::new(ctx, "dem check params", &check_host);
+        let evidence = GpuBuffer::<[u32; 4]>::zeroed(ctx, "dem check evidence", n)?;
+        let first = GpuBuffer::<u32>::zeroed(ctx, "dem check first", 1)?;
+        let alarm = GpuBuffer::<u32>::zeroed(ctx, "dem check alarm", 1)?;
+        let k = kernel(ctx, &[GUARD_WGSL, CHECK_WGSL], "dem_check", 64, &[])?;
+        let b = k.bind(
+            ctx,
+            &[
+                params.binding(),
+                check_params.binding(),
+                pos.binding(),
+                vel.binding(),
+                acc.binding(),
+                clock.binding(),
+                evidence.binding(),
+                first.binding(),
+                alarm.binding(),
+            ],
+        )?;
+        let check = (k, b);
+        // Every buffer a step reads before writing it is state; vpred and the cell list
+        // are rewritten from them every step.
+        let guard = GpuGuard::new(
+            ctx,
+            &[
+                Watch::checked(&pos, Precision::F32),
+                Watch::checked(&vel, Precision::F32),
+                Watch::checked(&acc, Precision::F32),
+                Watch::checked(&alarm, Precision::F32),
+                Watch::copied(&clock),
+            ],
+        )?;
+        if saved.is_none() {
+            // Initial accelerations a(0) with the initial velocities.
+            let mut encoder = ctx.encoder("dem init");
+            in_pass(&mut encoder, "dem init forces", |pass| {
+                cells.encode(ctx, pass)?;
+                init.dispatch_items(ctx, pass, &init_bind, n as u64)
+            })?;
+            ctx.submit(encoder);
+            cells.check(ctx)?;
+        }
         Ok(Self {
             ctx: ctx.clone(),
             prep,
@@ -362,9 +473,16 @@ impl GpuEngine {
             drift,
             force,
             tick,
-            steps: 0,
+            check,
+            guard,
+            check_params,
+            check_host,
+            acc,
+            evidence,
+            first,
+            steps,
             _bound: BoundOnly {
-                _acc: acc,
+                _alarm: alarm,
                 _vpred: vpred,
                 _species: species,
                 _table: table,
@@ -375,27 +493,162 @@ impl GpuEngine {
     }
 }
 
+/// Positions, velocities and accelerations of a GPU checkpoint (4 values per particle).
+type Loaded = (Vec<[f32; 4]>, Vec<[f32; 4]>, Vec<[f32; 4]>);
+
+/// The device arrays of a checkpoint, checked against the particle count.
+fn load(s: &EngineState, n: usize) -> Result<Loaded> {
+    let bad = |what: String| Error::Checkpoint {
+        source_name: "<bytes>".into(),
+        reason: format!("{what}; the file does not belong to this scene"),
+    };
+    if s.width != 4 || s.id.len() != n || s.id.iter().enumerate().any(|(k, &i)| i as usize != k) {
+        return Err(bad(format!(
+            "{} slots of {} values, expected {n} slots of 4 in scene order",
+            s.id.len(),
+            s.width
+        )));
+    }
+    let arrays = |v: &[f64], name: &str| -> Result<Vec<[f32; 4]>> {
+        if v.len() != 4 * n {
+            return Err(bad(format!(
+                "{name} holds {} values, expected {}",
+                v.len(),
+                4 * n
+            )));
+        }
+        Ok(v.chunks_exact(4)
+            .map(|c| std::array::from_fn(|d| c[d] as f32))
+            .collect())
+    };
+    Ok((
+        arrays(&s.pos, "positions")?,
+        arrays(&s.vel, "velocities")?,
+        arrays(&s.acc, "accelerations")?,
+    ))
+}
+
+impl GpuEngine {
+    /// Records one step into `encoder`.
+    fn record_step(&self, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
+        let ctx = &self.ctx;
+        let n = self.prep.n as u64;
+        in_pass(encoder, "dem step", |pass| {
+            self.drift.0.dispatch_items(ctx, pass, &self.drift.1, n)?;
+            self.cells.encode(ctx, pass)?;
+            self.force.0.dispatch_items(ctx, pass, &self.force.1, n)?;
+            self.tick.0.dispatch_workgroups(ctx, pass, &self.tick.1, 1)
+        })
+    }
+
+    /// What the check that failed found: `(what, cause)` from the evidence of the first
+    /// failing check, or from the guard's report when the check kernel saw nothing (a
+    /// non-finite acceleration alone).
+    fn explain(&self, label: &str, index: u32) -> Result<(String, String)> {
+        const AXES: [&str; 3] = ["x", "y", "z"];
+        let first = self.first.download(&self.ctx)?[0];
+        let epoch = self.check_host.epoch;
+        let found = if first == u32::MAX {
+            None
+        } else {
+            let ev = self.evidence.download(&self.ctx)?;
+            ev.iter()
+                .position(|e| e[3] == epoch && e[2] == first)
+                .map(|i| (i, ev[i]))
+        };
+        let p = &self.prep;
+        Ok(match found {
+            Some((i, e)) => {
+                let (kind, axis) = (e[0] / 4, AXES[(e[0] % 4).min(2) as usize]);
+                let value = f32::from_bits(e[1]);
+                match kind {
+                    1 => (
+                        format!("particle {i}: position {axis} = {value}"),
+                        p.non_finite_cause(),
+                    ),
+                    2 => (
+                        format!("particle {i}: velocity {axis} = {value}"),
+                        p.non_finite_cause(),
+                    ),
+                    3 => {
+                        let d = (e[0] % 4).min(2) as usize;
+                        let (lo, hi) = (p.lo[d], p.lo[d] + p.len[d]);
+                        (
+                            format!(
+                                "particle {i}: position {axis} = {value}, outside the box \
+                                 [{lo}, {hi}] by more than its radius {}",
+                                p.radius[i]
+                            ),
+                            p.escape_cause(),
+                        )
+                    }
+                    _ => (
+                        format!(
+                            "particle {i} has a contact deeper than {value} of the smaller \
+                             radius (limit Config::max_overlap = {})",
+                            p.max_overlap
+                        ),
+                        p.overlap_cause(),
+                    ),
+                }
+            }
+            None => (
+                format!(
+                    "{label}: value {index} (particle {}) is not finite",
+                    index / 4
+                ),
+                p.non_finite_cause(),
+            ),
+        })
+    }
+}
+
 impl Engine for GpuEngine {
     fn step(&mut self, steps: u32) -> Result<()> {
         let ctx = &self.ctx;
         let n = self.prep.n as u64;
-        let mut left = steps;
-        while left > 0 {
-            let batch = left.min(STEPS_PER_SUBMIT);
-            let mut encoder = ctx.encoder("dem steps");
-            for _ in 0..batch {
-                in_pass(&mut encoder, "dem step", |pass| {
-                    self.drift.0.dispatch_items(ctx, pass, &self.drift.1, n)?;
-                    self.cells.encode(ctx, pass)?;
-                    self.force.0.dispatch_items(ctx, pass, &self.force.1, n)?;
-                    self.tick.0.dispatch_workgroups(ctx, pass, &self.tick.1, 1)
-                })?;
+        self.check_host.epoch = self.check_host.epoch.wrapping_add(1).max(1);
+        self.check_host.begin = self.steps as u32;
+        self.check_params.set(ctx, &self.check_host);
+        self.first.upload(ctx, &[u32::MAX])?;
+        self.guard.begin(ctx)?;
+        // The step of every recorded check; the first is the starting state.
+        let mut checks = vec![self.steps];
+        let mut encoder = ctx.encoder("dem steps");
+        self.guard.record(ctx, &mut encoder)?;
+        let mut recorded = 0;
+        for stretch in chunks(self.steps, steps, self.prep.check_every) {
+            for _ in 0..stretch {
+                self.record_step(&mut encoder)?;
+                recorded += 1;
+                if recorded == STEPS_PER_SUBMIT {
+                    ctx.submit(std::mem::replace(&mut encoder, ctx.encoder("dem steps")));
+                    recorded = 0;
+                }
             }
-            ctx.submit(encoder);
-            left -= batch;
-            self.steps += u64::from(batch);
+            in_pass(&mut encoder, "dem check", |pass| {
+                self.check.0.dispatch_items(ctx, pass, &self.check.1, n)
+            })?;
+            self.guard.record(ctx, &mut encoder)?;
+            let last = checks[checks.len() - 1];
+            checks.push(last + u64::from(stretch));
         }
-        Ok(())
+        ctx.submit(encoder);
+        let report = self.guard.report(ctx)?;
+        match report.bad {
+            None => {
+                self.steps = checks[checks.len() - 1];
+                Ok(())
+            }
+            Some((label, index)) => {
+                let passed = (report.passed as usize).clamp(1, checks.len() - 1);
+                let (good, bad) = (checks[passed - 1], checks[passed]);
+                let (what, cause) = self.explain(&label, index)?;
+                self.guard.rollback(ctx)?;
+                self.steps = good;
+                Err(blow_up(bad, good, what, cause))
+            }
+        }
     }
 
     fn state(&mut self) -> Result<State> {
@@ -423,6 +676,34 @@ impl Engine for GpuEngine {
 
     fn name(&self) -> String {
         format!("gpu f32 ({})", self.ctx.adapter_info().name)
+    }
+
+    fn steps_done(&self) -> u64 {
+        self.steps
+    }
+
+    fn model(&self) -> String {
+        crate::sim::model_name(true, Precision::F32, self.prep.axes)
+    }
+
+    fn save(&mut self) -> Result<EngineState> {
+        self.cells.check(&self.ctx)?;
+        let flat = |v: Vec<[f32; 4]>| -> Vec<f64> {
+            v.as_flattened().iter().map(|&x| f64::from(x)).collect()
+        };
+        let n = self.prep.n;
+        Ok(EngineState {
+            steps: self.steps,
+            time: self.steps as f64 * self.prep.dt,
+            started: true,
+            width: 4,
+            id: (0..n as u32).collect(),
+            pos: flat(self.pos.download(&self.ctx)?),
+            vel: flat(self.vel.download(&self.ctx)?),
+            acc: flat(self.acc.download(&self.ctx)?),
+            aux: Vec::new(),
+            reference: Vec::new(),
+        })
     }
 }
 
@@ -453,6 +734,24 @@ mod tests {
                 ("dim", offset_of!(GpuParams, dim)),
                 ("_pad0", offset_of!(GpuParams, _pad0)),
                 ("_pad1", offset_of!(GpuParams, _pad1)),
+            ],
+        );
+    }
+
+    #[test]
+    fn gpu_check_mirrors_dem_check() {
+        let source = [DISPATCH_WGSL, PARAMS_WGSL, GUARD_WGSL, CHECK_WGSL].concat();
+        assert_mirrors::<GpuCheck>(
+            &source,
+            "DemCheck",
+            &[
+                ("lo", offset_of!(GpuCheck, lo)),
+                ("hi", offset_of!(GpuCheck, hi)),
+                ("closed", offset_of!(GpuCheck, closed)),
+                ("max_overlap", offset_of!(GpuCheck, max_overlap)),
+                ("epoch", offset_of!(GpuCheck, epoch)),
+                ("begin", offset_of!(GpuCheck, begin)),
+                ("pad", offset_of!(GpuCheck, pad)),
             ],
         );
     }

@@ -1,9 +1,10 @@
 //! Scene description: particles, species-pair materials, walls, gravity, vibration, box.
 
+use serde::{Deserialize, Serialize};
 use simkit_backend::{Error, Result};
 
 /// Spatial dimension of a scene.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Dim {
     /// Discs in the x-y plane; the vertical axis is y.
     Two,
@@ -31,7 +32,7 @@ impl Dim {
 ///
 /// The linear spring–dashpot coefficients follow from `(e, t_c)` with the reduced mass
 /// (see [`crate::ContactCoefficients`]), so the requested `e` and `t_c` hold for any mass pair.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Material {
     /// Normal coefficient of restitution, in (0, 1].
     pub restitution: f64,
@@ -98,7 +99,7 @@ impl Material {
 }
 
 /// One particle: a disc (2D) or sphere (3D) without rotation.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Particle {
     /// Position (in 2D the z component must be 0).
     pub position: [f64; 3],
@@ -138,7 +139,7 @@ impl Particle {
 }
 
 /// Geometry of a wall.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub enum WallShape {
     /// The plane `normal . x = offset`; particles live on the side the unit `normal` points
     /// to (`normal . x > offset`).
@@ -160,7 +161,7 @@ pub enum WallShape {
 }
 
 /// A wall with its own contact material; it may follow the container vibration.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Wall {
     /// Geometry at rest (time 0 without vibration offset).
     pub shape: WallShape,
@@ -205,7 +206,7 @@ impl Wall {
 
 /// Sinusoidal vertical motion of the container: `z_w(t) = -A cos(omega t)`,
 /// velocity `A omega sin(omega t)`; vibration strength `Gamma = A omega^2 / g`.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Vibration {
     /// Amplitude `A`.
     pub amplitude: f64,
@@ -257,6 +258,22 @@ pub struct Scene {
 }
 
 const AXES: [&str; 3] = ["x", "y", "z"];
+
+/// The fields of a [`Scene`] as a checkpoint stores them; [`Scene::from_record`] rebuilds
+/// the scene through the validating builders.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub(crate) struct SceneRecord {
+    dim: Dim,
+    lo: [f64; 3],
+    hi: [f64; 3],
+    periodic: [bool; 3],
+    n_species: usize,
+    pairs: Vec<Material>,
+    particles: Vec<Particle>,
+    walls: Vec<Wall>,
+    gravity: f64,
+    vibration: Option<Vibration>,
+}
 
 impl Scene {
     /// An empty scene in the box `[lo, hi]` (z ignored in 2D) with one species whose
@@ -540,6 +557,69 @@ impl Scene {
             .chain(self.walls.iter().map(|w| &w.material))
             .map(|m| m.contact_time)
             .fold(f64::INFINITY, f64::min)
+    }
+
+    /// The scene as a checkpoint stores it.
+    pub(crate) fn to_record(&self) -> SceneRecord {
+        SceneRecord {
+            dim: self.dim,
+            lo: self.lo,
+            hi: self.hi,
+            periodic: self.periodic,
+            n_species: self.n_species,
+            pairs: self.pairs.clone(),
+            particles: self.particles.clone(),
+            walls: self.walls.clone(),
+            gravity: self.gravity,
+            vibration: self.vibration,
+        }
+    }
+
+    /// Rebuilds a scene from a checkpoint record through the builders, so it is validated
+    /// exactly as one built by hand.
+    pub(crate) fn from_record(r: SceneRecord) -> Result<Self> {
+        let first = *r.pairs.first().ok_or_else(|| {
+            Error::invalid(
+                "species-pair table",
+                "empty",
+                "must hold n_species^2 materials",
+            )
+        })?;
+        let n = r.n_species;
+        if n.checked_mul(n) != Some(r.pairs.len()) {
+            return Err(Error::invalid(
+                "species-pair table",
+                format!("{} materials for {n} species", r.pairs.len()),
+                "must hold n_species^2 materials",
+            ));
+        }
+        let mut s = Scene::new(r.dim, r.lo, r.hi, first)?;
+        s.set_periodic(r.periodic);
+        s.set_species(n, first)?;
+        for a in 0..n {
+            for b in a..n {
+                let m = r.pairs[pair_index(a as u32, b as u32, n)];
+                if m != r.pairs[pair_index(b as u32, a as u32, n)] {
+                    return Err(Error::invalid(
+                        format!("species pair ({a}, {b})"),
+                        "asymmetric",
+                        "the pair table must be symmetric",
+                    ));
+                }
+                s.set_pair(a as u32, b as u32, m)?;
+            }
+        }
+        s.set_gravity(r.gravity)?;
+        if let Some(v) = r.vibration {
+            s.set_vibration(v.amplitude, v.omega)?;
+        }
+        for w in r.walls {
+            s.add_wall(w)?;
+        }
+        for p in r.particles {
+            s.add_particle(p)?;
+        }
+        Ok(s)
     }
 
     pub(crate) fn check_ready(&self) -> Result<()> {

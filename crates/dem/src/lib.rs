@@ -15,6 +15,56 @@
 //! - [`Dem`]: the simulation ([`simkit_backend::Simulation`]), with [`Diagnostics`].
 //! - [`Units`]: the source's normalised units from cm, g, s, Hz and `Gamma`.
 //!
+//! # Runs that cannot silently go wrong
+//!
+//! [`Dem::new`] refuses, on both backends alike (the checks are shared): particles outside
+//! the box (periodic axes: more than one box length), initial overlaps deeper than
+//! [`MAX_INITIAL_OVERLAP`] of a radius with another particle or a wall, periodic axes
+//! shorter than twice the largest diameter times `1 + skin`, magnitudes the precision cannot
+//! hold (the GPU and [`Precision::F32`] computations need `f32`), and a time step over
+//! [`safe_dt`] unless overridden. Any box size works: the overlap checks need no grid over
+//! the box.
+//!
+//! Inside `step(n)` the state is checked every [`Config::check_every`] steps (default 100,
+//! counted from step 0; 0 = only at the end of each call, which always happens): non-finite
+//! positions or velocities, a particle more than its radius outside the box along a
+//! non-periodic axis (it escaped through a wall, or the box has none), and a contact deeper
+//! than [`Config::max_overlap`] of the smaller radius (default [`DEFAULT_MAX_OVERLAP`] =
+//! 0.5). A failed check returns [`simkit_backend::Error::BlowUp`] (the step, the particle and
+//! its value, the likely cause, e.g. "time step too large for the contact stiffness: use
+//! dt <= ..."), and the run is rolled back to the last state that passed:
+//! [`simkit_backend::Simulation::steps_done`] and `state()` give it. The CPU keeps a copy of
+//! the state per check; the GPU checks on the device (`dem_check` and
+//! [`simkit_backend::gpu::GpuGuard`]) with one small download per call. The check does not
+//! change the results (tested bit for bit against `check_every = 0`).
+//!
+//! # Checkpoints
+//!
+//! [`Dem`] implements [`simkit_backend::Restart`]: the checkpoint holds the scene, the
+//! settings and the complete dynamic state (step count, simulated time and so the wall
+//! phase, accelerations, half-step quantities, the particle order and the neighbour-list
+//! build positions), and a run resumed from it on the backend kind that wrote it continues
+//! bit for bit.
+//!
+//! ```
+//! use simkit_backend::{Backend, Restart, Simulation};
+//! use simkit_dem::{Config, Dem, Dim, Material, Particle, Scene};
+//! # fn main() -> simkit_backend::Result<()> {
+//! let mut scene = Scene::new(Dim::Two, [0.0; 3], [4.0, 4.0, 0.0], Material::new(0.9, 0.05))?;
+//! scene.set_gravity(1.0)?.add_box_walls(Material::new(0.8, 0.05), false)?;
+//! scene.add_particle(Particle::new([2.0, 2.0, 0.0], 0.5, 1.0))?;
+//! let mut sim = Dem::new(&scene, &Config::default(), Backend::Cpu)?;
+//! sim.step(150)?;
+//! let bytes = sim.checkpoint()?; // or sim.write_checkpoint("run.ckpt")?
+//! let mut resumed = Dem::resume(&bytes, Backend::Cpu)?;
+//! sim.step(100)?;
+//! resumed.step(100)?;
+//! assert_eq!(resumed.steps_done(), 250);
+//! assert_eq!(resumed.state()?, sim.state()?);
+//! # Ok(())
+//! # }
+//! ```
+//!
 //! ```
 //! use simkit_backend::{Backend, Simulation};
 //! use simkit_dem::{Config, Dem, Dim, Material, Particle, Scene};
@@ -49,7 +99,9 @@ mod sim;
 mod units;
 mod walls;
 
-pub use config::{Config, DEFAULT_STEPS_PER_CONTACT, Integrator, resolve_dt, safe_dt};
+pub use config::{
+    Config, DEFAULT_MAX_OVERLAP, DEFAULT_STEPS_PER_CONTACT, Integrator, resolve_dt, safe_dt,
+};
 pub use contact::{ContactCoefficients, friction_force, normal_force, reduced_mass, spring_energy};
 pub use diagnostics::Diagnostics;
 pub use diagnostics::MAX_INITIAL_OVERLAP;

@@ -1,11 +1,45 @@
 //! Scene data resolved for the backends: coefficients, time step, grid geometry.
 
-use simkit_backend::Result;
+use simkit_backend::{Error, Result};
 
 use crate::{
     Config, ContactCoefficients, Integrator, Scene, Vibration, WallShape, cylinder_overlap,
-    plane_overlap, resolve_dt, wall_motion,
+    plane_overlap, resolve_dt, safe_dt, wall_motion,
 };
+
+/// Largest magnitude of any length, speed, mass or coefficient the `f64` engines accept:
+/// far beyond any unit system, it keeps squares and products of the inputs finite.
+const F64_LIMIT: f64 = 1e100;
+/// The same for engines that compute in `f32` (the GPU, the CPU with `Precision::F32`).
+const F32_LIMIT: f64 = 1e30;
+
+/// Refuses a value whose magnitude is beyond `limit` or, if non-zero, below `1 / limit`
+/// (it would overflow or vanish in the engine's precision).
+fn in_range(name: &str, v: f64, limit: f64, precision: &str) -> Result<()> {
+    check_magnitude(name, v, limit, precision, true)
+}
+
+/// Like [`in_range`] for values that may be arbitrarily small (speeds, offsets).
+fn not_huge(name: &str, v: f64, limit: f64, precision: &str) -> Result<()> {
+    check_magnitude(name, v, limit, precision, false)
+}
+
+fn check_magnitude(name: &str, v: f64, limit: f64, precision: &str, lower: bool) -> Result<()> {
+    let a = v.abs();
+    let floor = if lower { 1.0 / limit } else { 0.0 };
+    if a.is_finite() && (a == 0.0 || (a <= limit && a >= floor)) {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            name,
+            v,
+            format!(
+                "its magnitude must be 0 or within [{floor:e}, {limit:e}] for a run in \
+                 {precision}; rescale the units (e.g. lengths in particle diameters)"
+            ),
+        ))
+    }
+}
 
 /// A wall with its coefficients, in a backend-neutral form.
 #[derive(Clone, Copy, Debug)]
@@ -67,12 +101,29 @@ pub(crate) struct Prepared {
     pub len: [f64; 3],
     pub periodic: [bool; 3],
     pub cutoff: f64,
+    /// The safe time-step bound of the scene ([`safe_dt`]), for the blow-up messages.
+    pub safe_dt: f64,
+    /// Blow-up check interval ([`Config::check_every`]).
+    pub check_every: u32,
+    /// Overlap limit of the blow-up check ([`Config::max_overlap`]).
+    pub max_overlap: f64,
+    /// Whether the scene has walls (for the blow-up messages).
+    pub has_walls: bool,
 }
 
 impl Prepared {
-    pub fn new(scene: &Scene, config: &Config) -> Result<Self> {
+    /// Validates `scene` and `config` for an engine that computes in `f32` (`single`) or
+    /// `f64`: every check both backends share lives here, so they accept and refuse the
+    /// same inputs.
+    pub fn new(scene: &Scene, config: &Config, single: bool) -> Result<Self> {
         scene.check_ready()?;
         let dt = resolve_dt(scene, config)?;
+        let (limit, precision) = if single {
+            (F32_LIMIT, "f32")
+        } else {
+            (F64_LIMIT, "f64")
+        };
+        Self::check_scene(scene, config, dt, limit, precision)?;
         let dim = scene.dim();
         let axes = dim.axes();
         let vertical = dim.vertical();
@@ -145,8 +196,180 @@ impl Prepared {
             len,
             periodic: scene.periodic(),
             cutoff: 2.0 * r_max,
+            safe_dt: safe_dt(scene),
+            check_every: config.check_every,
+            max_overlap: config.max_overlap,
+            has_walls: !scene.walls().is_empty(),
         };
         Ok(p)
+    }
+
+    /// The checks of [`Prepared::new`] beyond the builders': magnitudes the precision can
+    /// hold, particles inside the box, periodic axes long enough for the neighbour lists.
+    fn check_scene(
+        scene: &Scene,
+        config: &Config,
+        dt: f64,
+        limit: f64,
+        precision: &str,
+    ) -> Result<()> {
+        const AXES: [&str; 3] = ["x", "y", "z"];
+        let axes = scene.dim().axes();
+        let ps = scene.particles();
+        if ps.len() >= (u32::MAX / 2) as usize {
+            return Err(Error::invalid(
+                "particle count",
+                ps.len(),
+                "must be below 2^31 (indices are 32-bit on both backends)",
+            ));
+        }
+        let (lo, hi) = (scene.lo(), scene.hi());
+        for d in 0..axes {
+            not_huge(
+                &format!("box lower corner .{}", AXES[d]),
+                lo[d],
+                limit,
+                precision,
+            )?;
+            not_huge(
+                &format!("box upper corner .{}", AXES[d]),
+                hi[d],
+                limit,
+                precision,
+            )?;
+            in_range(
+                &format!("box length along {}", AXES[d]),
+                hi[d] - lo[d],
+                limit,
+                precision,
+            )?;
+        }
+        in_range("dt", dt, limit, precision)?;
+        not_huge("gravity", scene.gravity(), limit, precision)?;
+        if let Some(v) = scene.vibration() {
+            not_huge("vibration amplitude", v.amplitude, limit, precision)?;
+            in_range("vibration omega", v.omega, limit, precision)?;
+        }
+        let materials = scene
+            .pair_table()
+            .iter()
+            .chain(scene.walls().iter().map(|w| &w.material));
+        for m in materials {
+            let c = ContactCoefficients::new(m);
+            in_range("contact stiffness (pi / t_c)^2", c.kappa, limit, precision)?;
+            not_huge("contact damping 2 ln(1/e) / t_c", c.two_b, limit, precision)?;
+            not_huge("friction mu_s", c.mu_s, limit, precision)?;
+            not_huge("friction mu_k", c.mu_k, limit, precision)?;
+        }
+        for (i, p) in ps.iter().enumerate() {
+            in_range(&format!("particle[{i}].radius"), p.radius, limit, precision)?;
+            in_range(&format!("particle[{i}].mass"), p.mass, limit, precision)?;
+            for d in 0..axes {
+                let x = p.position[d];
+                // A periodic axis takes positions up to one box length outside (both
+                // backends wrap them once); a closed one only positions inside.
+                let slack = if scene.periodic()[d] {
+                    hi[d] - lo[d]
+                } else {
+                    0.0
+                };
+                if !(x >= lo[d] - slack && x <= hi[d] + slack) {
+                    return Err(Error::invalid(
+                        format!("particle[{i}].position.{}", AXES[d]),
+                        x,
+                        format!(
+                            "outside the box [{}, {}] along {}{}; place every particle \
+                             inside the box (its centre within [lo, hi])",
+                            lo[d],
+                            hi[d],
+                            AXES[d],
+                            if slack > 0.0 {
+                                " by more than one box length"
+                            } else {
+                                ""
+                            }
+                        ),
+                    ));
+                }
+                not_huge(
+                    &format!("particle[{i}].velocity.{}", AXES[d]),
+                    p.velocity[d],
+                    limit,
+                    precision,
+                )?;
+            }
+        }
+        // Each neighbour-list pair keeps one periodic image between list builds: no pair
+        // may be within reach in two images (both backends refuse the same boxes).
+        let reach = 2.0 * scene.max_radius() * (1.0 + config.skin);
+        let periodic = scene.periodic();
+        for d in 0..axes {
+            if periodic[d] && hi[d] - lo[d] < 2.0 * reach {
+                return Err(Error::invalid(
+                    format!("periodic box length along {}", AXES[d]),
+                    hi[d] - lo[d],
+                    format!(
+                        "must be at least twice the largest diameter times (1 + skin), \
+                         2 x {reach}; enlarge the box, make the axis closed or reduce \
+                         Config::skin"
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The blow-up cause when the time step is over the safe bound (only possible with
+    /// `Config::allow_unstable_dt`).
+    fn unstable_cause(&self) -> Option<String> {
+        (self.dt > self.safe_dt * (1.0 + 1e-12)).then(|| {
+            format!(
+                "time step too large for the contact stiffness: use dt <= {:e} (dt = {:e} \
+                 was let through by Config::allow_unstable_dt)",
+                self.safe_dt, self.dt
+            )
+        })
+    }
+
+    /// Likely cause of a non-finite position or velocity.
+    pub fn non_finite_cause(&self) -> String {
+        self.unstable_cause().unwrap_or_else(|| {
+            format!(
+                "a force overflowed although dt = {:e} is within the safe bound {:e}: check \
+                 the masses, radii, velocities and contact times for extreme values",
+                self.dt, self.safe_dt
+            )
+        })
+    }
+
+    /// Likely cause of a particle found outside the box.
+    pub fn escape_cause(&self) -> String {
+        let why = self.unstable_cause().unwrap_or_else(|| {
+            if self.has_walls {
+                "the wall contact is too soft for the impact speed (shorten the wall \
+                 material's contact_time) or a wall is missing on that face \
+                 (Scene::add_box_walls)"
+                    .into()
+            } else {
+                "the scene has no walls: particles may not leave the box along a \
+                 non-periodic axis; add walls (Scene::add_box_walls), make the axis \
+                 periodic or enlarge the box"
+                    .into()
+            }
+        });
+        format!("particle escaped through a wall: {why}")
+    }
+
+    /// Likely cause of a contact deeper than `max_overlap`.
+    pub fn overlap_cause(&self) -> String {
+        self.unstable_cause().unwrap_or_else(|| {
+            format!(
+                "impact too fast for the contact time: a head-on impact at relative speed v \
+                 reaches an overlap of about v t_c / pi; shorten the materials' contact_time \
+                 or raise Config::max_overlap (now {})",
+                self.max_overlap
+            )
+        })
     }
 
     /// Vertical wall displacement and velocity at time `t`.

@@ -1,14 +1,76 @@
 //! The user-facing simulation object and its state snapshot.
 
-use simkit_backend::{Backend, Error, Result, Simulation};
+use serde::{Deserialize, Serialize};
+use simkit_backend::{Backend, Error, Restart, Result, Simulation, checkpoint};
 
-#[cfg(feature = "gpu")]
-use crate::Integrator;
 use crate::cpu::CpuEngine;
 use crate::diagnostics;
-use crate::engine::Engine;
+use crate::engine::{Engine, EngineState};
+use crate::input::SceneRecord;
 use crate::prepared::Prepared;
-use crate::{Config, Diagnostics, Precision, Scene};
+use crate::{Config, Diagnostics, Integrator, Precision, Scene};
+
+/// The checkpoint model string of an engine: backend, precision, dimension.
+pub(crate) fn model_name(gpu: bool, precision: Precision, axes: usize) -> String {
+    if gpu {
+        format!("Dem<gpu f32, {axes}>")
+    } else {
+        format!("Dem<cpu {}, {axes}>", precision.wgsl())
+    }
+}
+
+/// [`Config`] as a checkpoint stores it.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct ConfigRecord {
+    dt: Option<f64>,
+    integrator: Integrator,
+    single: bool,
+    allow_unstable_dt: bool,
+    skin: f64,
+    check_every: u32,
+    max_overlap: f64,
+}
+
+impl From<&Config> for ConfigRecord {
+    fn from(c: &Config) -> Self {
+        Self {
+            dt: c.dt,
+            integrator: c.integrator,
+            single: c.precision == Precision::F32,
+            allow_unstable_dt: c.allow_unstable_dt,
+            skin: c.skin,
+            check_every: c.check_every,
+            max_overlap: c.max_overlap,
+        }
+    }
+}
+
+impl From<ConfigRecord> for Config {
+    fn from(c: ConfigRecord) -> Self {
+        Self {
+            dt: c.dt,
+            integrator: c.integrator,
+            precision: if c.single {
+                Precision::F32
+            } else {
+                Precision::F64
+            },
+            allow_unstable_dt: c.allow_unstable_dt,
+            skin: c.skin,
+            check_every: c.check_every,
+            max_overlap: c.max_overlap,
+        }
+    }
+}
+
+/// Everything a checkpoint holds: the inputs (validated again on resume) and the engine's
+/// dynamic state.
+#[derive(Serialize, Deserialize)]
+struct Payload {
+    scene: SceneRecord,
+    config: ConfigRecord,
+    engine: EngineState,
+}
 
 /// Host-side snapshot: time, positions and velocities (`[x, y, 0]` in 2D), in the scene's
 /// particle order.
@@ -42,24 +104,39 @@ pub struct State {
 /// ```
 pub struct Dem {
     engine: Box<dyn Engine>,
-    steps: u64,
+    scene: Scene,
+    config: Config,
 }
 
 impl Dem {
     /// Validates the scene and settings and builds the backend.
     ///
-    /// Errors: an empty scene, a time step over the safe bound (see
-    /// [`crate::resolve_dt`]), initial overlaps deeper than a tenth of a radius, position
-    /// Verlet on the GPU, or any GPU failure.
+    /// Errors: an empty scene, a particle outside the box, a time step over the safe bound
+    /// (see [`crate::resolve_dt`]), initial overlaps deeper than [`crate::MAX_INITIAL_OVERLAP`]
+    /// of a radius (between particles or with a wall), a periodic axis shorter than twice
+    /// the largest diameter times `1 + skin`, magnitudes the precision cannot hold (the GPU
+    /// computes in `f32`, as the CPU with [`Precision::F32`]), position Verlet on the GPU,
+    /// or any GPU failure. The checks are shared: both backends accept the same inputs.
     pub fn new(scene: &Scene, config: &Config, backend: Backend<'_>) -> Result<Self> {
-        let prep = Prepared::new(scene, config)?;
+        Self::build(scene, config, backend, None)
+    }
+
+    /// [`Dem::new`], at a checkpointed state when `saved` is given.
+    fn build(
+        scene: &Scene,
+        config: &Config,
+        backend: Backend<'_>,
+        saved: Option<&EngineState>,
+    ) -> Result<Self> {
+        let single = is_gpu(backend) || config.precision == Precision::F32;
+        let prep = Prepared::new(scene, config, single)?;
         diagnostics::check_initial_overlaps(&prep)?;
         let engine: Box<dyn Engine> = match backend {
             Backend::Cpu => match (prep.axes, config.precision) {
-                (2, Precision::F64) => Box::new(CpuEngine::<2, f64>::new(prep)?),
-                (2, Precision::F32) => Box::new(CpuEngine::<2, f32>::new(prep)?),
-                (_, Precision::F64) => Box::new(CpuEngine::<3, f64>::new(prep)?),
-                (_, Precision::F32) => Box::new(CpuEngine::<3, f32>::new(prep)?),
+                (2, Precision::F64) => Box::new(CpuEngine::<2, f64>::new(prep, saved)?),
+                (2, Precision::F32) => Box::new(CpuEngine::<2, f32>::new(prep, saved)?),
+                (_, Precision::F64) => Box::new(CpuEngine::<3, f64>::new(prep, saved)?),
+                (_, Precision::F32) => Box::new(CpuEngine::<3, f32>::new(prep, saved)?),
             },
             #[cfg(feature = "gpu")]
             Backend::Gpu(ctx) => {
@@ -70,10 +147,14 @@ impl Dem {
                             .into(),
                     ));
                 }
-                Box::new(crate::gpu::GpuEngine::new(ctx, prep)?)
+                Box::new(crate::gpu::GpuEngine::new(ctx, prep, saved)?)
             }
         };
-        Ok(Self { engine, steps: 0 })
+        Ok(Self {
+            engine,
+            scene: scene.clone(),
+            config: *config,
+        })
     }
 
     /// The time step in use.
@@ -109,10 +190,12 @@ impl Dem {
 impl Simulation for Dem {
     type State = State;
 
+    /// Advances `steps` steps, checking the state every [`Config::check_every`] steps and
+    /// at the end; a failed check returns [`Error::BlowUp`] with the run rolled back to the
+    /// last state that passed ([`Simulation::steps_done`] and [`Simulation::state`] give
+    /// it).
     fn step(&mut self, steps: u32) -> Result<()> {
-        self.engine.step(steps)?;
-        self.steps += u64::from(steps);
-        Ok(())
+        self.engine.step(steps)
     }
 
     fn state(&mut self) -> Result<State> {
@@ -120,10 +203,69 @@ impl Simulation for Dem {
     }
 
     fn steps_done(&self) -> u64 {
-        self.steps
+        self.engine.steps_done()
     }
 
     fn backend_name(&self) -> String {
         self.engine.name()
+    }
+}
+
+/// Whether `backend` is a GPU.
+fn is_gpu(backend: Backend<'_>) -> bool {
+    match backend {
+        Backend::Cpu => false,
+        #[cfg(feature = "gpu")]
+        Backend::Gpu(_) => true,
+    }
+}
+
+/// Checkpoints hold the scene, the settings and the complete dynamic state (CPU: positions,
+/// velocities, accelerations, half-step velocities or last displacements, the particle
+/// order and the positions of the last neighbour-list build, the step count and the
+/// accumulated time; GPU: the device buffers and the step count, which keys the wall
+/// phase). A checkpoint resumes on the backend kind that wrote it, bit for bit.
+impl Restart for Dem {
+    fn checkpoint(&mut self) -> Result<Vec<u8>> {
+        let engine = self.engine.save()?;
+        let payload = Payload {
+            scene: self.scene.to_record(),
+            config: ConfigRecord::from(&self.config),
+            engine,
+        };
+        checkpoint::encode(
+            env!("CARGO_PKG_NAME"),
+            env!("CARGO_PKG_VERSION"),
+            &self.engine.model(),
+            &payload,
+        )
+    }
+
+    fn resume(bytes: &[u8], backend: Backend<'_>) -> Result<Self> {
+        let header = checkpoint::header(bytes)?;
+        let payload: Payload = checkpoint::decode(
+            bytes,
+            env!("CARGO_PKG_NAME"),
+            env!("CARGO_PKG_VERSION"),
+            &header.model,
+        )?;
+        let fail = |reason: String| Error::Checkpoint {
+            source_name: "<bytes>".into(),
+            reason,
+        };
+        let scene = Scene::from_record(payload.scene)
+            .map_err(|e| fail(format!("the stored scene is not valid: {e}")))?;
+        let config = Config::from(payload.config);
+        let want = model_name(is_gpu(backend), config.precision, scene.dim().axes());
+        if header.model != want {
+            return Err(fail(format!(
+                "holds a {} run, and {} on this backend would be a {want} run; resume it on \
+                 the backend that wrote it (or start a new run there from Dem::state with \
+                 Scene::set_kinematics)",
+                header.model,
+                backend.name()
+            )));
+        }
+        Self::build(&scene, &config, backend, Some(&payload.engine))
     }
 }
