@@ -10,7 +10,12 @@
 //! ```text
 //! cargo run --release --example bacterial_colony                      # 40,000 steps, CPU
 //! cargo run --release --example bacterial_colony -- --steps 8000 --gpu
+//! cargo run --release --example bacterial_colony -- --steps 40000 --checkpoint-every 10000
+//! cargo run --release --example bacterial_colony -- --resume out/bacterial_colony/checkpoint.ckpt
 //! ```
+//! `--checkpoint-every N` saves the run every N steps to `out/bacterial_colony/checkpoint.ckpt`;
+//! `--resume FILE` continues it up to `--steps` in total, bit for bit as the uninterrupted
+//! run (frames, CSV rows and the GIF then cover the resumed part).
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -56,7 +61,11 @@ fn main() -> Result<()> {
 
     let (grid, model) = colony_scene::<f32>(N, N, 2026)?;
     let (cy, left, right) = (N * 127 / 512, N * 103 / 512, N * 151 / 512);
-    let mut sim = Rd::new(grid, model, &Config::new(Stepping::euler(0.005)), backend)?;
+    let checkpoints = simkit::cli::Checkpoints::from_args(&out)?;
+    let mut sim = checkpoints.start(backend, |b| {
+        Rd::new(grid, model, &Config::new(Stepping::euler(0.005)), b)
+    })?;
+    let first = sim.steps_done();
     println!(
         "bacterial colony: {N} x {N}, h = 0.5, dt = 0.005, gamma = 0.5, {steps} steps on {}",
         sim.backend_name()
@@ -73,18 +82,23 @@ fn main() -> Result<()> {
     )?;
     let mut frames = Vec::new();
     let (mut ts, mut gaps) = (Vec::new(), Vec::new());
-    let mut progress = Progress::new("colony", u64::from(steps));
+    let mut progress = Progress::new("colony", u64::from(steps).saturating_sub(first));
     let chunk = steps / FRAMES;
     let mut stepping_secs = 0.0;
     for f in 0..=FRAMES {
-        if f > 0 {
-            let n = if f == FRAMES {
-                steps - chunk * (FRAMES - 1)
-            } else {
-                chunk
-            };
+        // Frames are at fixed steps of the whole run; a resumed run starts at its step.
+        let end = if f == FRAMES {
+            u64::from(steps)
+        } else {
+            u64::from(chunk * f)
+        };
+        if end < first || (f > 0 && end == first) {
+            continue;
+        }
+        if end > sim.steps_done() {
+            let n = (end - sim.steps_done()) as u32;
             let t = Instant::now();
-            sim.step(n)?;
+            checkpoints.step(&mut sim, n)?;
             stepping_secs += t.elapsed().as_secs_f64();
             progress.inc(u64::from(n));
         }
@@ -125,9 +139,10 @@ fn main() -> Result<()> {
         .add_scalar("n", g.field(1))?;
     vti.write(out.join("final.vti"))?;
 
-    let updates = (N * N) as f64 * f64::from(steps);
+    let stepped = u64::from(steps).saturating_sub(first);
+    let updates = (N * N) as f64 * stepped as f64;
     println!(
-        "\nthroughput: {:.3e} cell updates/s ({steps} steps in {stepping_secs:.2} s of stepping)",
+        "\nthroughput: {:.3e} cell updates/s ({stepped} steps in {stepping_secs:.2} s of stepping)",
         updates / stepping_secs
     );
     println!("outputs in {}", out.display());

@@ -7,13 +7,18 @@
 //! cargo run --release --example plasma_box                        # 10 steps, CPU f64
 //! cargo run --release --example plasma_box -- --steps 50 --f32
 //! cargo run --release --example plasma_box -- --gpu --n 16384
+//! cargo run --release --example plasma_box -- --steps 20 --checkpoint-every 10
+//! cargo run --release --example plasma_box -- --steps 40 --resume out/plasma_box/checkpoint.ckpt
 //! ```
-//! Prints the normalised units, interactions/s and the energy before and after.
+//! Prints the normalised units, interactions/s and the energy before and after (for a
+//! resumed run: at the resumed step and at the end). `--checkpoint-every N` saves the run
+//! every N steps to `out/plasma_box/checkpoint.ckpt`; `--resume FILE` continues it up to
+//! `--steps` in total, bit for bit as the uninterrupted run.
 
 use std::time::Instant;
 
 use simkit::backend::{Backend, GpuContext, Result, Simulation};
-use simkit::cli::arg;
+use simkit::cli::{Checkpoints, arg};
 use simkit::output::progress::Progress;
 use simkit::pp_coulomb::units::PhysicalInputs;
 use simkit::pp_coulomb::{Config, Integrator, PpCoulomb, Precision, scenes};
@@ -48,7 +53,12 @@ fn main() -> Result<()> {
     let config = Config::new(1.0, law)
         .with_integrator(Integrator::SymplecticEuler)
         .with_precision(precision);
-    let mut sim = PpCoulomb::new(particles, &config, backend)?;
+    let checkpoints = Checkpoints::from_args(std::path::Path::new("out/plasma_box"))?;
+    let mut sim = checkpoints.start(backend, |b| PpCoulomb::new(particles, &config, b))?;
+    let first = u32::try_from(sim.steps_done())
+        .unwrap_or(u32::MAX)
+        .min(steps);
+    let steps = steps - first;
     println!(
         "{} particles, exclusion radius {:.4} (Debye length), {steps} steps on {}",
         sim.len(),
@@ -59,7 +69,7 @@ fn main() -> Result<()> {
     let mut bar = Progress::new("plasma box", u64::from(steps));
     let start = Instant::now();
     for _ in 0..steps {
-        sim.step(1)?;
+        checkpoints.step(&mut sim, 1)?;
         bar.inc(1);
     }
     // GPU work is asynchronous: the state download waits for it.
