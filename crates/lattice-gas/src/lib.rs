@@ -17,6 +17,7 @@
 //! - Checkpoints: [`LatticeGas`] implements [`simkit_backend::Restart`] (`checkpoint`,
 //!   `write_checkpoint`, `resume`, `resume_file`): the settings, the lattice and the step
 //!   counter that keys the random bits, so a resumed run continues bit for bit, on any backend.
+//! - [`poiseuille`]: the viscosity from the profile of a body-forced channel.
 //! - [`viscosity`]: the shear-wave viscosity measurement and the FHP-I theory.
 //! - [`field`]: the lattice vectors and [`field::BlockField`], block sums of density and
 //!   momentum (filled from site bytes or straight from the multi-spin bit-planes).
@@ -50,6 +51,7 @@ pub mod field;
 pub mod gpu;
 pub mod lattice;
 pub mod observables;
+pub mod poiseuille;
 pub mod random;
 pub mod rules;
 mod sim;

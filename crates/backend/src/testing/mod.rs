@@ -25,6 +25,38 @@ pub const REQUIRE_GPU_ENV: &str = "SIMKIT_REQUIRE_GPU";
 #[cfg(feature = "gpu")]
 static CONTEXT: OnceLock<Result<GpuContext, Error>> = OnceLock::new();
 
+/// Environment variable listing the SIMD paths a test run must exercise, comma-separated
+/// (`avx2`, `avx512f`, `avx512vbmi`, or `all`); `.ci/run` sets it to what the CPU has.
+pub const REQUIRE_SIMD_ENV: &str = "SIMKIT_REQUIRE_SIMD";
+
+/// Reports whether a test exercised the SIMD path `feature` (e.g. `"avx512vbmi"`): when
+/// `ran` is false it prints that the test compared the portable code with itself, and
+/// panics when `SIMKIT_REQUIRE_SIMD` names `feature` (or `all`), so a CI runner with the
+/// feature cannot pass without running it. Returns `ran`.
+///
+/// # Panics
+/// When `ran` is false and the feature is required.
+pub fn simd_exercised(test: &str, feature: &str, ran: bool) -> bool {
+    if ran {
+        println!("{test}: the {feature} path ran");
+        return true;
+    }
+    let required = std::env::var(REQUIRE_SIMD_ENV).unwrap_or_default();
+    let listed = required
+        .split(',')
+        .map(str::trim)
+        .any(|f| f == feature || f == "all");
+    assert!(
+        !listed,
+        "{test}: {REQUIRE_SIMD_ENV}={required} requires the {feature} path, which did not run"
+    );
+    eprintln!(
+        "NOT EXERCISED {test}: this CPU (or build) lacks {feature}; the test compared the \
+         portable path with itself"
+    );
+    false
+}
+
 /// Whether `SIMKIT_REQUIRE_GPU` is set to something other than `0` or empty.
 pub fn gpu_required() -> bool {
     std::env::var(REQUIRE_GPU_ENV).is_ok_and(|v| !v.is_empty() && v != "0")

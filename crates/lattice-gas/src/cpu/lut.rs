@@ -326,7 +326,7 @@ mod tests {
         let vbmi = LutCpu::new(Lattice::new(64, 2).unwrap(), &Config::default())
             .unwrap()
             .uses_vbmi();
-        println!("AVX-512 VBMI path present: {vbmi}");
+        simkit_backend::testing::simd_exercised("vbmi_path_equals_scalar_loop", "avx512vbmi", vbmi);
         for (w, h) in [(64, 8), (200, 30), (37, 10), (320, 64)] {
             for rules in [RuleSet::FhpI, RuleSet::Full] {
                 let mut chan = Lattice::new(w, h).unwrap();

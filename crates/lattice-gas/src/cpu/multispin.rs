@@ -415,6 +415,10 @@ mod tests {
         if t == "avx512" {
             assert!(is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512bw"));
         }
+        // The conformance tests compare this dispatch with the lookup table bit for bit.
+        let test = "dispatch_follows_the_cpu_features";
+        simkit_backend::testing::simd_exercised(test, "avx512f", t == "avx512");
+        simkit_backend::testing::simd_exercised(test, "avx2", t != "baseline");
     }
 
     #[test]
