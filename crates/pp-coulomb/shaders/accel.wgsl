@@ -13,6 +13,10 @@ const WG: u32 = 128u;
 @group(0) @binding(2) var<storage, read_write> acc: array<vec4<REAL>>;  // ax, ay, az, 0
 @group(0) @binding(3) var<storage, read_write> partner: array<u32>;     // coincident j + 1
 @group(0) @binding(4) var<storage, read> coef: array<REAL>;             // [law parameter]
+// NaN bits (as f32) where a particle met a coincident partner: the blow-up guard, which
+// checks this buffer for non-finite values, catches it with the state (exact law only).
+@group(0) @binding(5) var<storage, read_write> coincident_flag: array<u32>;
+const FLAG: u32 = 0x7fc00000u;
 
 var<workgroup> tile: array<vec4<REAL>, WG>;
 
@@ -51,6 +55,7 @@ fn accel(
         acc[i] = vec4<REAL>(e * vel[i].w, 0.0);
         if (coincident != 0u) {
             partner[i] = coincident;
+            coincident_flag[i] = FLAG;
         }
     }
 }

@@ -3,13 +3,23 @@
 
 use simkit_backend::{Precision, Real, Result};
 
+use crate::guard::{Checks, Energy};
+
 /// Positions and velocities of a state, in f64.
 pub(crate) type PositionsVelocities = (Vec<[f64; 3]>, Vec<[f64; 3]>);
 
 /// What a backend implements.
 pub(crate) trait Engine: Send {
-    /// Advances `steps` steps.
-    fn step(&mut self, steps: u32) -> Result<()>;
+    /// Advances `steps` steps with the blow-up checks of `checks`; on a failed check the
+    /// engine puts itself back to the last state that passed and returns
+    /// `Error::BlowUp` (whose `rolled_back_to` the caller adopts).
+    fn step(&mut self, steps: u32, checks: &mut Checks<'_>) -> Result<()>;
+    /// Kinetic and potential energy of the current state under the exact law (the energy
+    /// check's measure; f64 sums).
+    fn energy(&mut self) -> Result<Energy>;
+    /// The accelerations kept for the next step (leapfrog keeps those at the current
+    /// positions between calls), if any.
+    fn kept_accelerations(&mut self) -> Result<Option<Vec<[f64; 3]>>>;
     /// Current positions and velocities (f64).
     fn state(&mut self) -> Result<PositionsVelocities>;
     /// Accelerations at the current positions.

@@ -1,16 +1,21 @@
 //! The GPU backend: tiled all-pairs field kernel and integrator passes, all on the device.
 
-use simkit_backend::gpu::DISPATCH_WGSL;
+use simkit_backend::gpu::{DISPATCH_WGSL, GpuGuard, Watch};
+use simkit_backend::guard::chunks;
 use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Precision, Real, Result};
 
 use crate::config::{Config, ForceLaw, Integrator, coincident_error};
 use crate::engine::{Engine, PositionsVelocities, pad_coordinate};
+use crate::guard::{
+    Checks, Energy, coincident_blow_up, energy_blow_up, energy_jump, jump_fails, non_finite_blow_up,
+};
 use crate::laws;
 use crate::particles::Particles;
 
 const ACCEL_WGSL: &str = simkit_backend::wgsl!("accel.wgsl");
 const UPDATE_WGSL: &str = simkit_backend::wgsl!("update.wgsl");
 const KICK_WGSL: &str = simkit_backend::wgsl!("kick.wgsl");
+const ENERGY_WGSL: &str = simkit_backend::wgsl!("energy.wgsl");
 /// Workgroup size and tile length (the `WG` constant of the shaders).
 const WG: usize = 128;
 
@@ -25,8 +30,14 @@ pub fn gpu_max_particles(ctx: &GpuContext) -> usize {
     }
 }
 
-/// Builds the engine for the configured precision (f64 needs `SHADER_F64`).
-pub(crate) fn engine(ctx: &GpuContext, p: &Particles, c: &Config) -> Result<Box<dyn Engine>> {
+/// Builds the engine for the configured precision (f64 needs `SHADER_F64`); `accelerations`
+/// are the kept accelerations of a resumed run (leapfrog), if any.
+pub(crate) fn engine(
+    ctx: &GpuContext,
+    p: &Particles,
+    c: &Config,
+    accelerations: Option<&[[f64; 3]]>,
+) -> Result<Box<dyn Engine>> {
     let max = gpu_max_particles(ctx);
     if p.len() > max {
         return Err(Error::Unsupported(format!(
@@ -40,7 +51,7 @@ pub(crate) fn engine(ctx: &GpuContext, p: &Particles, c: &Config) -> Result<Box<
         )));
     }
     Ok(match c.precision {
-        Precision::F32 => Box::new(GpuEngine::<f32>::new(ctx, p, c)?),
+        Precision::F32 => Box::new(GpuEngine::<f32>::new(ctx, p, c, accelerations)?),
         Precision::F64 => {
             if !ctx.has_f64() {
                 return Err(Error::Unsupported(format!(
@@ -49,13 +60,24 @@ pub(crate) fn engine(ctx: &GpuContext, p: &Particles, c: &Config) -> Result<Box<
                     ctx.adapter_info().name
                 )));
             }
-            Box::new(GpuEngine::<f64>::new(ctx, p, c)?)
+            Box::new(GpuEngine::<f64>::new(ctx, p, c, accelerations)?)
         }
     })
 }
 
+/// Labels of the watched state buffers (the guard reports them).
+const POS_LABELS: [&str; 2] = ["pp-coulomb positions A", "pp-coulomb positions B"];
+const VEL_LABEL: &str = "pp-coulomb velocities";
+const ACC_LABEL: &str = "pp-coulomb accelerations";
+const FLAG_LABEL: &str = "pp-coulomb coincident flags";
+
+/// Host-side counters at one recorded guard check: the step, the current position buffer,
+/// whether the accelerations are valid, and the energy reference.
+type Record = (u64, usize, bool, Option<Energy>);
+
 /// Device state in precision `T`: positions (x, y, z, charge) double-buffered, velocities
-/// (vx, vy, vz, q/m), accelerations, and the coincident-partner flags of the exact law.
+/// (vx, vy, vz, q/m), accelerations, the coincident flags and partners of the exact law;
+/// the guard watches every state buffer.
 struct GpuEngine<T: Real> {
     ctx: GpuContext,
     n: usize,
@@ -64,14 +86,19 @@ struct GpuEngine<T: Real> {
     vel: GpuBuffer<[T; 4]>,
     acc: GpuBuffer<[T; 4]>,
     partner: GpuBuffer<u32>,
+    flags: GpuBuffer<u32>,
+    partials: GpuBuffer<T>,
     drift_coef: GpuBuffer<T>,
     kick_coef: GpuBuffer<T>,
     accel: Kernel,
     drift: Kernel,
     kick: Kernel,
+    energy: Kernel,
     accel_bind: [wgpu::BindGroup; 2],
     drift_bind: [wgpu::BindGroup; 2],
     kick_bind: wgpu::BindGroup,
+    energy_bind: [wgpu::BindGroup; 2],
+    guard: GpuGuard,
     law: ForceLaw,
     integrator: Integrator,
     dt: f64,
@@ -82,7 +109,12 @@ struct GpuEngine<T: Real> {
 }
 
 impl<T: Real> GpuEngine<T> {
-    fn new(ctx: &GpuContext, p: &Particles, c: &Config) -> Result<Self> {
+    fn new(
+        ctx: &GpuContext,
+        p: &Particles,
+        c: &Config,
+        accelerations: Option<&[[f64; 3]]>,
+    ) -> Result<Self> {
         let prelude = laws::wgsl_prelude(T::PRECISION);
         let n = p.len();
         let npad = n.next_multiple_of(WG).max(WG);
@@ -102,13 +134,28 @@ impl<T: Real> GpuEngine<T> {
             .collect();
         // Padding entries keep every buffer non-empty (and are never read back).
         vel.resize(npad, [T::ZERO; 4]);
+        let mut mass: Vec<T> = p.mass.iter().map(|&m| T::from_f64(m)).collect();
+        mass.resize(npad, T::ZERO);
+        let (mut acc, a_valid) = match accelerations {
+            Some(a) if a.len() == n => (
+                a.iter()
+                    .map(|a| [a[0], a[1], a[2], 0.0].map(T::from_f64))
+                    .collect::<Vec<_>>(),
+                true,
+            ),
+            _ => (Vec::new(), false),
+        };
+        acc.resize(npad, [T::ZERO; 4]);
         let pos = [
-            GpuBuffer::from_slice(ctx, "pp-coulomb positions A", &pos)?,
-            GpuBuffer::from_slice(ctx, "pp-coulomb positions B", &pos)?,
+            GpuBuffer::from_slice(ctx, POS_LABELS[0], &pos)?,
+            GpuBuffer::from_slice(ctx, POS_LABELS[1], &pos)?,
         ];
-        let vel = GpuBuffer::from_slice(ctx, "pp-coulomb velocities", &vel)?;
-        let acc = GpuBuffer::<[T; 4]>::zeroed(ctx, "pp-coulomb accelerations", npad)?;
+        let vel = GpuBuffer::from_slice(ctx, VEL_LABEL, &vel)?;
+        let acc = GpuBuffer::from_slice(ctx, ACC_LABEL, &acc)?;
+        let mass = GpuBuffer::from_slice(ctx, "pp-coulomb masses", &mass)?;
         let partner = GpuBuffer::<u32>::zeroed(ctx, "pp-coulomb coincident partners", npad)?;
+        let flags = GpuBuffer::<u32>::zeroed(ctx, FLAG_LABEL, npad)?;
+        let partials = GpuBuffer::<T>::zeroed(ctx, "pp-coulomb energy partials", 2 * npad / WG)?;
         let law_coef = GpuBuffer::from_slice(
             ctx,
             "pp-coulomb law parameter",
@@ -122,6 +169,7 @@ impl<T: Real> GpuEngine<T> {
             ForceLaw::Plummer { .. } => laws::PLUMMER_WGSL,
         };
         let exact = if c.force == ForceLaw::Exact { 1.0 } else { 0.0 };
+        let sizes = [("N", n as f64), ("NPAD", npad as f64)];
         let accel = Kernel::new(
             ctx,
             &KernelDesc {
@@ -129,7 +177,17 @@ impl<T: Real> GpuEngine<T> {
                 sources: &[prelude, DISPATCH_WGSL, law_wgsl, ACCEL_WGSL],
                 entry: "accel",
                 workgroup_size: WG as u32,
-                constants: &[("N", n as f64), ("NPAD", npad as f64), ("EXACT", exact)],
+                constants: &[sizes[0], sizes[1], ("EXACT", exact)],
+            },
+        )?;
+        let energy = Kernel::new(
+            ctx,
+            &KernelDesc {
+                label: "pp-coulomb energy",
+                sources: &[prelude, DISPATCH_WGSL, laws::EXACT_WGSL, ENERGY_WGSL],
+                entry: "energy",
+                workgroup_size: WG as u32,
+                constants: &sizes,
             },
         )?;
         let drift = Kernel::new(
@@ -139,7 +197,7 @@ impl<T: Real> GpuEngine<T> {
                 sources: &[prelude, DISPATCH_WGSL, UPDATE_WGSL],
                 entry: "kick_drift",
                 workgroup_size: WG as u32,
-                constants: &[("N", n as f64)],
+                constants: &[sizes[0]],
             },
         )?;
         let kick = Kernel::new(
@@ -149,7 +207,7 @@ impl<T: Real> GpuEngine<T> {
                 sources: &[prelude, DISPATCH_WGSL, KICK_WGSL],
                 entry: "kick",
                 workgroup_size: WG as u32,
-                constants: &[("N", n as f64)],
+                constants: &[sizes[0]],
             },
         )?;
         let accel_bind = [0, 1].map(|b| {
@@ -161,6 +219,18 @@ impl<T: Real> GpuEngine<T> {
                     acc.binding(),
                     partner.binding(),
                     law_coef.binding(),
+                    flags.binding(),
+                ],
+            )
+        });
+        let energy_bind = [0, 1].map(|b| {
+            energy.bind(
+                ctx,
+                &[
+                    pos[b].binding(),
+                    vel.binding(),
+                    mass.binding(),
+                    partials.binding(),
                 ],
             )
         });
@@ -178,7 +248,18 @@ impl<T: Real> GpuEngine<T> {
         });
         let [a0, a1] = accel_bind;
         let [d0, d1] = drift_bind;
+        let [e0, e1] = energy_bind;
         let kick_bind = kick.bind(ctx, &[vel.binding(), acc.binding(), kick_coef.binding()])?;
+        let guard = GpuGuard::new(
+            ctx,
+            &[
+                Watch::checked(&pos[0], T::PRECISION),
+                Watch::checked(&pos[1], T::PRECISION),
+                Watch::checked(&vel, T::PRECISION),
+                Watch::checked(&acc, T::PRECISION),
+                Watch::checked(&flags, Precision::F32),
+            ],
+        )?;
         let mut engine = Self {
             ctx: ctx.clone(),
             n,
@@ -187,19 +268,24 @@ impl<T: Real> GpuEngine<T> {
             vel,
             acc,
             partner,
+            flags,
+            partials,
             drift_coef,
             kick_coef,
             accel,
             drift,
             kick,
+            energy,
             accel_bind: [a0?, a1?],
             drift_bind: [d0?, d1?],
             kick_bind,
+            energy_bind: [e0?, e1?],
+            guard,
             law: c.force,
             integrator: c.integrator,
             dt: c.dt,
             cur: 0,
-            a_valid: false,
+            a_valid,
         };
         engine.upload_coefficients()?;
         Ok(engine)
@@ -215,19 +301,14 @@ impl<T: Real> GpuEngine<T> {
         self.kick_coef.upload(&self.ctx, &[T::from_f64(kick)])
     }
 
-    /// Under the exact law, reads the partner flags and reports the first coincident pair.
-    fn check_coincident(&self) -> Result<()> {
-        if self.law != ForceLaw::Exact {
-            return Ok(());
-        }
+    /// The first particle flagged with a coincident partner: `(i, j)`, `i < j`.
+    fn coincident_pair(&self, flags: &[u32]) -> Result<Option<(usize, usize)>> {
+        let Some(i) = flags.iter().position(|f| *f != 0) else {
+            return Ok(None);
+        };
         let partner = self.partner.download(&self.ctx)?;
-        if let Some((i, &j)) = partner.iter().enumerate().find(|(_, j)| **j != 0) {
-            let j = j as usize - 1;
-            let x = self.pos[self.cur].download(&self.ctx)?;
-            let at = [0, 1, 2].map(|k| x[i][k].to_f64());
-            return Err(coincident_error(i.min(j), i.max(j), at));
-        }
-        Ok(())
+        let j = (partner[i] as usize).saturating_sub(1);
+        Ok(Some((i.min(j), i.max(j))))
     }
 
     /// Records one accel dispatch on the current positions.
@@ -240,6 +321,135 @@ impl<T: Real> GpuEngine<T> {
         )
     }
 
+    /// Records `steps` steps into `encoder` (one compute pass) and advances `cur`/`a_valid`.
+    fn encode_steps(&mut self, encoder: &mut wgpu::CommandEncoder, steps: u32) -> Result<()> {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("pp-coulomb steps"),
+            timestamp_writes: None,
+        });
+        let n = self.n as u64;
+        for _ in 0..steps {
+            let cur = self.cur;
+            match self.integrator {
+                Integrator::SymplecticEuler => {
+                    self.encode_accel(&mut pass, cur)?;
+                    self.drift
+                        .dispatch_items(&self.ctx, &mut pass, &self.drift_bind[cur], n)?;
+                    self.a_valid = false;
+                }
+                Integrator::Leapfrog => {
+                    if !self.a_valid {
+                        self.encode_accel(&mut pass, cur)?;
+                    }
+                    self.drift
+                        .dispatch_items(&self.ctx, &mut pass, &self.drift_bind[cur], n)?;
+                    self.encode_accel(&mut pass, 1 - cur)?;
+                    self.kick
+                        .dispatch_items(&self.ctx, &mut pass, &self.kick_bind, n)?;
+                    self.a_valid = true;
+                }
+            }
+            self.cur = 1 - cur;
+        }
+        Ok(())
+    }
+
+    /// Records the energy kernel on the current positions and a download of its partial
+    /// sums, submits `encoder`, and returns the energy (partials added in f64).
+    fn submit_energy(&self, mut encoder: wgpu::CommandEncoder) -> Result<Energy> {
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("pp-coulomb energy"),
+                timestamp_writes: None,
+            });
+            self.energy.dispatch_workgroups(
+                &self.ctx,
+                &mut pass,
+                &self.energy_bind[self.cur],
+                (self.npad / WG) as u64,
+            )?;
+        }
+        let download = self.partials.encode_download(&self.ctx, &mut encoder);
+        self.ctx.submit(encoder);
+        let partials = download.read(&self.ctx)?;
+        let (mut kinetic, mut potential) = (0.0, 0.0);
+        for pair in partials.chunks_exact(2) {
+            kinetic += pair[0].to_f64();
+            potential += pair[1].to_f64();
+        }
+        Ok(Energy { kinetic, potential })
+    }
+
+    /// Puts the device state back to the guard's last snapshot (record `records[passed - 1]`)
+    /// and the host counters with it; returns that record.
+    fn roll_back(
+        &mut self,
+        records: &[Record],
+        passed: usize,
+        checks: &mut Checks<'_>,
+    ) -> Result<u64> {
+        let Some(&(step, cur, a_valid, energy)) =
+            passed.checked_sub(1).and_then(|k| records.get(k))
+        else {
+            return Err(Error::Gpu(
+                "the blow-up guard found the starting state of the step call bad; nothing to \
+                 roll back to"
+                    .into(),
+            ));
+        };
+        self.guard.rollback(&self.ctx)?;
+        self.cur = cur;
+        self.a_valid = a_valid;
+        *checks.energy_ref = energy;
+        Ok(step)
+    }
+
+    /// The blow-up for a failed finite check (guard report `passed`, `bad`).
+    fn finite_failure(
+        &mut self,
+        records: &[Record],
+        passed: usize,
+        (label, index): (String, u32),
+        checks: &mut Checks<'_>,
+    ) -> Result<Error> {
+        let step = records.get(passed).map_or(checks.done, |r| r.0);
+        let index = index as usize;
+        let what = if label == FLAG_LABEL {
+            let flags = self.flags.download(&self.ctx)?;
+            let pair = self.coincident_pair(&flags)?.unwrap_or((index, index));
+            let x = self.pos[self.cur].download(&self.ctx)?;
+            let at = [0, 1, 2].map(|k| x[pair.0][k].to_f64());
+            let rolled = self.roll_back(records, passed, checks)?;
+            return Ok(coincident_blow_up(step, rolled, pair.0, pair.1, at));
+        } else {
+            let buffer = if label == POS_LABELS[0] {
+                &self.pos[0]
+            } else if label == POS_LABELS[1] {
+                &self.pos[1]
+            } else if label == VEL_LABEL {
+                &self.vel
+            } else {
+                &self.acc
+            };
+            let value = buffer
+                .download(&self.ctx)?
+                .get(index / 4)
+                .map_or(f64::NAN, |v| v[index % 4].to_f64());
+            let name = match label.as_str() {
+                l if POS_LABELS.contains(&l) => "position",
+                VEL_LABEL => "velocity",
+                _ => "acceleration",
+            };
+            let axis = ["x", "y", "z", "w"][index % 4];
+            format!(
+                "particle {}: {name} {axis} = {value} (read at the end of the call)",
+                index / 4
+            )
+        };
+        let rolled = self.roll_back(records, passed, checks)?;
+        Ok(non_finite_blow_up(step, rolled, what))
+    }
+
     fn to_f64(v: &[[T; 4]]) -> Vec<[f64; 3]> {
         v.iter()
             .map(|a| [a[0].to_f64(), a[1].to_f64(), a[2].to_f64()])
@@ -248,39 +458,56 @@ impl<T: Real> GpuEngine<T> {
 }
 
 impl<T: Real> Engine for GpuEngine<T> {
-    fn step(&mut self, steps: u32) -> Result<()> {
-        let mut cur = self.cur;
-        let mut a_valid = self.a_valid;
-        let n = self.n as u64;
-        simkit_backend::gpu::run_pass(&self.ctx, "pp-coulomb steps", |pass| {
-            for _ in 0..steps {
-                match self.integrator {
-                    Integrator::SymplecticEuler => {
-                        self.encode_accel(pass, cur)?;
-                        self.drift
-                            .dispatch_items(&self.ctx, pass, &self.drift_bind[cur], n)?;
-                        cur = 1 - cur;
-                        a_valid = false;
+    fn step(&mut self, steps: u32, c: &mut Checks<'_>) -> Result<()> {
+        self.guard.begin(&self.ctx)?;
+        let mut encoder = self.ctx.encoder("pp-coulomb steps");
+        self.guard.record(&self.ctx, &mut encoder)?;
+        let mut records: Vec<Record> = vec![(c.done, self.cur, self.a_valid, *c.energy_ref)];
+        let mut at = c.done;
+        for n in chunks(c.done, steps, c.every) {
+            self.encode_steps(&mut encoder, n)?;
+            at += u64::from(n);
+            if let (true, Some(tol)) = (c.is_interval(at), c.energy_tolerance) {
+                // One small read-back per interval: the energy, before this state's check
+                // and snapshot are recorded.
+                let submitted =
+                    std::mem::replace(&mut encoder, self.ctx.encoder("pp-coulomb steps"));
+                let now = self.submit_energy(submitted)?;
+                let jump = c.energy_ref.map_or(0.0, |r| energy_jump(r, now));
+                if !now.is_finite() || jump_fails(jump, tol) {
+                    let report = self.guard.report(&self.ctx)?;
+                    let passed = report.passed as usize;
+                    if let Some(bad) = report.bad {
+                        return Err(self.finite_failure(&records, passed, bad, c)?);
                     }
-                    Integrator::Leapfrog => {
-                        if !a_valid {
-                            self.encode_accel(pass, cur)?;
-                        }
-                        self.drift
-                            .dispatch_items(&self.ctx, pass, &self.drift_bind[cur], n)?;
-                        cur = 1 - cur;
-                        self.encode_accel(pass, cur)?;
-                        self.kick
-                            .dispatch_items(&self.ctx, pass, &self.kick_bind, n)?;
-                        a_valid = true;
-                    }
+                    let bad = self.state()?;
+                    let rolled = self.roll_back(&records, passed, c)?;
+                    let good = self.state()?;
+                    return Err(energy_blow_up(at, rolled, c, jump, &good, &bad));
                 }
+                *c.energy_ref = Some(now);
             }
-            Ok(())
-        })?;
-        self.cur = cur;
-        self.a_valid = a_valid;
-        self.check_coincident()
+            self.guard.record(&self.ctx, &mut encoder)?;
+            records.push((at, self.cur, self.a_valid, *c.energy_ref));
+        }
+        self.ctx.submit(encoder);
+        let report = self.guard.report(&self.ctx)?;
+        if let Some(bad) = report.bad {
+            return Err(self.finite_failure(&records, report.passed as usize, bad, c)?);
+        }
+        Ok(())
+    }
+
+    fn energy(&mut self) -> Result<Energy> {
+        let encoder = self.ctx.encoder("pp-coulomb energy");
+        self.submit_energy(encoder)
+    }
+
+    fn kept_accelerations(&mut self) -> Result<Option<Vec<[f64; 3]>>> {
+        if !self.a_valid {
+            return Ok(None);
+        }
+        Ok(Some(Self::to_f64(&self.acc.download(&self.ctx)?[..self.n])))
     }
 
     fn state(&mut self) -> Result<PositionsVelocities> {
@@ -299,7 +526,16 @@ impl<T: Real> Engine for GpuEngine<T> {
             simkit_backend::gpu::run_pass(&self.ctx, "pp-coulomb accel", |pass| {
                 self.encode_accel(pass, cur)
             })?;
-            self.check_coincident()?;
+            if self.law == ForceLaw::Exact {
+                let flags = self.flags.download(&self.ctx)?;
+                if let Some((i, j)) = self.coincident_pair(&flags)? {
+                    // Clear the flags: the state did not change, and a good state has none.
+                    self.flags.upload(&self.ctx, &vec![0; self.npad])?;
+                    let x = self.pos[cur].download(&self.ctx)?;
+                    let at = [0, 1, 2].map(|k| x[i][k].to_f64());
+                    return Err(coincident_error(i, j, at));
+                }
+            }
             self.a_valid = true;
         }
         Ok(Self::to_f64(&self.acc.download(&self.ctx)?[..self.n]))

@@ -43,6 +43,16 @@ pub fn exact_potential<T: Real>(r: T) -> T {
     T::ONE / r
 }
 
+/// Bare Coulomb potential from the squared distance, `1 / sqrt(r^2)` (as
+/// [`exact_potential`]); the self pair (`r^2 = 0`) gives 0, as in [`exact_weight`]. The exact
+/// law's energy check sums it over all pairs on the CPU; its WGSL twin is
+/// `pair_potential(r2)` in `EXACT_WGSL`, summed by the GPU's energy kernel.
+#[inline(always)]
+pub fn exact_pair_potential<T: Real>(r2: T) -> T {
+    let p = T::ONE / r2.sqrt();
+    if r2 > T::ZERO { p } else { T::ZERO }
+}
+
 /// Potential of [`exclusion_weight`]: `1 / r` for `r > radius`, 0 inside and at the radius.
 #[inline]
 pub fn exclusion_potential<T: Real>(r: T, radius: T) -> T {
@@ -56,7 +66,8 @@ pub fn plummer_potential<T: Real>(r: T, eps2: T) -> T {
     T::ONE / (r * r + eps2).sqrt()
 }
 
-/// WGSL twin of [`exact_weight`]: `pair_weight(r2, p)` (`p` unused).
+/// WGSL twin of [`exact_weight`]: `pair_weight(r2, p)` (`p` unused), and of
+/// [`exact_pair_potential`]: `pair_potential(r2)`.
 #[cfg(feature = "gpu")]
 pub const EXACT_WGSL: &str = simkit_backend::wgsl!("law_exact.wgsl");
 /// WGSL twin of [`exclusion_weight`]: `pair_weight(r2, p)` with `p = radius^2`.
@@ -110,6 +121,10 @@ mod tests {
         assert_eq!(exact_weight(0.0f32), 0.0);
         assert_eq!(exclusion_weight(2.25f64, 2.25), 0.0);
         assert_eq!(plummer_weight(0.0f64, 0.25), 8.0);
+        for r in [1e-3, 0.5, 3.0, 1e4f64] {
+            assert_eq!(exact_pair_potential(r * r), exact_potential((r * r).sqrt()));
+        }
+        assert_eq!(exact_pair_potential(0.0f64), 0.0);
     }
 
     #[test]

@@ -15,6 +15,17 @@
 //!   else a portable kernel compiled for AVX-512/AVX2 with runtime dispatch) or
 //!   [`Backend::Gpu`] (tiled all-pairs WGSL kernel, all steps on the device, f32, or f64 where
 //!   the adapter has `SHADER_F64`).
+//! - Blow-up checks inside `step(n)` ([`Config::check_every`], default every 100 steps, and
+//!   at the end of every call): non-finite positions or velocities, a coincident pair and,
+//!   under the exact law, a jump of the total energy beyond [`Config::energy_tolerance`]
+//!   (default [`DEFAULT_ENERGY_TOLERANCE`] = 1e-2) return `Error::BlowUp` naming the step,
+//!   the particle(s) and the likely cause, with the run put back to the last state that passed
+//!   a check (CPU: a copy of the state per check; GPU: `GpuGuard` on the device, plus one small
+//!   read-back of the energy per interval under the exact law).
+//! - Checkpoints ([`simkit_backend::Restart`]): `checkpoint()` / `resume(bytes, backend)` hold
+//!   the complete state (particles, configuration, the accelerations leapfrog keeps between
+//!   calls, step counter, simulated time, the energy guard's reference); a resumed run
+//!   continues bit for bit on the same backend.
 //! - [`Diagnostics`]: kinetic and potential energy, momentum, angular momentum, sum of forces.
 //! - [`scenes`]: the source's plasma box and the cold sphere of the Coulomb explosion.
 //! - [`analytic`]: Coulomb explosion of a cold uniform sphere and Rutherford scattering.
@@ -33,6 +44,31 @@
 //! sim.step(20)?;
 //! let after = sim.diagnostics()?;
 //! assert!(((after.total - before.total) / before.total).abs() < 1e-3);
+//!
+//! // Save, resume (here in the same process; in practice from a file with
+//! // `write_checkpoint` / `resume_file`) and go on: same bits as an uninterrupted run.
+//! use simkit_backend::Restart;
+//! let bytes = sim.checkpoint()?;
+//! let mut resumed = PpCoulomb::resume(&bytes, Backend::Cpu)?;
+//! assert_eq!((resumed.steps_done(), resumed.time()), (20, sim.time()));
+//! resumed.step(5)?;
+//! sim.step(5)?;
+//! assert_eq!(resumed.state()?, sim.state()?);
+//!
+//! // The bare Coulomb law with a step far too large for the closest pairs: the energy
+//! // guard stops the run and puts it back to the last good check.
+//! let mut p = Particles::new();
+//! let e = p.add_species(Species::new("electron", -1.0, 1.0))?;
+//! let ion = p.add_species(Species::new("ion", 1.0, 1.0))?;
+//! p.fill(e, 200, cube, Velocities::Maxwellian { thermal_speed: 0.1 }, 1)?;
+//! p.fill(ion, 200, cube, Velocities::Maxwellian { thermal_speed: 0.1 }, 2)?;
+//! let mut bad = PpCoulomb::new(p, &Config::new(10.0, ForceLaw::Exact), Backend::Cpu)?;
+//! match bad.step(1000) {
+//!     Err(simkit_backend::Error::BlowUp { rolled_back_to, .. }) => {
+//!         assert_eq!(bad.steps_done(), rolled_back_to)
+//!     }
+//!     other => panic!("expected a blow-up, got {other:?}"),
+//! }
 //! # Ok(())
 //! # }
 //! ```
@@ -47,13 +83,14 @@ mod diagnostics;
 mod engine;
 #[cfg(feature = "gpu")]
 mod gpu;
+mod guard;
 pub mod laws;
 mod particles;
 pub mod scenes;
 mod sim;
 pub mod units;
 
-pub use config::{Config, ForceLaw, Integrator};
+pub use config::{Config, DEFAULT_ENERGY_TOLERANCE, ForceLaw, Integrator};
 pub use diagnostics::{Diagnostics, diagnostics, potential_energy, reference_accelerations};
 #[cfg(feature = "gpu")]
 pub use gpu::gpu_max_particles;

@@ -2,10 +2,11 @@
 
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
+use serde::{Deserialize, Serialize};
 use simkit_backend::{Error, Result, require_finite, require_positive};
 
 /// A particle species: normalised charge and mass.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Species {
     /// Name, e.g. `"electron"`.
     pub name: String,
@@ -73,7 +74,7 @@ const BYTES_PER_PARTICLE: usize =
     2 * size_of::<[f64; 3]>() + 2 * size_of::<f64>() + size_of::<u32>();
 
 /// Particles in structure-of-arrays form (host side, f64).
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Particles {
     /// Positions.
     pub position: Vec<[f64; 3]>,
@@ -112,8 +113,15 @@ impl Particles {
             species.charge,
         )?;
         require_positive(&format!("mass of species '{}'", species.name), species.mass)?;
+        let index = u32::try_from(self.species_table.len()).map_err(|_| {
+            Error::invalid(
+                "species",
+                &species.name,
+                "more than 2^32 species cannot be indexed; reuse a species",
+            )
+        })?;
         self.species_table.push(species);
-        Ok(self.species_table.len() as u32 - 1)
+        Ok(index)
     }
 
     fn species_ref(&self, species: u32) -> Result<&Species> {
@@ -199,9 +207,10 @@ impl Particles {
     ///
     /// # Errors
     ///
-    /// An unknown species, a bad region or velocity parameter, or a `count` that would take
-    /// the total past [`MAX_PARTICLES`] (checked before anything is allocated) or that the
-    /// host cannot allocate; the error names `count` ("particle count").
+    /// An unknown species, a bad region or velocity parameter (also one so large that the
+    /// drawn values overflow: then nothing is added), or a `count` that would take the total
+    /// past [`MAX_PARTICLES`] (checked before anything is allocated) or that the host cannot
+    /// allocate; the error names `count` ("particle count").
     pub fn fill(
         &mut self,
         species: u32,
@@ -279,11 +288,45 @@ impl Particles {
                 }
             }
         }
+        // A region or a speed near the largest float can overflow: refuse the fill whole.
+        let bad = (start..self.len()).find_map(|i| {
+            let (x, v) = (self.position[i], self.velocity[i]);
+            if x.iter().any(|c| !c.is_finite()) {
+                Some(("region", format!("{x:?}")))
+            } else if v.iter().any(|c| !c.is_finite()) {
+                Some(("velocities", format!("{v:?}")))
+            } else {
+                None
+            }
+        });
+        if let Some((what, value)) = bad {
+            self.position.truncate(start);
+            self.velocity.truncate(start);
+            self.charge.truncate(start);
+            self.mass.truncate(start);
+            self.species.truncate(start);
+            return Err(Error::invalid(
+                format!("fill {what}"),
+                value,
+                format!(
+                    "the {what} parameters give non-finite values (too close to the largest \
+                     float); use smaller ones. Nothing was added"
+                ),
+            ));
+        }
         Ok(())
     }
 
-    /// Checks lengths, finiteness and masses; errors name the first bad particle.
+    /// Checks lengths, finiteness, masses, species indices and the total against
+    /// [`MAX_PARTICLES`]; errors name the first bad particle.
     pub fn validate(&self) -> Result<()> {
+        if self.len() > MAX_PARTICLES {
+            return Err(Error::invalid(
+                "particle count",
+                self.len(),
+                format!("over MAX_PARTICLES = {MAX_PARTICLES}; use fewer particles"),
+            ));
+        }
         let n = self.len();
         for (name, len) in [
             ("velocity", self.velocity.len()),
@@ -306,6 +349,16 @@ impl Particles {
             }
             require_finite(&format!("charge[{i}]"), self.charge[i])?;
             require_positive(&format!("mass[{i}]"), self.mass[i])?;
+            if self.species[i] as usize >= self.species_table.len() {
+                return Err(Error::invalid(
+                    format!("species[{i}]"),
+                    self.species[i],
+                    format!(
+                        "no such species ({} registered); use an index from add_species",
+                        self.species_table.len()
+                    ),
+                ));
+            }
         }
         Ok(())
     }

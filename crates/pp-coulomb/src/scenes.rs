@@ -66,12 +66,17 @@ impl Expansion {
         Self { outer }
     }
 
-    /// The expansion factor of the positions `x` (NaN if the outer shell is empty).
+    /// The expansion factor of the positions `x` (NaN if the outer shell is empty, or if `x`
+    /// has fewer particles than the initial positions).
     pub fn factor(&self, x: &[[f64; 3]]) -> f64 {
-        let mut ratios: Vec<f64> = self.outer.iter().map(|&(i, r0)| norm(x[i]) / r0).collect();
-        if ratios.is_empty() {
+        let ratios: Option<Vec<f64>> = self
+            .outer
+            .iter()
+            .map(|&(i, r0)| x.get(i).map(|x| norm(*x) / r0))
+            .collect();
+        let Some(mut ratios) = ratios.filter(|r| !r.is_empty()) else {
             return f64::NAN;
-        }
+        };
         ratios.sort_by(f64::total_cmp);
         ratios[ratios.len() / 2]
     }
@@ -93,6 +98,9 @@ pub struct ExplosionSample {
 /// Steps a sphere explosion until the expansion factor reaches `xi_max` (or the time
 /// `t_max`), with the step `dt = courant xi^(3/2) / omega` that follows the growing dynamical
 /// time. `on_step` sees every state (for frames); the samples start with `(0, 1)`.
+///
+/// Errors: `omega` or `courant` not finite and > 0, `xi_max` not finite, `t_max` not finite
+/// and > 0 (the loop must end), or an error of the simulation (e.g. a blow-up).
 pub fn run_explosion(
     sim: &mut crate::PpCoulomb,
     expansion: &Expansion,
@@ -105,6 +113,8 @@ pub fn run_explosion(
     use simkit_backend::Simulation;
     require_positive("omega", omega)?;
     require_positive("courant", courant)?;
+    simkit_backend::require_finite("xi_max", xi_max)?;
+    require_positive("t_max", t_max)?;
     let mut samples = vec![ExplosionSample {
         time: sim.time(),
         xi: 1.0,

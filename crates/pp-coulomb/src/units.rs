@@ -77,7 +77,8 @@ pub struct Normalised {
 
 /// Converts physical inputs to normalised units (k_e' = 1, dt' = 1).
 ///
-/// Errors name the offending input (zero or negative density, NaN temperature, ...).
+/// Errors name the offending input (zero or negative density, NaN temperature, ...), or the
+/// derived quantity that overflows or underflows for extreme inputs.
 pub fn normalise(p: &PhysicalInputs) -> Result<Normalised> {
     let dt = require_positive("dt", p.dt)?;
     let n0 = require_positive("density", p.density)?;
@@ -107,7 +108,7 @@ pub fn normalise(p: &PhysicalInputs) -> Result<Normalised> {
     let thermal = (te * e / (mass * ELECTRON_MASS)).sqrt();
     let debye = (VACUUM_PERMITTIVITY * te / (n0 * e)).sqrt();
     let omega_pe = (n0 * e * e / (VACUUM_PERMITTIVITY * ELECTRON_MASS)).sqrt();
-    Ok(Normalised {
+    let out = Normalised {
         weight,
         length,
         time: dt,
@@ -118,7 +119,27 @@ pub fn normalise(p: &PhysicalInputs) -> Result<Normalised> {
         omega_pe_dt: omega_pe * dt,
         charge: p.charge_number,
         mass,
-    })
+    };
+    let derived = [
+        ("weight", out.weight),
+        ("length unit", out.length),
+        ("velocity unit", out.velocity),
+        ("normalised box", out.box_length),
+        ("normalised thermal speed", out.thermal_speed),
+        ("normalised Debye length", out.debye_length),
+        ("omega_pe dt", out.omega_pe_dt),
+    ];
+    if let Some((name, value)) = derived.iter().find(|(_, v)| !(v.is_finite() && *v > 0.0)) {
+        return Err(Error::invalid(
+            format!("physical inputs ({name})"),
+            value,
+            format!(
+                "the inputs {p:?} give a {name} that is not finite and > 0 (overflow or \
+                 underflow); use inputs of physical magnitude"
+            ),
+        ));
+    }
+    Ok(out)
 }
 
 #[cfg(test)]

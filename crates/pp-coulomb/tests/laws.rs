@@ -171,3 +171,52 @@ fn wgsl_laws_match_their_rust_twins() {
         );
     }
 }
+
+/// The energy guard's potential `pair_potential(r2)` (in `law_exact.wgsl`) against
+/// `laws::exact_pair_potential`: 0 for the self pair, else within 4 ulp (the reciprocal square
+/// root's 2 ulp, plus the CPU's correctly rounded square root and division).
+fn check_potential<T: Real>(ctx: &GpuContext, epsilon: f64) {
+    let r2: Vec<T> = [0.0, 1e-6, 1e-2, 0.5, 1.0, 2.25, 7.0, 1e4, 1e10]
+        .into_iter()
+        .map(T::from_f64)
+        .collect();
+    let gpu: Vec<T> = eval_wgsl(
+        ctx,
+        &[laws::wgsl_prelude(T::PRECISION), laws::EXACT_WGSL],
+        "REAL",
+        "REAL",
+        "pair_potential(x)",
+        &r2,
+    )
+    .unwrap();
+    for (x, g) in r2.iter().zip(&gpu) {
+        let want = laws::exact_pair_potential(*x).to_f64();
+        let got = g.to_f64();
+        if want == 0.0 {
+            assert_eq!(got, 0.0, "{} r2 = {x:?}", T::WGSL);
+        } else {
+            let rel = (got - want).abs() / want;
+            assert!(
+                rel <= 4.0 * epsilon,
+                "{} r2 = {x:?}: {got} vs {want}",
+                T::WGSL
+            );
+        }
+    }
+}
+
+#[test]
+fn wgsl_pair_potential_matches_its_rust_twin() {
+    let Some(ctx) = gpu_or_skip("wgsl_pair_potential_matches_its_rust_twin") else {
+        return;
+    };
+    check_potential::<f32>(&ctx, f64::from(f32::EPSILON));
+    if ctx.has_f64() {
+        check_potential::<f64>(&ctx, f64::EPSILON);
+    } else {
+        println!(
+            "f64 half skipped: adapter '{}' has no SHADER_F64",
+            ctx.adapter_info().name
+        );
+    }
+}

@@ -195,3 +195,37 @@ fn field_with<T: CpuReal, L: Law>(
             }
         });
 }
+
+/// `phi_i = sum_j q_j / r_ij` ([`laws::exact_pair_potential`], the self pair and the
+/// zero-charge padding give 0) at the first `n` sources, in f64 (the differences are formed
+/// in `T`, as the field kernel does). Each target's sum has a fixed order, so the result
+/// does not depend on the thread count.
+pub(crate) fn exact_potentials<T: CpuReal>(s: &Sources<'_, T>, n: usize) -> Vec<f64> {
+    (0..n)
+        .into_par_iter()
+        .with_min_len(TARGET_CHUNK)
+        .map(|i| block_potential(s.x[i], s.y[i], s.z[i], s))
+        .collect()
+}
+
+/// `sum_j q_j / r_ij` of one target over all sources (16 partial sums, like the field).
+#[multiversion(targets("x86_64+avx512f+avx512vl+avx512dq+avx2+fma", "x86_64+avx2+fma"))]
+fn block_potential<T: CpuReal>(xi: T, yi: T, zi: T, s: &Sources<'_, T>) -> f64 {
+    let mut phi = [0.0f64; LANES];
+    let chunks =
+        s.x.chunks_exact(LANES)
+            .zip(s.y.chunks_exact(LANES))
+            .zip(s.z.chunks_exact(LANES).zip(s.q.chunks_exact(LANES)));
+    for ((cx, cy), (cz, cq)) in chunks {
+        for l in 0..LANES {
+            let dx = (xi - cx[l]).to_f64();
+            let dy = (yi - cy[l]).to_f64();
+            let dz = (zi - cz[l]).to_f64();
+            let r2 = dx.mul_add(dx, dy.mul_add(dy, dz * dz));
+            phi[l] = cq[l]
+                .to_f64()
+                .mul_add(laws::exact_pair_potential(r2), phi[l]);
+        }
+    }
+    phi.iter().sum()
+}

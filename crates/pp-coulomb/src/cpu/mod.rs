@@ -10,14 +10,19 @@ use pairs::Sources;
 
 use std::collections::HashMap;
 
+use simkit_backend::guard::{chunks, first_non_finite};
 use simkit_backend::{Precision, Result};
 
 use crate::config::{Config, ForceLaw, Integrator, coincident_error};
 use crate::engine::{Engine, PositionsVelocities, pad_coordinate};
+use crate::guard::{
+    Checks, Energy, coincident_blow_up, energy_blow_up, energy_jump, jump_fails, non_finite_blow_up,
+};
 use crate::particles::Particles;
 
 /// CPU state in precision `T`. Positions are double-buffered: the force pass reads `x`, the
 /// drift writes `x_next`, then the two swap, so no position is written while it is read.
+/// `kept` is the state of the last blow-up check that passed.
 pub(crate) struct CpuEngine<T: CpuReal> {
     n: usize,
     x: [Vec<T>; 3],
@@ -25,6 +30,7 @@ pub(crate) struct CpuEngine<T: CpuReal> {
     q: Vec<T>,
     v: [Vec<T>; 3],
     qm: Vec<T>,
+    mass: Vec<f64>,
     a: [Vec<T>; 3],
     law: ForceLaw,
     /// Use the AVX-512 rsqrt path.
@@ -33,13 +39,27 @@ pub(crate) struct CpuEngine<T: CpuReal> {
     dt: T,
     /// Whether `a` holds the accelerations at the current `x`.
     a_valid: bool,
+    kept: Kept<T>,
 }
 
-/// Builds the engine for the configured precision.
-pub(crate) fn engine(p: &Particles, c: &Config) -> Box<dyn Engine> {
+/// A copy of the state (positions, velocities, kept accelerations).
+struct Kept<T> {
+    x: [Vec<T>; 3],
+    v: [Vec<T>; 3],
+    a: [Vec<T>; 3],
+    a_valid: bool,
+}
+
+/// Builds the engine for the configured precision; `accelerations` are the kept
+/// accelerations of a resumed run (leapfrog), if any.
+pub(crate) fn engine(
+    p: &Particles,
+    c: &Config,
+    accelerations: Option<&[[f64; 3]]>,
+) -> Box<dyn Engine> {
     match c.precision {
-        Precision::F32 => Box::new(CpuEngine::<f32>::new(p, c)),
-        Precision::F64 => Box::new(CpuEngine::<f64>::new(p, c)),
+        Precision::F32 => Box::new(CpuEngine::<f32>::new(p, c, accelerations)),
+        Precision::F64 => Box::new(CpuEngine::<f64>::new(p, c, accelerations)),
     }
 }
 
@@ -58,8 +78,14 @@ fn padded<T: CpuReal>(values: impl Iterator<Item = T>, n: usize, pad: T) -> Vec<
     v
 }
 
+fn copy3<T: Copy>(to: &mut [Vec<T>; 3], from: &[Vec<T>; 3]) {
+    for k in 0..3 {
+        to[k].copy_from_slice(&from[k]);
+    }
+}
+
 impl<T: CpuReal> CpuEngine<T> {
-    fn new(p: &Particles, c: &Config) -> Self {
+    fn new(p: &Particles, c: &Config, accelerations: Option<&[[f64; 3]]>) -> Self {
         let n = p.len();
         let coord = |k: usize| {
             padded(
@@ -70,44 +96,65 @@ impl<T: CpuReal> CpuEngine<T> {
         };
         let x = [coord(0), coord(1), coord(2)];
         let vel = |k: usize| p.velocity.iter().map(|v| T::from_f64(v[k])).collect();
+        let v = [vel(0), vel(1), vel(2)];
+        let (a, a_valid) = match accelerations {
+            Some(acc) if acc.len() == n => (
+                [0, 1, 2].map(|k| acc.iter().map(|a| T::from_f64(a[k])).collect()),
+                true,
+            ),
+            _ => (
+                [vec![T::ZERO; n], vec![T::ZERO; n], vec![T::ZERO; n]],
+                false,
+            ),
+        };
         Self {
             n,
             x_next: x.clone(),
+            kept: Kept {
+                x: x.clone(),
+                v: v.clone(),
+                a: a.clone(),
+                a_valid,
+            },
             x,
             q: padded(p.charge.iter().map(|&q| T::from_f64(q)), n, T::ZERO),
-            v: [vel(0), vel(1), vel(2)],
+            v,
             qm: (0..n)
                 .map(|i| T::from_f64(p.charge[i] / p.mass[i]))
                 .collect(),
-            a: [vec![T::ZERO; n], vec![T::ZERO; n], vec![T::ZERO; n]],
+            mass: p.mass.clone(),
+            a,
             law: c.force,
             fast: c.rsqrt && fast_path_available(),
             integrator: c.integrator,
             dt: T::from_f64(c.dt),
-            a_valid: false,
+            a_valid,
         }
     }
 
-    /// Under the exact law, two particles at the same position are an error naming them.
-    fn check_coincident(&self) -> Result<()> {
+    /// Under the exact law, the first two particles at the same position, if any.
+    fn coincident(&self) -> Option<(usize, usize, [f64; 3])> {
         if self.law != ForceLaw::Exact {
-            return Ok(());
+            return None;
         }
         let mut seen: HashMap<[u64; 3], usize> = HashMap::with_capacity(self.n);
         for i in 0..self.n {
             // `+ 0.0` maps -0.0 to +0.0 so that equal coordinates have equal bits.
             let c = [0, 1, 2].map(|k| self.x[k][i].to_f64() + 0.0);
             if let Some(&j) = seen.get(&c.map(f64::to_bits)) {
-                return Err(coincident_error(j, i, c));
+                return Some((j, i, c));
             }
             seen.insert(c.map(f64::to_bits), i);
         }
-        Ok(())
+        None
     }
 
-    /// Accelerations at the current positions into `a`.
-    fn compute_accelerations(&mut self) -> Result<()> {
-        self.check_coincident()?;
+    /// Accelerations at the current positions into `a`; under the exact law, the first
+    /// coincident pair instead (and `a` untouched).
+    fn compute_accelerations(&mut self) -> std::result::Result<(), (usize, usize, [f64; 3])> {
+        if let Some(pair) = self.coincident() {
+            return Err(pair);
+        }
         let s = Sources {
             x: &self.x[0],
             y: &self.x[1],
@@ -148,36 +195,142 @@ impl<T: CpuReal> CpuEngine<T> {
         }
     }
 
+    /// One step; a coincident pair under the exact law is returned instead.
+    fn one_step(&mut self) -> std::result::Result<(), (usize, usize, [f64; 3])> {
+        match self.integrator {
+            Integrator::SymplecticEuler => {
+                self.compute_accelerations()?;
+                self.kick_drift(self.dt);
+            }
+            Integrator::Leapfrog => {
+                let half = self.dt * T::from_f64(0.5);
+                if !self.a_valid {
+                    self.compute_accelerations()?;
+                }
+                self.kick_drift(half);
+                self.compute_accelerations()?;
+                self.kick(half);
+            }
+        }
+        Ok(())
+    }
+
+    /// Keeps a copy of the current state (the last state that passed a check).
+    fn keep(&mut self) {
+        copy3(&mut self.kept.x, &self.x);
+        copy3(&mut self.kept.v, &self.v);
+        copy3(&mut self.kept.a, &self.a);
+        self.kept.a_valid = self.a_valid;
+    }
+
+    /// Puts the state back to the kept copy.
+    fn restore(&mut self) {
+        copy3(&mut self.x, &self.kept.x);
+        copy3(&mut self.v, &self.kept.v);
+        copy3(&mut self.a, &self.kept.a);
+        self.a_valid = self.kept.a_valid;
+    }
+
+    /// The first particle with a non-finite position or velocity, as a message.
+    fn first_non_finite(&self) -> Option<String> {
+        let arrays = [
+            ("position x", &self.x[0][..self.n]),
+            ("position y", &self.x[1][..self.n]),
+            ("position z", &self.x[2][..self.n]),
+            ("velocity x", &self.v[0][..]),
+            ("velocity y", &self.v[1][..]),
+            ("velocity z", &self.v[2][..]),
+        ];
+        arrays
+            .iter()
+            .filter_map(|(name, a)| first_non_finite(a).map(|i| (i, *name, a[i])))
+            .min_by_key(|(i, _, _)| *i)
+            .map(|(i, name, value)| format!("particle {i}: {name} = {}", value.to_f64()))
+    }
+
     fn to_f64(a: &[Vec<T>; 3], n: usize) -> Vec<[f64; 3]> {
         (0..n)
             .map(|i| [a[0][i].to_f64(), a[1][i].to_f64(), a[2][i].to_f64()])
             .collect()
     }
+
+    /// Checks after reaching step `at` (last good state: step `kept`): finite state, and at
+    /// interval checks the energy jump; on failure, restores the kept state.
+    fn check(&mut self, at: u64, kept: u64, c: &mut Checks<'_>) -> Result<()> {
+        if let Some(what) = self.first_non_finite() {
+            self.restore();
+            return Err(non_finite_blow_up(at, kept, what));
+        }
+        if let (true, Some(tol)) = (c.is_interval(at), c.energy_tolerance) {
+            let now = self.energy_now();
+            if let Some(reference) = *c.energy_ref {
+                let jump = energy_jump(reference, now);
+                if jump_fails(jump, tol) {
+                    let bad = (Self::to_f64(&self.x, self.n), Self::to_f64(&self.v, self.n));
+                    self.restore();
+                    let good = (Self::to_f64(&self.x, self.n), Self::to_f64(&self.v, self.n));
+                    return Err(energy_blow_up(at, kept, c, jump, &good, &bad));
+                }
+            }
+            *c.energy_ref = Some(now);
+        }
+        Ok(())
+    }
+
+    /// Kinetic and potential energy (exact law) of the current state, in f64.
+    fn energy_now(&self) -> Energy {
+        let kinetic = (0..self.n)
+            .map(|i| {
+                let v2: f64 = (0..3).map(|k| self.v[k][i].to_f64().powi(2)).sum();
+                0.5 * self.mass[i] * v2
+            })
+            .sum();
+        let s = Sources {
+            x: &self.x[0],
+            y: &self.x[1],
+            z: &self.x[2],
+            q: &self.q,
+        };
+        let phi = kernel::exact_potentials(&s, self.n);
+        let potential = 0.5
+            * phi
+                .iter()
+                .zip(&self.q)
+                .map(|(p, q)| p * q.to_f64())
+                .sum::<f64>();
+        Energy { kinetic, potential }
+    }
 }
 
 impl<T: CpuReal> Engine for CpuEngine<T> {
-    fn step(&mut self, steps: u32) -> Result<()> {
-        let half = self.dt * T::from_f64(0.5);
+    fn step(&mut self, steps: u32, c: &mut Checks<'_>) -> Result<()> {
         // The whole loop on a pool thread: no hand-over to the pool per pass.
         simkit_backend::pool::on_pool(|| {
-            for _ in 0..steps {
-                match self.integrator {
-                    Integrator::SymplecticEuler => {
-                        self.compute_accelerations()?;
-                        self.kick_drift(self.dt);
-                    }
-                    Integrator::Leapfrog => {
-                        if !self.a_valid {
-                            self.compute_accelerations()?;
-                        }
-                        self.kick_drift(half);
-                        self.compute_accelerations()?;
-                        self.kick(half);
+            self.keep();
+            let mut at = c.done;
+            let mut kept = at;
+            for n in chunks(c.done, steps, c.every) {
+                for s in 0..u64::from(n) {
+                    if let Err((i, j, x)) = self.one_step() {
+                        self.restore();
+                        return Err(coincident_blow_up(at + s + 1, kept, i, j, x));
                     }
                 }
+                at += u64::from(n);
+                self.check(at, kept, c)?;
+                self.keep();
+                kept = at;
             }
             Ok(())
         })
+    }
+
+    fn energy(&mut self) -> Result<Energy> {
+        Ok(simkit_backend::pool::on_pool(|| self.energy_now()))
+    }
+
+    fn kept_accelerations(&mut self) -> Result<Option<Vec<[f64; 3]>>> {
+        Ok(self.a_valid.then(|| Self::to_f64(&self.a, self.n)))
     }
 
     fn state(&mut self) -> Result<PositionsVelocities> {
@@ -185,8 +338,10 @@ impl<T: CpuReal> Engine for CpuEngine<T> {
     }
 
     fn accelerations(&mut self) -> Result<Vec<[f64; 3]>> {
-        if !self.a_valid {
-            self.compute_accelerations()?;
+        if !self.a_valid
+            && let Err((i, j, at)) = self.compute_accelerations()
+        {
+            return Err(coincident_error(i, j, at));
         }
         Ok(Self::to_f64(&self.a, self.n))
     }

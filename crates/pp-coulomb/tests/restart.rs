@@ -1,0 +1,201 @@
+//! Checkpoint and resume: bit-exact in a new process on every backend and precision
+//! (`simkit_backend::testing::check_restart`), the clock and step counter restored, and clear
+//! errors for checkpoints of another model, truncated or corrupted ones.
+
+use simkit_backend::checkpoint;
+use simkit_backend::testing::{backends, check_restart};
+use simkit_backend::{Backend, Error, Restart, Simulation};
+use simkit_pp_coulomb::{
+    Config, ForceLaw, Integrator, Particles, PpCoulomb, Precision, Region, Species, Velocities,
+};
+
+/// 150 electrons and 50 ions in a cube of edge 12.
+fn plasma() -> Particles {
+    let mut p = Particles::new();
+    let e = p.add_species(Species::new("electron", -1.0, 1.0)).unwrap();
+    let ion = p.add_species(Species::new("ion", 3.0, 50.0)).unwrap();
+    let cube = Region::Cube {
+        min: [-6.0; 3],
+        length: 12.0,
+    };
+    let v = Velocities::Maxwellian { thermal_speed: 0.2 };
+    p.fill(e, 150, cube, v, 21).unwrap();
+    p.fill(ion, 50, cube, v, 22).unwrap();
+    p
+}
+
+/// Whether `backend` runs f64.
+fn has_f64(backend: Backend<'_>) -> bool {
+    match backend {
+        #[cfg(feature = "gpu")]
+        Backend::Gpu(ctx) => ctx.has_f64(),
+        _ => true,
+    }
+}
+
+/// A run of 2 x 35 steps against 35 steps, checkpoint, resume in a new process and 35 more
+/// steps, byte for byte, for: the exact law (energy guard on, a cold sphere) with leapfrog,
+/// Plummer with symplectic Euler, and the exclusion law with leapfrog after a `set_dt` (the
+/// clock's origin moves), each in f64 and f32 on the CPU, in f32 on the GPU, and in f64 on a
+/// GPU with SHADER_F64 (a GPU without it is reported, not skipped silently). The check
+/// interval 10 puts checks inside both halves and the resume at a non-multiple of it.
+#[test]
+fn restart_is_bit_exact() {
+    let name = "restart_is_bit_exact";
+    for backend in backends(name) {
+        let mut precisions = vec![Precision::F32];
+        if has_f64(backend) {
+            precisions.push(Precision::F64);
+        } else {
+            println!("{backend:?}: no SHADER_F64 on this adapter, f64 restart not tested");
+        }
+        for precision in precisions {
+            let cases = [
+                ("exact leapfrog", ForceLaw::Exact, Integrator::Leapfrog),
+                (
+                    "plummer euler",
+                    ForceLaw::Plummer { epsilon: 0.3 },
+                    Integrator::SymplecticEuler,
+                ),
+                (
+                    "exclusion leapfrog set_dt",
+                    ForceLaw::Exclusion { radius: 0.5 },
+                    Integrator::Leapfrog,
+                ),
+            ];
+            for (label, law, integrator) in cases {
+                let label = format!("{label} {precision:?}");
+                check_restart(name, &label, backend, 35, |b| {
+                    let config = Config::new(0.02, law)
+                        .with_integrator(integrator)
+                        .with_precision(precision)
+                        .with_check_every(10);
+                    let p = match law {
+                        ForceLaw::Exact => simkit_pp_coulomb::scenes::cold_sphere(200, 1.0, 5)?,
+                        _ => plasma(),
+                    };
+                    let mut sim = PpCoulomb::new(p, &config, b)?;
+                    if matches!(law, ForceLaw::Exclusion { .. }) {
+                        sim.step(3)?;
+                        sim.set_dt(0.015)?;
+                    }
+                    Ok(sim)
+                });
+            }
+        }
+    }
+}
+
+/// The resumed run has the step counter, the simulated time (after a `set_dt`), the
+/// configuration and the state of the original.
+#[test]
+fn resume_restores_clock_and_state() {
+    for backend in backends("resume_restores_clock_and_state") {
+        let config = Config::new(0.05, ForceLaw::Plummer { epsilon: 0.4 })
+            .with_precision(Precision::F32)
+            .with_check_every(7);
+        let mut sim = PpCoulomb::new(plasma(), &config, backend).unwrap();
+        sim.step(11).unwrap();
+        sim.set_dt(0.03).unwrap();
+        sim.step(5).unwrap();
+        let bytes = sim.checkpoint().unwrap();
+        let mut back = PpCoulomb::resume(&bytes, backend).unwrap();
+        assert_eq!(back.steps_done(), 16);
+        assert_eq!(back.time().to_bits(), sim.time().to_bits());
+        assert!((back.time() - (11.0 * 0.05 + 5.0 * 0.03)).abs() < 1e-12);
+        assert_eq!(back.config(), sim.config());
+        assert_eq!(back.state().unwrap(), sim.state().unwrap());
+        // The empty system too.
+        let mut empty = PpCoulomb::new(Particles::new(), &config, backend).unwrap();
+        empty.step(4).unwrap();
+        let back = PpCoulomb::resume(&empty.checkpoint().unwrap(), backend).unwrap();
+        assert_eq!((back.steps_done(), back.len()), (4, 0));
+    }
+}
+
+fn checkpoint_error(bytes: &[u8]) -> String {
+    match PpCoulomb::resume(bytes, Backend::Cpu) {
+        Err(e @ Error::Checkpoint { .. }) => e.to_string(),
+        Err(e) => panic!("expected Error::Checkpoint, got {e}"),
+        Ok(_) => panic!("expected Error::Checkpoint, got a run"),
+    }
+}
+
+/// Another crate's or model's checkpoint, a truncated one, one flipped bit, and a file whose
+/// header and contents disagree are each a clear `Error::Checkpoint`.
+#[test]
+fn bad_checkpoints_are_clear_errors() {
+    let config = Config::new(0.05, ForceLaw::Exact);
+    let mut sim = PpCoulomb::new(plasma(), &config, Backend::Cpu).unwrap();
+    sim.step(3).unwrap();
+    let good = sim.checkpoint().unwrap();
+    let version = env!("CARGO_PKG_VERSION");
+    let foreign = checkpoint::encode("simkit-dem", version, "Dem<f64, 3>", &1u8).unwrap();
+    let e = checkpoint_error(&foreign);
+    assert!(e.contains("simkit-dem"), "{e}");
+    let other_model =
+        checkpoint::encode("simkit-pp-coulomb", version, "PpCoulomb<f16>", &1u8).unwrap();
+    let e = checkpoint_error(&other_model);
+    assert!(e.contains("PpCoulomb<f16>"), "{e}");
+    let e = checkpoint_error(&good[..good.len() - 9]);
+    assert!(e.contains("truncated"), "{e}");
+    for at in [20, good.len() / 2, good.len() - 5] {
+        let mut bad = good.clone();
+        bad[at] ^= 0x10;
+        let e = checkpoint_error(&bad);
+        assert!(e.contains("checksum") || e.contains("model"), "{e}");
+    }
+    // The f64 run's state relabelled as f32: the header and the payload disagree.
+    let header = checkpoint::header(&good).unwrap();
+    assert_eq!(header.model, "PpCoulomb<f64>");
+    let relabelled = relabel(&good, "PpCoulomb<f32>");
+    assert_eq!(
+        checkpoint::header(&relabelled).unwrap().model,
+        "PpCoulomb<f32>"
+    );
+    let e = checkpoint_error(&relabelled);
+    assert!(
+        e.contains("PpCoulomb<f32>") && e.contains("PpCoulomb<f64>"),
+        "{e}"
+    );
+}
+
+/// CRC-32 (IEEE, reflected, as the checkpoint format uses), bit by bit.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut crc = !0u32;
+    for &b in bytes {
+        crc ^= u32::from(b);
+        for _ in 0..8 {
+            crc = if crc & 1 != 0 {
+                (crc >> 1) ^ 0xEDB8_8320
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    !crc
+}
+
+/// `bytes` with its model string replaced by `model` and the checksum recomputed (a
+/// well-formed file whose header and payload disagree).
+fn relabel(bytes: &[u8], model: &str) -> Vec<u8> {
+    let mut at = 12; // magic and format version
+    let field = |at: &mut usize| {
+        let n = usize::from(u16::from_le_bytes([bytes[*at], bytes[*at + 1]]));
+        let range = *at..*at + 2 + n;
+        *at += 2 + n;
+        range
+    };
+    let package = field(&mut at);
+    let version = field(&mut at);
+    let _model = field(&mut at);
+    let mut out = bytes[..12].to_vec();
+    out.extend_from_slice(&bytes[package]);
+    out.extend_from_slice(&bytes[version]);
+    out.extend_from_slice(&(model.len() as u16).to_le_bytes());
+    out.extend_from_slice(model.as_bytes());
+    out.extend_from_slice(&bytes[at..bytes.len() - 4]);
+    let crc = crc32(&out);
+    out.extend_from_slice(&crc.to_le_bytes());
+    out
+}
