@@ -50,9 +50,10 @@ fn configs(
 /// The colony scene on 72 x 60 (not a multiple of the tile), 1000 steps, f32, Euler and Heun:
 /// the CPU f32 run agrees with the CPU f64 run within 1e-5 relative, and every backend (each
 /// GPU kernel variant, stepping in calls of 400 and 600 steps) agrees within 1e-5 with both
-/// CPU runs (f32 rounding accumulated over 1000 steps). Measured: CPU f32 vs f64 5.1e-6
-/// (Euler) and 4.7e-6 (Heun); llvmpipe at most 3.0e-6 against CPU f32 and 5.1e-6 against
-/// CPU f64; the CPU against itself is bit-identical.
+/// CPU runs (f32 rounding accumulated over 1000 steps). Measured (this test, `--nocapture`):
+/// CPU f32 vs f64 5.1e-6 (Euler) and 4.7e-6 (Heun); llvmpipe 2.3e-6 (Euler) and 3.0e-6 (Heun)
+/// against CPU f32 and 5.1e-6 / 4.7e-6 against CPU f64 (bound 2x); the CPU against itself is
+/// bit-identical.
 #[test]
 fn cpu_and_gpu_agree_after_1000_steps() {
     let (grid, model) = colony_scene::<f32>(72, 60, 7).unwrap();
@@ -100,9 +101,10 @@ fn cpu_and_gpu_agree_after_1000_steps() {
     }
 }
 
-/// f64 on every backend matches the f64 CPU reference cell by cell within 1e-12 (colony scene,
-/// Heun, 300 steps); a GPU without `SHADER_F64` must refuse f64 with `Error::Unsupported`.
-/// Measured on llvmpipe: 2.2e-15 at most.
+/// f64 on every backend matches the f64 CPU reference cell by cell within 7e-15 absolute
+/// (colony scene, Heun, 300 steps, values of order 1): measured 2.2e-15 at most on llvmpipe
+/// (this test, `--nocapture`); bound 3x. A GPU without `SHADER_F64` must refuse f64 with
+/// `Error::Unsupported`, and the test then says that the comparison was skipped.
 #[test]
 fn gpu_f64_matches_cpu_f64() {
     let (grid, model) = colony_scene::<f64>(40, 40, 3).unwrap();
@@ -118,7 +120,7 @@ fn gpu_f64_matches_cpu_f64() {
                 let mut worst = 0.0f64;
                 for s in 0..2 {
                     for (x, y) in g.field(s).iter().zip(c.field(s)) {
-                        assert!((x - y).abs() < 1e-12, "{}: {x} vs {y}", sim.backend_name());
+                        assert!((x - y).abs() < 7e-15, "{}: {x} vs {y}", sim.backend_name());
                         worst = max_or_nan(worst, (x - y).abs());
                     }
                 }
@@ -127,7 +129,10 @@ fn gpu_f64_matches_cpu_f64() {
             #[cfg(feature = "gpu")]
             Err(simkit_backend::Error::Unsupported(m)) if matches!(backend, Backend::Gpu(ctx) if !ctx.has_f64()) =>
             {
-                println!("f64 refused as expected: {m}");
+                eprintln!(
+                    "SKIPPED gpu_f64_matches_cpu_f64 on the GPU: the adapter lacks SHADER_F64, \
+                     so f64 was refused as expected ({m}) and no f64 GPU result was compared"
+                );
             }
             Err(e) => panic!("{e}"),
         }
@@ -136,8 +141,9 @@ fn gpu_f64_matches_cpu_f64() {
 
 /// Mixed edge conditions (periodic west/east, Dirichlet south, no-flux north) with two
 /// species of different diffusivities, Euler and Heun: every backend (the GPU ghost kernel,
-/// tiled and global stencils) agrees with the CPU ghost fill cell by cell within 1e-5 relative
-/// (f32, 500 steps; measured at most 1.3e-7 on llvmpipe), and the wrap-around actually carries
+/// tiled and global stencils) agrees with the CPU ghost fill cell by cell within 4e-7 relative
+/// (f32, 500 steps; measured 6.2e-8 Euler, 1.25e-7 Heun on llvmpipe, this test with
+/// `--nocapture`; bound ~3x), and the wrap-around actually carries
 /// mass across the periodic edges.
 #[test]
 fn mixed_boundaries_agree_on_both_backends() {
@@ -177,7 +183,7 @@ fn mixed_boundaries_agree_on_both_backends() {
                 let err = max_rel(&sim.state().unwrap(), &reference);
                 let name = sim.backend_name();
                 println!("{:?} {name}: max rel diff {err:e}", stepping.integrator);
-                assert!(err < 1e-5, "{:?} {name}: {err:e}", stepping.integrator);
+                assert!(err < 4e-7, "{:?} {name}: {err:e}", stepping.integrator);
             }
         }
     }

@@ -58,6 +58,11 @@ fn restart_is_bit_exact() {
             check_restart(test, "colony f64 euler", backend, 50, |b| {
                 colony::<f64>(b, Stepping::euler(0.005))
             });
+        } else {
+            eprintln!(
+                "SKIPPED {test} f64 on the GPU: the adapter lacks SHADER_F64, so the f64 \
+                 restarts (gray-scott, colony) ran on the CPU only"
+            );
         }
     }
 }

@@ -113,7 +113,8 @@ fn random_field(nx: usize, ny: usize, seed: u32) -> Vec<f64> {
         .collect()
 }
 
-/// No-flux edges conserve the total of each species to 1e-12 relative over 10^4 steps (f64).
+/// No-flux edges conserve the total of each species over 10^4 steps (f64): measured relative
+/// changes 1.9e-15 and 1.6e-16 (this test, `--nocapture`); bound 6e-15 (3x the larger).
 #[test]
 fn no_flux_conserves_mass() {
     let (nx, ny) = (24, 20);
@@ -134,7 +135,7 @@ fn no_flux_conserves_mass() {
     for (s, b) in before.iter().enumerate() {
         let rel = (g.total(s) - b).abs() / b;
         println!("species {s}: relative change of total {rel:e}");
-        assert!(rel < 1e-12, "species {s}: {rel:e}");
+        assert!(rel < 6e-15, "species {s}: {rel:e}");
     }
     // ... and the field has actually diffused towards uniform.
     assert!(simkit_rd::scenes::variance(&g, 0) < 1e-6);
@@ -156,6 +157,7 @@ fn colony_b_changes_only_through_reaction() {
         Backend::Cpu,
     )
     .unwrap();
+    let mut worst = 0.0f64;
     for _ in 0..200 {
         let g = sim.state().unwrap();
         let r: f64 = g
@@ -168,8 +170,11 @@ fn colony_b_changes_only_through_reaction() {
         sim.step(1).unwrap();
         let after = sim.state().unwrap().total(0);
         let err = (after - before - dt * h2 * r).abs() / before;
-        assert!(err < 1e-13, "b bookkeeping off by {err:e}");
+        // Measured at most 6.9e-15 over the 200 steps (printed below); bound 2e-14 (3x).
+        assert!(err < 2e-14, "b bookkeeping off by {err:e}");
+        worst = worst.max(err);
     }
+    println!("b bookkeeping: worst relative error over 200 steps {worst:e}");
     sim.step(2000).unwrap();
     let g = sim.state().unwrap();
     let rel = (g.total(0) + g.total(1) - start).abs() / start;
@@ -178,6 +183,9 @@ fn colony_b_changes_only_through_reaction() {
         b0,
         g.total(0)
     );
+    // Measured 0. Derived bound: each step moves dt r from n to b in every cell with one
+    // rounding on each side (eps / 2 relative to the totals at most), 2200 steps:
+    // 2200 eps = 4.9e-13; asserted 1e-12.
     assert!(rel < 1e-12, "{rel:e}");
 }
 
@@ -339,11 +347,15 @@ fn gpu_colony_step_rechecks_device_fields() {
     );
     assert!(cpu_call > 0);
     assert_eq!(cpu_call, gpu_call);
-    assert!((cpu_bound - gpu_bound).abs() < 1e-6 * cpu_bound);
+    // The GPU forms d b n in f32 (two roundings) where the CPU forms it in f64 from the same f32
+    // values: derived bound 2 eps_f32 relative (measured: equal).
+    assert!((cpu_bound - gpu_bound).abs() <= 2.0 * f64::from(f32::EPSILON) * cpu_bound);
 }
 
 /// Dirichlet 0 (west) and 1 (east) with no-flux north/south relax to the linear profile,
-/// which the scheme represents exactly: on both backends.
+/// which the scheme represents exactly: on both backends. After 3000 steps (t = 720) the
+/// slowest mode has decayed by e^-28; what is left is f32 round-off: measured 2.6e-6 at most
+/// on the CPU and on llvmpipe (this test, `--nocapture`); bound 8e-6 (3x).
 #[test]
 fn dirichlet_relaxes_to_linear_profile() {
     let (nx, ny) = (16, 4);
@@ -365,17 +377,20 @@ fn dirichlet_relaxes_to_linear_profile() {
         .unwrap();
         sim.step(3000).unwrap();
         let g = sim.state().unwrap();
+        let mut worst = 0.0f64;
         for j in 0..ny {
             for i in 0..nx {
                 let want = (i as f64 + 0.5) / nx as f64;
                 let got = f64::from(g.get(0, i, j).unwrap());
+                worst = worst.max((got - want).abs());
                 assert!(
-                    (got - want).abs() < 1e-5,
+                    (got - want).abs() < 8e-6,
                     "{} ({i},{j}): {got} vs {want}",
                     sim.backend_name()
                 );
             }
         }
+        println!("{}: worst |u - linear| = {worst:e}", sim.backend_name());
     }
 }
 
