@@ -30,21 +30,25 @@ fn has_f64(backend: Backend<'_>) -> bool {
     }
 }
 
-/// Forces on every backend against the CPU: f32 at N = 4096 within 1e-5 (L2 relative) of the
-/// CPU f32 forces; per law, f64 within 1e-12 and f32 within 1e-5 (worst particle over rms) of
-/// the CPU f64 forces. The backends sum the same pairs in a different order, so f32 results
-/// differ by rounding only. Measured: llvmpipe 1.7e-6 (L2, N = 4096 vs CPU f32) and at most
-/// 6.4e-6 (f32 vs CPU f64, exact law); the CPU in f32 (AVX-512 rsqrt path) at most 6.9e-6
-/// against f64 (exact law); f64 on llvmpipe at most 5.6e-15 from the CPU.
+/// Forces on every backend against the CPU: f32 at N = 4096 (L2 relative) against the CPU
+/// f32 forces; per law, f64 and f32 (worst particle over rms) against the CPU f64 forces. The
+/// backends sum the same pairs in a different order, so results differ by rounding only.
+/// Bounds: 3x the values measured by this test (llvmpipe and an AVX-512 CPU), or the old
+/// 1e-5 where that is tighter, beside each assertion.
 #[test]
 fn accelerations_match_cpu_on_every_backend() {
+    let test = "accelerations_match_cpu_on_every_backend";
     let p = plasma(4096, 2);
     let law = ForceLaw::Plummer { epsilon: 0.1 };
     let cpu32 = accelerations(&p, law, Precision::F32, Backend::Cpu);
     let cpu64 = accelerations(&p, law, Precision::F64, Backend::Cpu);
     let e32_64 = l2_relative(&cpu32, &cpu64);
     println!("N=4096 f32 vs f64 (L2 relative): cpu {e32_64:.2e}");
-    for backend in backends("accelerations_match_cpu_on_every_backend") {
+    // Per law (order of `LAWS`): f32 vs CPU f64, worst particle over rms. Measured: CPU
+    // 6.86e-6, 1.53e-6, 4.68e-6; llvmpipe 6.36e-6, 2.23e-6, 5.07e-6. Bounds: 1e-5 (exact,
+    // Plummer: 1.5x and 2x the larger), 6.7e-6 (exclusion: 3x).
+    const F32_BOUNDS: [f64; 3] = [1e-5, 6.7e-6, 1e-5];
+    for backend in backends(test) {
         let acc32 = accelerations(&p, law, Precision::F32, backend);
         let e = l2_relative(&acc32, &cpu32);
         let emax = max_error_over_rms(&acc32, &cpu32);
@@ -53,56 +57,84 @@ fn accelerations_match_cpu_on_every_backend() {
             "{backend:?} N=4096 f32: L2 relative vs cpu f32 {e:.2e} (max_i / rms: {emax:.2e}); \
              vs cpu f64 {e64:.2e}"
         );
-        assert!(e < 1e-5, "{backend:?} vs cpu f32: {e:e}");
-        for law in LAWS {
+        // Measured 1.73e-6 on llvmpipe (0 on the CPU itself); bound 3x.
+        assert!(e < 5.2e-6, "{backend:?} vs cpu f32: {e:e}");
+        for (law, b32) in LAWS.into_iter().zip(F32_BOUNDS) {
             let p = plasma(300, 3);
             let c = accelerations(&p, law, Precision::F64, Backend::Cpu);
             if has_f64(backend) {
                 let g = accelerations(&p, law, Precision::F64, backend);
                 let e = max_error_over_rms(&g, &c);
                 println!("{backend:?} {law:?} f64 vs cpu f64 {e:.2e}");
-                assert!(e < 1e-12, "{backend:?} {law:?}: {e:e}");
+                // Measured on llvmpipe: 4.18e-15, 3.50e-15, 5.61e-15; bound 3x the largest.
+                assert!(e < 1.7e-14, "{backend:?} {law:?}: {e:e}");
+            } else {
+                eprintln!(
+                    "SKIPPED {test} {law:?} f64 on {backend:?}: the adapter has no SHADER_F64 \
+                     (only the f32 comparison ran)"
+                );
             }
             let g = accelerations(&p, law, Precision::F32, backend);
             let e = max_error_over_rms(&g, &c);
             println!("{backend:?} {law:?} f32 vs cpu f64 {e:.2e}");
-            assert!(e < 1e-5, "{backend:?} {law:?}: f32 vs cpu f64 {e:e}");
+            assert!(e < b32, "{backend:?} {law:?}: f32 vs cpu f64 {e:e}");
         }
     }
 }
 
 /// Ten steps of 500 particles, both integrators, on every backend (split into calls of 7 and
-/// 3 steps) against the CPU in one call of 10: positions and velocities within 1e-10 (worst
-/// particle over rms) in f64; a GPU without `SHADER_F64` runs f32 against the CPU in f32,
-/// within 1e-4. Measured: the CPU in two calls is bit-identical to one call; llvmpipe (f64)
-/// within 2e-15.
+/// 3 steps) against the CPU in one call of 10, in f32 (against the CPU in f32) and in f64
+/// where the backend has it (a GPU without `SHADER_F64` says so): positions and velocities,
+/// worst particle over rms. The CPU in two calls must be bit-identical to one call.
 #[test]
 fn gpu_and_cpu_trajectories_agree() {
-    for backend in backends("gpu_and_cpu_trajectories_agree") {
-        let (prec, tol) = if has_f64(backend) {
-            (Precision::F64, 1e-10)
+    let test = "gpu_and_cpu_trajectories_agree";
+    for backend in backends(test) {
+        let mut precisions = vec![Precision::F32];
+        if has_f64(backend) {
+            precisions.push(Precision::F64);
         } else {
-            (Precision::F32, 1e-4)
-        };
-        for integrator in [Integrator::SymplecticEuler, Integrator::Leapfrog] {
-            let p = plasma(500, 4);
-            let config = Config::new(0.05, ForceLaw::Plummer { epsilon: 0.5 })
-                .with_integrator(integrator)
-                .with_precision(prec);
-            let mut cpu = PpCoulomb::new(p.clone(), &config, Backend::Cpu).unwrap();
-            let mut sim = PpCoulomb::new(p, &config, backend).unwrap();
-            cpu.step(10).unwrap();
-            sim.step(7).unwrap();
-            sim.step(3).unwrap();
-            let (a, b) = (cpu.state().unwrap(), sim.state().unwrap());
-            let dx = max_error_over_rms(&b.position, &a.position);
-            let dv = max_error_over_rms(&b.velocity, &a.velocity);
-            println!(
-                "{} {integrator:?}: positions {dx:.2e}, velocities {dv:.2e}",
-                sim.backend_name()
+            eprintln!(
+                "SKIPPED {test} f64 on {backend:?}: the adapter has no SHADER_F64 (f32 only)"
             );
-            assert!(dx < tol && dv < tol, "{integrator:?}: {dx:e} {dv:e}");
-            assert_eq!(sim.steps_done(), 10);
+        }
+        for prec in precisions {
+            for integrator in [Integrator::SymplecticEuler, Integrator::Leapfrog] {
+                let p = plasma(500, 4);
+                let config = Config::new(0.05, ForceLaw::Plummer { epsilon: 0.5 })
+                    .with_integrator(integrator)
+                    .with_precision(prec);
+                let mut cpu = PpCoulomb::new(p.clone(), &config, Backend::Cpu).unwrap();
+                let mut sim = PpCoulomb::new(p, &config, backend).unwrap();
+                cpu.step(10).unwrap();
+                sim.step(7).unwrap();
+                sim.step(3).unwrap();
+                let (a, b) = (cpu.state().unwrap(), sim.state().unwrap());
+                let dx = max_error_over_rms(&b.position, &a.position);
+                let dv = max_error_over_rms(&b.velocity, &a.velocity);
+                println!(
+                    "{} {integrator:?}: positions {dx:.2e}, velocities {dv:.2e}",
+                    sim.backend_name()
+                );
+                if matches!(backend, Backend::Cpu) {
+                    assert!(dx == 0.0 && dv == 0.0, "{integrator:?}: {dx:e} {dv:e}");
+                }
+                let tol = match prec {
+                    // Measured on llvmpipe: positions 1.07e-7, velocities 1.28e-6 (largest
+                    // of both integrators); bound 3x the larger.
+                    Precision::F32 => 3.8e-6,
+                    // Measured on llvmpipe: positions 2.2e-16, velocities 1.9e-15. Derived
+                    // bound: ten steps of forces that differ by at most 1.7e-14 of the rms
+                    // (the f64 bound of `accelerations_match_cpu_on_every_backend`), with
+                    // no time for the difference to grow: 10 x 1.7e-14.
+                    Precision::F64 => 1.7e-13,
+                };
+                assert!(
+                    dx < tol && dv < tol,
+                    "{prec:?} {integrator:?}: {dx:e} {dv:e} (bound {tol:e})"
+                );
+                assert_eq!(sim.steps_done(), 10);
+            }
         }
     }
 }
@@ -114,10 +146,8 @@ fn flat(p: &Particles) -> (Vec<f64>, Vec<f64>) {
 }
 
 /// The CPU in f32 follows the f64 trajectory: 20 leapfrog steps of 500 particles (Plummer
-/// softening 0.5), positions within 1e-5 and velocities within 1e-4 of the f64 run, relative
-/// to the largest f64 coordinate. Measured: 4.1e-7 and 2.5e-6; the bounds leave room for
-/// other f32 summation orders (thread count, SIMD width) while still failing for a
-/// precision-dependent law or integrator bug, which moves particles by O(1) relative.
+/// softening 0.5): positions and velocities against the f64 run, relative to the largest
+/// f64 coordinate (bounds beside the assertions).
 #[test]
 fn cpu_f32_trajectory_tracks_f64() {
     let p = plasma(500, 7);
@@ -135,6 +165,8 @@ fn cpu_f32_trajectory_tracks_f64() {
     let dx = max_rel_diff(&x32, &x64, &x64);
     let dv = max_rel_diff(&v32, &v64, &v64);
     println!("CPU f32 vs f64 after 20 steps: positions {dx:.2e}, velocities {dv:.2e}");
-    assert!(dx < 1e-5, "positions: {dx:e}");
-    assert!(dv < 1e-4, "velocities: {dv:e}");
+    // Measured 4.09e-7 and 2.54e-6 (this test; the CPU's f32 sums have a fixed order, the
+    // same for any thread count or SIMD width); bounds 3x.
+    assert!(dx < 1.2e-6, "positions: {dx:e}");
+    assert!(dv < 7.6e-6, "velocities: {dv:e}");
 }

@@ -4,19 +4,41 @@
 mod common;
 
 use common::{LAWS, l2_relative, max_error_over_rms, norm, plasma};
-use simkit_backend::testing::backends;
 #[cfg(feature = "gpu")]
 use simkit_backend::testing::gpu_or_skip;
+use simkit_backend::testing::{backends, simd_exercised};
 use simkit_backend::{Backend, Simulation};
 use simkit_pp_coulomb::{
     Config, ForceLaw, MAX_PARTICLES, Particles, PpCoulomb, Precision, Region, Species, Velocities,
     reference_accelerations,
 };
 
+/// Both CPU kernels (the AVX-512 rsqrt path, where the CPU has it, and the portable sqrt +
+/// divide kernel) in f64 and f32 against the scalar f64 reference, per law, and Newton's
+/// third law. Bounds: 3x the values measured by this test (f64, 2 cores, AVX-512 CPU; the
+/// larger of the two kernels), listed per law in `BOUNDS` below.
 #[test]
 fn cpu_kernels_match_reference_and_third_law() {
     let p = plasma(1003, 1); // not a multiple of the SIMD width
-    for law in LAWS {
+    // Whether the rsqrt path runs here (a CPU without AVX-512 compares portable with itself).
+    let fast = Config::new(0.01, ForceLaw::Exact);
+    let name = PpCoulomb::new(p.clone(), &fast, Backend::Cpu)
+        .unwrap()
+        .backend_name();
+    simd_exercised(
+        "cpu_kernels_match_reference_and_third_law",
+        "avx512f",
+        name.contains("avx512-rsqrt"),
+    );
+    // Per law (order of `LAWS`): f64 max_i / rms, f32 max_i / rms, f32 L2. Measured:
+    // exact 1.17e-14, 2.36e-5, 1.46e-6; exclusion 1.01e-14, 1.03e-6, 2.76e-7;
+    // Plummer 7.45e-15, 3.28e-6, 4.73e-7. Bounds 3x.
+    const BOUNDS: [[f64; 3]; 3] = [
+        [3.5e-14, 7.1e-5, 4.4e-6],
+        [3.0e-14, 3.1e-6, 8.3e-7],
+        [2.2e-14, 9.8e-6, 1.4e-6],
+    ];
+    for (law, [b64, b32, bl32]) in LAWS.into_iter().zip(BOUNDS) {
         let reference = reference_accelerations(&p, law);
         // Both CPU paths: AVX-512 rsqrt + Newton (where the CPU has it) and sqrt + divide.
         for rsqrt in [true, false] {
@@ -36,17 +58,18 @@ fn cpu_kernels_match_reference_and_third_law() {
                 "{law:?}: {name64} vs reference {e64:.2e}; {name32} vs reference {e32:.2e} \
                  (max_i / rms), {l32:.2e} (L2)"
             );
-            assert!(e64 < 1e-12, "{law:?} {name64}: {e64:e}");
+            assert!(e64 < b64, "{law:?} {name64}: {e64:e} (bound {b64:e})");
             assert!(
-                e32 < 1e-4 && l32 < 1e-5,
-                "{law:?} {name32}: {e32:e} {l32:e}"
+                e32 < b32 && l32 < bl32,
+                "{law:?} {name32}: {e32:e} {l32:e} (bounds {b32:e}, {bl32:e})"
             );
         }
         let mut sim = PpCoulomb::new(p.clone(), &Config::new(0.01, law), Backend::Cpu).unwrap();
         let d = sim.diagnostics().unwrap();
         let third = norm(d.force_sum) / d.force_magnitude_sum;
         println!("{law:?}: |sum F| / sum |F| = {third:.2e}");
-        assert!(third < 1e-13, "{law:?}: third law {third:e}");
+        // Measured 7.41e-17 (exact), 9.31e-17 (exclusion), 7.11e-17 (Plummer); bound 3x.
+        assert!(third < 2.8e-16, "{law:?}: third law {third:e}");
     }
 }
 
@@ -147,7 +170,12 @@ fn gpu_refuses_more_particles_than_the_adapter_loops_allow() {
     let max = simkit_pp_coulomb::gpu_max_particles(&ctx);
     let Some(limit) = ctx.shader_loop_limit() else {
         assert_eq!(max, usize::MAX);
-        println!("{}: no shader loop limit, no particle limit", ctx.summary());
+        eprintln!(
+            "NOT EXERCISED gpu_refuses_more_particles_than_the_adapter_loops_allow: {} has no \
+             shader loop limit, so there is no particle limit to refuse; only checked that \
+             gpu_max_particles is unlimited",
+            ctx.summary()
+        );
         return;
     };
     // llvmpipe: 504 tiles of 128 particles, 130 loop iterations each, fit in 65,535.
