@@ -5,6 +5,8 @@ use rayon::prelude::*;
 
 use simkit_backend::{Error, Real, Result};
 
+use crate::MAX_CELLS;
+
 /// A half Verlet list (each pair once, `j > i` in cell-sorted order) within a fixed list
 /// range, split into fixed blocks of consecutive particles, each with its own CSR list.
 ///
@@ -29,9 +31,10 @@ use simkit_backend::{Error, Real, Result};
 /// rebuild (typically when a particle has moved by more than half the skin).
 ///
 /// Cells are at least the list range wide (the cutoff plus the skin); a sparse box gets
-/// wider cells, at most about `8 n + 4096` of them, which only costs distance checks at
-/// builds. Cells are ordered with the last axis slowest; within a cell the sort is stable.
-/// Distances are computed in `f64` whatever the precision `T` of the positions.
+/// wider cells, at most about `8 n + 4096` of them (and never more than [`MAX_CELLS`]),
+/// which only costs distance checks at builds. Cells are ordered with the last axis
+/// slowest; within a cell the sort is stable. Distances are computed in `f64` whatever the
+/// precision `T` of the positions.
 ///
 /// ```
 /// use simkit_neighbor::BlockedHalfList;
@@ -47,8 +50,8 @@ use simkit_backend::{Error, Real, Result};
 /// for b in list.blocks() {
 ///     for k in 0..b.len() {
 ///         let i = b.start() + k;
-///         assert!(b.partners_of(k).is_empty());
-///         for &(j, s) in b.image_partners_of(k) {
+///         assert_eq!(b.partners_of(k), Some(&[][..]));
+///         for &(j, s) in b.image_partners_of(k).unwrap() {
 ///             let j = j as usize;
 ///             let sep = [sorted[i][0] - sorted[j][0] - s[0], sorted[i][1] - sorted[j][1] - s[1]];
 ///             pairs.push((order[i].min(order[j]), sep[0].abs()));
@@ -133,13 +136,12 @@ impl<T, const D: usize> HalfListBlock<T, D> {
         &self.partners
     }
 
-    /// Same-image partners of local particle `k` (sorted slot `start + k`).
-    ///
-    /// # Panics
-    /// If `k >= len()` or the list was never built.
+    /// Same-image partners of local particle `k` (sorted slot `start + k`), or `None` if
+    /// `k >= len()` or the list was never built.
     #[inline]
-    pub fn partners_of(&self, k: usize) -> &[u32] {
-        &self.partners[self.offsets[k] as usize..self.offsets[k + 1] as usize]
+    pub fn partners_of(&self, k: usize) -> Option<&[u32]> {
+        let (a, b) = (*self.offsets.get(k)?, *self.offsets.get(k.checked_add(1)?)?);
+        self.partners.get(a as usize..b as usize)
     }
 
     /// CSR offsets into [`image_partners`](Self::image_partners), as
@@ -156,13 +158,15 @@ impl<T, const D: usize> HalfListBlock<T, D> {
         &self.image_partners
     }
 
-    /// Cross-image partners of local particle `k` (sorted slot `start + k`).
-    ///
-    /// # Panics
-    /// If `k >= len()` or the list was never built.
+    /// Cross-image partners of local particle `k` (sorted slot `start + k`), or `None` if
+    /// `k >= len()` or the list was never built.
     #[inline]
-    pub fn image_partners_of(&self, k: usize) -> &[(u32, [T; D])] {
-        &self.image_partners[self.image_offsets[k] as usize..self.image_offsets[k + 1] as usize]
+    pub fn image_partners_of(&self, k: usize) -> Option<&[(u32, [T; D])]> {
+        let (a, b) = (
+            *self.image_offsets.get(k)?,
+            *self.image_offsets.get(k.checked_add(1)?)?,
+        );
+        self.image_partners.get(a as usize..b as usize)
     }
 
     /// Number of pairs listed by the block (both kinds).
@@ -182,8 +186,9 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
     /// than `range` (the interaction cutoff plus the skin), for `n` particles.
     ///
     /// Errors: `D` other than 2 or 3; a non-finite `lo`; a non-finite or non-positive length
-    /// or `range`; a periodic length below `2 range` (a pair could then be within range in
-    /// two images); more than `u32::MAX` particles.
+    /// or `range`; a `range` whose square is not a normal `f64`; a periodic length below
+    /// `2 range` (a pair could then be within range in two images); more than `u32::MAX`
+    /// particles.
     pub fn new(
         lo: [f64; D],
         len: [f64; D],
@@ -201,6 +206,15 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
                 "neighbour list range",
                 range,
                 "must be finite and > 0 (the cutoff plus the skin)",
+            ));
+        }
+        // Pairs are selected by comparing squared distances with range^2.
+        if !(range * range).is_normal() {
+            return Err(Error::invalid(
+                "neighbour list range",
+                range,
+                "its square must be a normal f64 (a range between about 1.5e-154 and \
+                 1.3e154); rescale the length unit",
             ));
         }
         for d in 0..D {
@@ -233,7 +247,9 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
                 "must fit in 32 bits (partners are stored as u32)",
             ));
         }
-        let limit = (8 * n + 4096) as f64;
+        // The cell offsets are allocated here, before any position is seen: their number
+        // is bounded whatever the particle count.
+        let limit = n.saturating_mul(8).saturating_add(4096).min(MAX_CELLS) as f64;
         let mut width = range;
         let (cells, total) = loop {
             let mut cells = [1usize; D];
@@ -345,7 +361,10 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
     /// Counting sort of `pos` by cell (last axis slowest, stable within a cell): returns
     /// `order`, where `order[k]` is the current index of the particle that goes to sorted
     /// slot `k`. A coordinate outside the box goes to the nearest boundary cell; periodic
-    /// coordinates must have been wrapped into the box.
+    /// coordinates must have been wrapped into the box. A NaN coordinate goes to the first
+    /// cell, and such a particle is within range of no other (a NaN distance is not below
+    /// the range): check positions for non-finite values before the list is used (the
+    /// simulation crates' blow-up guards do).
     ///
     /// Errors: `pos.len()` differs from the particle count.
     pub fn sort(&mut self, pos: &[[T; D]]) -> Result<Vec<u32>> {

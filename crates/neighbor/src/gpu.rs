@@ -70,7 +70,9 @@ pub struct GpuGridParams {
 impl GpuGridParams {
     /// Parameters of `grid` for `n_particles` particles.
     ///
-    /// Errors: more than [`GPU_MAX_CELLS_PER_AXIS`] cells along an axis.
+    /// Errors: more than [`GPU_MAX_CELLS_PER_AXIS`] cells along an axis, an origin that is
+    /// not a finite `f32`, or a box length, cell density or cutoff squared that is not a
+    /// normal `f32`.
     pub fn new<const D: usize>(grid: &CellGrid<D>, n_particles: u32) -> Result<Self> {
         let mut p = Self {
             origin: [0.0; 4],
@@ -82,7 +84,7 @@ impl GpuGridParams {
             n_cells: grid.n_cells() as u32,
             clamp_out: u32::from(grid.out_of_box() == OutOfBox::Clamp),
             dim: D as u32,
-            cutoff2: (grid.cutoff() * grid.cutoff()) as f32,
+            cutoff2: f32_param("cutoff^2", grid.cutoff() * grid.cutoff(), true)?,
             pad: [0.0; 3],
         };
         for d in 0..D {
@@ -94,13 +96,45 @@ impl GpuGridParams {
                      the CPU backend"
                 )));
             }
-            p.origin[d] = grid.origin()[d] as f32;
-            p.length[d] = grid.lengths()[d] as f32;
-            p.inv_cell[d] = (n as f64 / grid.lengths()[d]) as f32;
+            p.origin[d] = f32_param(format!("origin along axis {d}"), grid.origin()[d], false)?;
+            p.length[d] = f32_param(
+                format!("box length along axis {d}"),
+                grid.lengths()[d],
+                true,
+            )?;
+            p.inv_cell[d] = f32_param(
+                format!("cells per unit length along axis {d}"),
+                n as f64 / grid.lengths()[d],
+                true,
+            )?;
             p.cells[d] = n as u32;
             p.periodic[d] = u32::from(grid.periodic()[d]);
         }
         Ok(p)
+    }
+}
+
+/// `value` as the `f32` the GPU computes with: finite, and normal if it must be `positive`.
+fn f32_param(name: impl Into<String>, value: f64, positive: bool) -> Result<f32> {
+    let v = value as f32;
+    let ok = if positive {
+        v.is_normal()
+    } else {
+        v.is_finite()
+    };
+    if ok {
+        Ok(v)
+    } else {
+        Err(Error::invalid(
+            name,
+            value,
+            format!(
+                "is {v} in f32, which the GPU computes in (normal f32 magnitudes are {:e} to \
+                 {:e}); rescale the length unit or use the CPU backend",
+                f32::MIN_POSITIVE,
+                f32::MAX
+            ),
+        ))
     }
 }
 

@@ -14,6 +14,12 @@ pub const CELL_MARGIN: f64 = 1e-3;
 /// A very large sparse box with a small cutoff is refused instead of allocating gigabytes.
 pub const MAX_CELLS: usize = 1 << 26;
 
+/// The smallest cutoff [`CellGrid::new`] accepts (its square is the smallest normal `f64`).
+const MIN_CUTOFF: f64 = 1.4916681462400413e-154;
+
+/// The largest cutoff [`CellGrid::new`] accepts (its square is finite).
+const MAX_CUTOFF: f64 = 1.3407807929942596e154;
+
 /// What to do with a position outside the box along a non-periodic axis.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum OutOfBox {
@@ -56,7 +62,8 @@ impl<const D: usize> CellGrid<D> {
     /// interaction cutoff.
     ///
     /// Errors: `D` other than 2 or 3, non-finite origin, non-finite or non-positive lengths
-    /// or cutoff, or more than [`MAX_CELLS`] cells.
+    /// or cutoff, a cutoff whose square is not a normal `f64` (outside about
+    /// `[1.5e-154, 1.3e154]`), or more than [`MAX_CELLS`] cells.
     pub fn new(
         origin: [f64; D],
         lengths: [f64; D],
@@ -87,6 +94,21 @@ impl<const D: usize> CellGrid<D> {
         }
         if !(cutoff.is_finite() && cutoff > 0.0) {
             return Err(Error::invalid("cutoff", cutoff, "must be finite and > 0"));
+        }
+        // Pairs are selected by comparing squared distances with cutoff^2: an infinite square
+        // would take every pair, one flushed to zero only coincident ones.
+        if !(cutoff * cutoff).is_normal() {
+            return Err(Error::invalid(
+                "cutoff",
+                cutoff,
+                format!(
+                    "cutoff^2 = {:e} is not a normal f64; use a cutoff between {:e} and {:e} \
+                     (rescale the length unit)",
+                    cutoff * cutoff,
+                    MIN_CUTOFF,
+                    MAX_CUTOFF
+                ),
+            ));
         }
         let mut cells = [1usize; D];
         let mut total: f64 = 1.0;
@@ -184,9 +206,13 @@ impl<const D: usize> CellGrid<D> {
 
     /// Wrapped coordinates of particle `index` at `p` (see the type docs).
     ///
-    /// Errors: a NaN or infinite coordinate, or (with [`OutOfBox::Error`]) a coordinate
-    /// outside `[origin, origin + L]` along a non-periodic axis; the message names the
-    /// particle index and the coordinate.
+    /// Any finite coordinate along a periodic axis wraps into `[0, L)`, however far from the
+    /// box.
+    ///
+    /// Errors: a NaN or infinite coordinate, a coordinate so far from the origin that
+    /// `x - origin` overflows, or (with [`OutOfBox::Error`]) a coordinate outside
+    /// `[origin, origin + L]` along a non-periodic axis; the message names the particle
+    /// index and the coordinate.
     #[inline]
     pub fn wrap(&self, index: usize, p: [f64; D]) -> Result<[f64; D]> {
         let mut t = [0.0; D];
@@ -197,14 +223,37 @@ impl<const D: usize> CellGrid<D> {
             }
             let l = self.lengths[d];
             let mut v = x - self.origin[d];
+            if !v.is_finite() {
+                return Err(bad_position(
+                    index,
+                    d,
+                    x,
+                    &format!(
+                        "is too far from the box origin {} for its offset to be an f64; move \
+                         the origin or the particle",
+                        self.origin[d]
+                    ),
+                ));
+            }
             if self.periodic[d] {
                 if !(0.0..l).contains(&v) {
-                    v -= l * (v / l).floor();
-                    if v < 0.0 {
-                        v += l;
-                    }
-                    if v >= l {
-                        v = 0.0;
+                    let shift = l * (v / l).floor();
+                    let w = v - shift;
+                    if shift.is_finite() && w > -l && w < 2.0 * l {
+                        v = w;
+                        if v < 0.0 {
+                            v += l;
+                        }
+                        if v >= l {
+                            v = 0.0;
+                        }
+                    } else {
+                        // Far from the box `l * floor(v / l)` rounds by more than a box
+                        // length (or overflows): the remainder is exact.
+                        v = v.rem_euclid(l);
+                        if v >= l {
+                            v = 0.0;
+                        }
                     }
                 }
             } else if self.out_of_box == OutOfBox::Error && !(0.0..=l).contains(&v) {
@@ -245,22 +294,39 @@ impl<const D: usize> CellGrid<D> {
     /// Linear cell index of a wrapped position.
     #[inline]
     pub fn cell_of(&self, t: [f64; D]) -> usize {
-        self.linear(self.cell_coords_of(t))
+        self.linear_of(self.cell_coords_of(t))
     }
 
-    /// Linear index `cx + nx * (cy + ny * cz)` of per-axis cell coordinates.
+    /// Linear index `cx + nx * (cy + ny * cz)` of per-axis cell coordinates, or `None` when
+    /// a coordinate is outside the grid (`c[d] >= cells_per_axis()[d]`).
     #[inline]
-    pub fn linear(&self, c: [usize; D]) -> usize {
+    pub fn linear(&self, c: [usize; D]) -> Option<usize> {
+        (0..D)
+            .all(|d| c[d] < self.cells[d])
+            .then(|| self.linear_of(c))
+    }
+
+    /// [`linear`](Self::linear) for coordinates known to be inside the grid.
+    #[inline]
+    pub(crate) fn linear_of(&self, c: [usize; D]) -> usize {
         let mut idx = 0;
         for d in (0..D).rev() {
+            debug_assert!(c[d] < self.cells[d]);
             idx = idx * self.cells[d] + c[d];
         }
         idx
     }
 
-    /// Per-axis cell coordinates of a linear cell index.
+    /// Per-axis cell coordinates of a linear cell index, or `None` when there is no such
+    /// cell (`cell >= n_cells()`).
     #[inline]
-    pub fn coords(&self, mut cell: usize) -> [usize; D] {
+    pub fn coords(&self, cell: usize) -> Option<[usize; D]> {
+        (cell < self.n_cells).then(|| self.coords_of(cell))
+    }
+
+    /// [`coords`](Self::coords) for a cell index known to be below `n_cells()`.
+    #[inline]
+    pub(crate) fn coords_of(&self, mut cell: usize) -> [usize; D] {
         std::array::from_fn(|d| {
             let c = cell % self.cells[d];
             cell /= self.cells[d];

@@ -1,6 +1,6 @@
 //! The trait shared by every method and backend, and per-particle neighbour lists.
 
-use simkit_backend::Result;
+use simkit_backend::{Error, Result};
 
 /// Per-particle neighbour lists in compressed sparse row form: the neighbours of particle
 /// `i` are `neighbors[offsets[i]..offsets[i + 1]]`, in ascending order.
@@ -13,20 +13,42 @@ pub struct NeighborLists {
 }
 
 impl NeighborLists {
-    /// Full lists (every pair appears in both particles' lists) from unordered pairs.
-    pub fn from_pairs(n: usize, pairs: &[(u32, u32)]) -> Self {
-        let mut counts = vec![0usize; n + 1];
+    /// Full lists (every pair appears in both particles' lists) of `n` particles from
+    /// unordered pairs `(i, j)`.
+    ///
+    /// Errors: `n` over `u32::MAX` (indices are `u32`), a pair with an index `>= n` or with
+    /// `i == j`, or lists too large to allocate.
+    pub fn from_pairs(n: usize, pairs: &[(u32, u32)]) -> Result<Self> {
+        if n > u32::MAX as usize {
+            return Err(Error::invalid(
+                "particle count",
+                n,
+                "must be at most 2^32 - 1 (neighbour indices are stored as u32)",
+            ));
+        }
+        for (k, &(i, j)) in pairs.iter().enumerate() {
+            if i as usize >= n || j as usize >= n || i == j {
+                return Err(Error::invalid(
+                    format!("pairs[{k}]"),
+                    format!("({i}, {j})"),
+                    format!("must be two different particle indices below n = {n}"),
+                ));
+            }
+        }
+        // Every entry is one of the 2 * pairs.len() ends of a pair (the pairs are already in
+        // memory); the offsets grow with n, which may be far larger than the input.
+        let mut counts = zeroed_offsets(n)?;
         for &(i, j) in pairs {
             counts[i as usize] += 1;
             counts[j as usize] += 1;
         }
-        let mut offsets = Vec::with_capacity(n + 1);
+        let mut offsets = zeroed_offsets(n)?;
         let mut acc = 0;
-        for c in &counts[..n] {
-            offsets.push(acc);
+        for (o, c) in offsets.iter_mut().zip(&counts) {
+            *o = acc;
             acc += c;
         }
-        offsets.push(acc);
+        drop(counts);
         let mut cursor = offsets.clone();
         let mut neighbors = vec![0u32; acc];
         for &(i, j) in pairs {
@@ -38,7 +60,7 @@ impl NeighborLists {
         for i in 0..n {
             neighbors[offsets[i]..offsets[i + 1]].sort_unstable();
         }
-        Self { offsets, neighbors }
+        Ok(Self { offsets, neighbors })
     }
 
     /// Number of particles.
@@ -60,10 +82,37 @@ impl NeighborLists {
     }
 
     /// Number of neighbours of every particle.
-    pub fn counts(&self) -> Vec<u32> {
+    ///
+    /// Errors when the public fields do not form CSR lists: `offsets` decreasing, past the
+    /// end of `neighbors`, or a list longer than `u32::MAX`.
+    pub fn counts(&self) -> Result<Vec<u32>> {
+        if let Some(&last) = self.offsets.last()
+            && last > self.neighbors.len()
+        {
+            return Err(Error::invalid(
+                format!("offsets[{}]", self.offsets.len() - 1),
+                last,
+                format!(
+                    "past the end of neighbors (length {}); offsets index into neighbors",
+                    self.neighbors.len()
+                ),
+            ));
+        }
         self.offsets
             .windows(2)
-            .map(|w| (w[1] - w[0]) as u32)
+            .enumerate()
+            .map(|(i, w)| {
+                w[1].checked_sub(w[0])
+                    .and_then(|c| u32::try_from(c).ok())
+                    .ok_or_else(|| {
+                        Error::invalid(
+                            format!("offsets[{i}..={}]", i + 1),
+                            format!("{}..{}", w[0], w[1]),
+                            "offsets must not decrease, and a list holds at most u32::MAX \
+                             entries",
+                        )
+                    })
+            })
             .collect()
     }
 }
@@ -108,6 +157,22 @@ pub trait NeighborSearch<const D: usize> {
     fn neighbor_lists(&mut self) -> Result<NeighborLists> {
         let mut pairs = Vec::new();
         self.for_each_pair(|i, j, _, _| pairs.push((i as u32, j as u32)))?;
-        Ok(NeighborLists::from_pairs(self.particle_count(), &pairs))
+        NeighborLists::from_pairs(self.particle_count(), &pairs)
     }
+}
+
+/// `n + 1` zeros, or an error when they cannot be allocated.
+fn zeroed_offsets(n: usize) -> Result<Vec<usize>> {
+    let mut v = Vec::new();
+    if n.checked_add(1)
+        .is_none_or(|len| v.try_reserve_exact(len).is_err())
+    {
+        return Err(Error::invalid(
+            "particle count",
+            n,
+            "the neighbour list offsets do not fit in memory; use fewer particles",
+        ));
+    }
+    v.resize(n + 1, 0);
+    Ok(v)
 }

@@ -250,9 +250,10 @@ impl<const D: usize> SortedCells<D> {
         &self.wrapped
     }
 
-    /// Wrapped coordinate `d` of every particle in sorted order (structure of arrays).
-    pub fn sorted_coords(&self, d: usize) -> &[f64] {
-        &self.coords[d][..self.order.len()]
+    /// Wrapped coordinate `d` of every particle in sorted order (structure of arrays), or
+    /// `None` for an axis `d >= D`.
+    pub fn sorted_coords(&self, d: usize) -> Option<&[f64]> {
+        self.coords.get(d).map(|c| &c[..self.order.len()])
     }
 
     /// Copies `data` (one value per particle, original order) into sorted order, so that a
@@ -373,10 +374,21 @@ impl<const D: usize> SortedCells<D> {
         Ok(())
     }
 
-    /// Neighbours of particle `i` (full shell), each with separation and squared distance.
-    pub fn for_each_neighbor_of<F: FnMut(usize, [f64; D], f64)>(&self, i: usize, mut f: F) {
+    /// Calls `f(j, sep, r2)` for every neighbour `j` of particle `i` (full shell), with
+    /// `sep = r_i - r_j` (minimum image) and `r2 = |sep|^2`.
+    ///
+    /// Errors: no particle `i` in the last build (`i >= len()`).
+    pub fn for_each_neighbor_of<F: FnMut(usize, [f64; D], f64)>(
+        &self,
+        i: usize,
+        mut f: F,
+    ) -> Result<()> {
         if i >= self.len() {
-            return;
+            return Err(Error::invalid(
+                "particle index",
+                i,
+                format!("the last build has {} particles", self.len()),
+            ));
         }
         let mut s = Scratch::new();
         let (rank, cell) = (self.rank[i] as usize, self.cell_of[i] as usize);
@@ -388,6 +400,7 @@ impl<const D: usize> SortedCells<D> {
             &mut s,
             &mut |_, j, sep, r2| f(j, sep, r2),
         );
+        Ok(())
     }
 }
 

@@ -95,7 +95,7 @@ impl<const D: usize> CellGrid<D> {
                 nc[d] = v as usize;
             }
         }
-        Some((self.linear(nc), shift))
+        Some((self.linear_of(nc), shift))
     }
 
     /// Distinct cells of the full shell of `c` in ascending (z, y, x) offset order, for grids
@@ -125,7 +125,7 @@ impl<const D: usize> CellGrid<D> {
                     let nc: [usize; D] = std::array::from_fn(|d| {
                         (c[d] as i64 + i64::from(o[d])).rem_euclid(n[d] as i64) as usize
                     });
-                    visit(self.linear(nc));
+                    visit(self.linear_of(nc));
                 }
             }
         }
@@ -136,7 +136,7 @@ impl<const D: usize> CellGrid<D> {
     /// side. Periodic axes with fewer than 3 cells use de-duplicated cells and `c' > c`.
     pub(crate) fn half_shell(&self, cell: usize, out: &mut Shell<D>) {
         out.len = 0;
-        let c = self.coords(cell);
+        let c = self.coords_of(cell);
         if self.needs_min_image_per_pair() {
             out.push(cell, [0.0; D]);
             let mut cells = [0usize; 27];
@@ -170,7 +170,7 @@ impl<const D: usize> CellGrid<D> {
     /// when a periodic axis has fewer than 3 cells).
     pub(crate) fn full_shell(&self, cell: usize, out: &mut Shell<D>) {
         out.len = 0;
-        let c = self.coords(cell);
+        let c = self.coords_of(cell);
         if self.needs_min_image_per_pair() {
             let mut cells = [0usize; 27];
             let mut k = 0;
@@ -223,12 +223,12 @@ mod tests {
     fn interior_half_shell_merges_rows() {
         let g = CellGrid::<3>::new([0.0; 3], [10.0; 3], [false; 3], 1.0).unwrap();
         let mut s = Shell::new();
-        g.half_shell(g.linear([4, 4, 4]), &mut s);
+        g.half_shell(g.linear_of([4, 4, 4]), &mut s);
         // self + (+1,0,0) merged, one y row, three z rows.
         assert_eq!(s.len, 5);
         let cells: usize = s.as_slice().iter().map(|r| r.end - r.first).sum();
         assert_eq!(cells, 14);
-        g.full_shell(g.linear([4, 4, 4]), &mut s);
+        g.full_shell(g.linear_of([4, 4, 4]), &mut s);
         assert_eq!(s.len, 9);
     }
 }

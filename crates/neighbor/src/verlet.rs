@@ -45,12 +45,22 @@ pub struct VerletList<const D: usize> {
 impl<const D: usize> VerletList<D> {
     /// A list for pairs within `grid.cutoff()`, stored up to `cutoff + skin`.
     ///
-    /// Errors: a negative or non-finite skin.
+    /// Errors: a negative or non-finite skin, or a list range `cutoff + skin` that is not a
+    /// valid cutoff of `grid`'s box (see [`CellGrid::new`]).
     pub fn new(grid: &CellGrid<D>, skin: f64, kind: ListKind) -> Result<Self> {
         if !(skin.is_finite() && skin >= 0.0) {
             return Err(Error::invalid("skin", skin, "must be finite and >= 0"));
         }
-        let list_grid = grid.with_cutoff(grid.cutoff() + skin)?;
+        let range = grid.cutoff() + skin;
+        let list_grid = grid.with_cutoff(range).map_err(|e| {
+            Error::invalid(
+                "skin",
+                skin,
+                format!(
+                    "the list range cutoff + skin = {range} is refused ({e}); use a smaller skin"
+                ),
+            )
+        })?;
         Ok(Self {
             grid: grid.clone(),
             skin,
@@ -219,8 +229,15 @@ impl<const D: usize> VerletList<D> {
         &self.neighbors
     }
 
-    /// The stored list of particle `i` (pairs within `cutoff + skin` at build time).
-    pub fn list_of(&self, i: usize) -> &[u32] {
+    /// The stored list of particle `i` (pairs within `cutoff + skin` at build time), or
+    /// `None` if there is no particle `i` in the last build.
+    pub fn list_of(&self, i: usize) -> Option<&[u32]> {
+        (i < self.current.len()).then(|| self.stored(i))
+    }
+
+    /// The stored list of particle `i`, known to exist.
+    #[inline]
+    fn stored(&self, i: usize) -> &[u32] {
         &self.neighbors[self.offsets[i]..self.offsets[i + 1]]
     }
 
@@ -232,7 +249,7 @@ impl<const D: usize> VerletList<D> {
     #[inline]
     fn filter<F: FnMut(usize, usize, [f64; D], f64)>(&self, i: usize, rc2: f64, f: &mut F) {
         let ti = self.current[i];
-        for &j in self.list_of(i) {
+        for &j in self.stored(i) {
             let (sep, r2) = self.grid.separation(ti, self.current[j as usize]);
             if r2 <= rc2 {
                 f(i, j as usize, sep, r2);

@@ -37,12 +37,12 @@ fn listed<T: Real, const D: usize>(list: &BlockedHalfList<T, D>) -> Pairs<D> {
         );
         for k in 0..b.len() {
             let i = b.start() + k;
-            for &j in b.partners_of(k) {
+            for &j in b.partners_of(k).expect("built") {
                 let j = j as usize;
                 assert!(j > i && j < n, "partner {j} of {i}");
                 assert!(m.insert((i, j), [0.0f64.to_bits(); D]).is_none());
             }
-            for &(j, s) in b.image_partners_of(k) {
+            for &(j, s) in b.image_partners_of(k).expect("built") {
                 let j = j as usize;
                 assert!(j > i && j < n, "image partner {j} of {i}");
                 assert!(

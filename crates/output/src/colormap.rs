@@ -46,7 +46,9 @@ impl Colormap {
     }
 
     /// The colour for `value` on the range `[min, max]` (`min` maps to `map(0)`, `max` to
-    /// `map(1)`). A degenerate range (`max <= min`) maps everything to the middle colour.
+    /// `map(1)`), also for ranges wider than `f64::MAX` (e.g. `-1e308` to `1e308`). A
+    /// degenerate range (`max <= min`, or an infinite end) maps everything to the middle
+    /// colour.
     pub fn map_range(self, value: f64, min: f64, max: f64) -> [u8; 3] {
         if value.is_nan() {
             return NAN_COLOR;
@@ -54,6 +56,9 @@ impl Colormap {
         let span = max - min;
         let t = if span > 0.0 && span.is_finite() {
             (value - min) / span
+        } else if min.is_finite() && max.is_finite() && max > min {
+            // The span passes f64::MAX: halving is exact and keeps it finite.
+            (value / 2.0 - min / 2.0) / (max / 2.0 - min / 2.0)
         } else {
             0.5
         };
@@ -119,6 +124,11 @@ mod tests {
         assert_eq!(Colormap::Gray.map(1.0), [255, 255, 255]);
         assert_eq!(Colormap::Viridis.map_range(5.0, 0.0, 10.0), viridis(0.5));
         assert_eq!(Colormap::Viridis.map_range(f64::NAN, 0.0, 1.0), NAN_COLOR);
+        // A range wider than f64::MAX used to map every value to the middle colour.
+        let (lo, hi) = (-1e308, 1e308);
+        assert_eq!(Colormap::Viridis.map_range(lo, lo, hi), viridis(0.0));
+        assert_eq!(Colormap::Viridis.map_range(0.0, lo, hi), viridis(0.5));
+        assert_eq!(Colormap::Viridis.map_range(hi, lo, hi), viridis(1.0));
     }
 
     #[test]

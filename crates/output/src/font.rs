@@ -172,30 +172,45 @@ fn draw_impl(
     color: [u8; 3],
     up: bool,
 ) -> usize {
-    let s = scale.max(1) as i64;
-    let (w, h) = (img.width() as i64, img.height() as i64);
+    let s = i64::from(scale.max(1));
+    let (w, h) = (i64::from(img.width()), i64::from(img.height()));
     let mut count = 0;
     for (ci, c) in text.chars().enumerate() {
+        // Position along the text and across it, in image pixels (saturating: text far
+        // off the image is not drawn).
+        let start = (ci as i64)
+            .saturating_mul(i64::from(ADVANCE))
+            .saturating_mul(s);
+        let beyond = if up {
+            y.saturating_sub(start) < 0
+        } else {
+            x.saturating_add(start) >= w
+        };
+        if beyond {
+            break; // this character and every later one lie past the image's edge
+        }
         let rows = glyph(c);
         for (gy, row) in rows.iter().enumerate() {
-            for gx in 0..GLYPH_WIDTH as i64 {
+            for gx in 0..i64::from(GLYPH_WIDTH) {
                 if row & (0x10 >> gx) == 0 {
                     continue;
                 }
-                // Position along the text and across it, in image pixels.
-                let along = (ci as i64 * ADVANCE as i64 + gx) * s;
-                let across = gy as i64 * s;
-                for dy in 0..s {
-                    for dx in 0..s {
-                        let (px, py) = if up {
-                            (x + across + dy, y - along - dx)
-                        } else {
-                            (x + along + dx, y + across + dy)
-                        };
-                        if px >= 0 && py >= 0 && px < w && py < h {
-                            img.put_pixel(px as u32, py as u32, Rgb(color));
-                            count += 1;
-                        }
+                let along = start.saturating_add(gx.saturating_mul(s));
+                let across = (gy as i64).saturating_mul(s);
+                // The font pixel's s x s square in image coordinates, cut to the image.
+                let (x0, y0) = if up {
+                    (
+                        x.saturating_add(across),
+                        y.saturating_sub(along).saturating_sub(s - 1),
+                    )
+                } else {
+                    (x.saturating_add(along), y.saturating_add(across))
+                };
+                let (x1, y1) = (x0.saturating_add(s).min(w), y0.saturating_add(s).min(h));
+                for py in y0.max(0)..y1 {
+                    for px in x0.max(0)..x1 {
+                        img.put_pixel(px as u32, py as u32, Rgb(color));
+                        count += 1;
                     }
                 }
             }

@@ -27,10 +27,16 @@ use image::{Delay, Frame, RgbImage};
 use crate::atomic::AtomicFile;
 use simkit_backend::{Error, Result};
 
-/// Writes `frames` as a looping animated GIF with `delay_ms` between frames.
+/// The longest delay between frames a GIF can store, in milliseconds (65535 hundredths of a
+/// second).
+pub const MAX_DELAY_MS: u32 = 655_350;
+
+/// Writes `frames` as a looping animated GIF with `delay_ms` between frames (stored in
+/// hundredths of a second, rounded down).
 ///
 /// Errors when there are no frames, frames differ in size, a frame is empty or larger than
-/// 65535 pixels on a side, or on I/O failure (the previous file is then left intact).
+/// 65535 pixels on a side, the delay is over [`MAX_DELAY_MS`], or on I/O failure (the
+/// previous file is then left intact).
 pub fn write_gif(path: impl AsRef<Path>, frames: &[RgbImage], delay_ms: u32) -> Result<()> {
     if frames.is_empty() {
         return Err(Error::invalid(
@@ -86,8 +92,21 @@ impl std::fmt::Debug for GifWriter {
 }
 
 impl GifWriter {
-    /// Starts a looping GIF at `path` with `delay_ms` between frames.
+    /// Starts a looping GIF at `path` with `delay_ms` between frames (stored in hundredths
+    /// of a second, rounded down).
+    ///
+    /// Errors: a delay over [`MAX_DELAY_MS`], or a file that cannot be created.
     pub fn create(path: impl AsRef<Path>, delay_ms: u32) -> Result<Self> {
+        if delay_ms > MAX_DELAY_MS {
+            return Err(Error::invalid(
+                "delay_ms",
+                delay_ms,
+                format!(
+                    "a GIF stores at most {MAX_DELAY_MS} ms (65535 hundredths of a second) \
+                     between frames; use a shorter delay"
+                ),
+            ));
+        }
         let file = AtomicFile::create(path)?;
         let shown = file.path().display().to_string();
         let sink = Sink(Arc::new(Mutex::new(file)));

@@ -15,6 +15,10 @@ use simkit_backend::{Error, Result};
 /// Largest image side in pixels this crate renders.
 pub const MAX_SIDE: usize = 32_768;
 
+/// Largest image area in pixels this crate renders (2^27: 384 MiB of RGB); a larger image
+/// is refused before it is allocated.
+pub const MAX_PIXELS: usize = 1 << 27;
+
 const WHITE: [u8; 3] = [255, 255, 255];
 const BLACK: [u8; 3] = [0, 0, 0];
 
@@ -97,7 +101,8 @@ impl HeatmapOptions {
         self
     }
     /// Sets the text scale factor (>= 1). Text, colour bar and margins grow with it, and
-    /// rendering refuses a scale that takes the image past [`MAX_SIDE`] pixels per side.
+    /// rendering refuses a scale that takes the image past [`MAX_SIDE`] pixels per side or
+    /// [`MAX_PIXELS`] in all.
     pub fn text_scale(mut self, scale: u32) -> Self {
         self.text_scale = Some(scale);
         self
@@ -119,8 +124,9 @@ pub struct FieldPlacement {
 /// used. Use this to collect frames for [`crate::gif`].
 ///
 /// Errors on zero sizes, `data.len() != width * height`, a zero upscale or text scale, an
-/// image (field plus text, colour bar and margins) over [`MAX_SIDE`] per side (checked
-/// before it is allocated; the error names `text_scale` when one is set), a fixed range that is non-finite or has `min >= max`, or (automatic range)
+/// image (field plus text, colour bar and margins) over [`MAX_SIDE`] per side or
+/// [`MAX_PIXELS`] in all (checked before it is allocated; the error names `text_scale` when
+/// one is set), a fixed range that is non-finite or has `min >= max`, or (automatic range)
 /// data with no finite value.
 pub fn render_heatmap<T: Copy + Into<f64>>(
     data: &[T],
@@ -210,8 +216,14 @@ pub(crate) fn resolve_range(values: &[f64], opts: &HeatmapOptions) -> Result<(f6
         (lo, hi) = (-m, m);
     }
     if lo == hi {
-        let d = if lo == 0.0 { 1.0 } else { lo.abs() * 0.1 };
-        (lo, hi) = (lo - d, hi + d);
+        // 10 % either side, at least the smallest normal number (a subnormal value's 10 %
+        // rounds to nothing), and clamped: padding a value near f64::MAX must stay finite.
+        let d = if lo == 0.0 {
+            1.0
+        } else {
+            (lo.abs() * 0.1).max(f64::MIN_POSITIVE)
+        };
+        (lo, hi) = ((lo - d).max(f64::MIN), (hi + d).min(f64::MAX));
     }
     Ok((lo, hi))
 }
@@ -284,11 +296,13 @@ pub(crate) fn render_field(
     canvas_w = canvas_w.max(title_w);
     let canvas_h = m + title_h + content_h + m;
     let limit = MAX_SIDE as u64;
-    if canvas_w > limit || canvas_h > limit {
+    let too_large =
+        |w: u64, h: u64| w > limit || h > limit || w.saturating_mul(h) > MAX_PIXELS as u64;
+    if too_large(canvas_w, canvas_h) {
         let reason = format!(
             "the image would be {canvas_w} x {canvas_h} pixels (the field, plus text, colour \
              bar and margins that grow with the text scale), over the limit of {MAX_SIDE} \
-             pixels per side"
+             pixels per side and {MAX_PIXELS} pixels in all"
         );
         return Err(if let Some(scale) = opts.text_scale {
             Error::invalid(
@@ -309,7 +323,10 @@ pub(crate) fn render_field(
             Error::invalid(
                 "upscale",
                 opts.upscale,
-                format!("{reason}; use a smaller upscale or drop the colour bar and title"),
+                format!(
+                    "{reason}; use a smaller upscale, drop the colour bar and title, or \
+                     downsample the field"
+                ),
             )
         });
     }
@@ -406,6 +423,14 @@ mod tests {
             (-3.0, 3.0)
         );
         assert!(resolve_range(&[f64::NAN], &o).is_err());
+        // One value at the ends of f64: a finite range around it (it used to reach inf, or
+        // stay empty for a subnormal value).
+        assert_eq!(
+            resolve_range(&[f64::MAX], &o).unwrap(),
+            (f64::MAX - f64::MAX * 0.1, f64::MAX)
+        );
+        let (lo, hi) = resolve_range(&[5e-324], &o).unwrap();
+        assert!(lo < 5e-324 && hi > 5e-324, "{lo} {hi}");
         assert!(resolve_range(&[1.0], &o.clone().range(1.0, 1.0)).is_err());
         assert!(resolve_range(&[1.0], &o.clone().range(0.0, f64::INFINITY)).is_err());
     }

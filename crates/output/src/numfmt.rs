@@ -14,7 +14,7 @@ pub fn short(v: f64) -> String {
         let decimals = (2 - a.log10().floor() as i32).max(0) as usize;
         trim_decimal(format!("{v:.decimals$}"))
     } else {
-        trim_sci(format!("{v:.2e}"))
+        trim_sci(sci(v, 2))
     }
 }
 
@@ -37,7 +37,7 @@ pub fn tick(v: f64, step: f64) -> String {
         trim_decimal(format!("{v:.decimals$}"))
     } else {
         let digits = (a.log10().floor() as i32 - step_exp).clamp(0, 8) as usize;
-        trim_sci(format!("{v:.digits$e}"))
+        trim_sci(sci(v, digits))
     }
 }
 
@@ -54,6 +54,23 @@ pub fn exact(v: f64) -> String {
     } else {
         format!("{v:e}")
     }
+}
+
+/// Finite `v` in exponent notation with `digits` decimals: rounded to nearest, or cut toward
+/// zero where rounding would pass `f64::MAX` (`1.8e308` for `f64::MAX` would read back as
+/// infinity; `1.79e308` does not).
+fn sci(v: f64, digits: usize) -> String {
+    let rounded = format!("{v:.digits$e}");
+    if rounded.parse::<f64>().is_ok_and(f64::is_finite) {
+        return rounded;
+    }
+    // 17 significant digits name `v` exactly; cutting decimals off moves toward zero.
+    let exact = format!("{v:.16e}");
+    let (mantissa, exponent) = exact.split_once('e').unwrap_or((&exact, "0"));
+    let keep = mantissa
+        .find('.')
+        .map_or(mantissa.len(), |dot| (dot + 1 + digits).min(mantissa.len()));
+    format!("{}e{exponent}", &mantissa[..keep])
 }
 
 fn non_finite(v: f64) -> String {
@@ -103,5 +120,10 @@ mod tests {
         assert_eq!(exact(0.1), "0.1");
         assert_eq!(exact(1e-300), "1e-300");
         assert_eq!(exact(1e-300).parse::<f64>().unwrap(), 1e-300);
+        // Rounding up would pass f64::MAX ("1.8e308" reads back as infinity).
+        assert_eq!(short(f64::MAX), "1.79e308");
+        assert_eq!(short(f64::MIN), "-1.79e308");
+        assert_eq!(tick(f64::MAX, 1e307), "1.7e308");
+        assert_eq!(tick(f64::MAX, 1e308), "1e308");
     }
 }

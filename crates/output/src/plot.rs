@@ -23,6 +23,7 @@ use std::path::Path;
 
 use image::{Rgb, RgbImage};
 
+use crate::heatmap::{MAX_PIXELS, MAX_SIDE};
 use crate::{font, numfmt, png, raster};
 use simkit_backend::{Error, Result};
 
@@ -266,13 +267,12 @@ impl Plot {
                 "use at least 100 x 80 pixels (800 x 500 is typical)",
             ));
         }
-        if self.width as usize > crate::heatmap::MAX_SIDE
-            || self.height as usize > crate::heatmap::MAX_SIDE
-        {
+        let (w, h) = (self.width as usize, self.height as usize);
+        if w > MAX_SIDE || h > MAX_SIDE || w * h > MAX_PIXELS {
             return Err(Error::invalid(
                 "plot size",
-                format!("{} x {}", self.width, self.height),
-                format!("at most {} pixels per side", crate::heatmap::MAX_SIDE),
+                format!("{w} x {h}"),
+                format!("at most {MAX_SIDE} pixels per side and {MAX_PIXELS} pixels in all"),
             ));
         }
         Ok(())
@@ -282,7 +282,8 @@ impl Plot {
     ///
     /// Errors when there is no series, a series is empty or has `x.len() != y.len()`, a value
     /// is non-finite or not positive on a log axis, a fixed range is invalid, or the image is
-    /// too small for the axes.
+    /// too small for the axes or larger than [`MAX_SIDE`] pixels per side or [`MAX_PIXELS`]
+    /// in all.
     pub fn render(&self) -> Result<RgbImage> {
         self.validate()?;
         let xs = self.series.iter().flat_map(|s| s.x.iter().copied());

@@ -76,13 +76,12 @@ impl Progress {
         }
     }
 
-    /// Estimated time to completion at the average rate so far, if known.
+    /// Estimated time to completion at the average rate so far, if known (and within the
+    /// range of a [`Duration`]).
     pub fn eta(&self) -> Option<Duration> {
         let rate = self.rate();
         if rate > 0.0 && self.done <= self.total {
-            Some(Duration::from_secs_f64(
-                (self.total - self.done) as f64 / rate,
-            ))
+            Duration::try_from_secs_f64((self.total - self.done) as f64 / rate).ok()
         } else {
             None
         }

@@ -14,8 +14,8 @@ pub fn put(img: &mut RgbImage, x: i64, y: i64, color: [u8; 3]) {
 pub fn fill_rect(img: &mut RgbImage, x: i64, y: i64, w: i64, h: i64, color: [u8; 3]) {
     let x0 = x.max(0);
     let y0 = y.max(0);
-    let x1 = (x + w).min(img.width() as i64);
-    let y1 = (y + h).min(img.height() as i64);
+    let x1 = x.saturating_add(w).min(img.width() as i64);
+    let y1 = y.saturating_add(h).min(img.height() as i64);
     for py in y0..y1 {
         for px in x0..x1 {
             img.put_pixel(px as u32, py as u32, Rgb(color));
@@ -29,9 +29,9 @@ pub fn stroke_rect(img: &mut RgbImage, x: i64, y: i64, w: i64, h: i64, color: [u
         return;
     }
     fill_rect(img, x, y, w, 1, color);
-    fill_rect(img, x, y + h - 1, w, 1, color);
+    fill_rect(img, x, y.saturating_add(h - 1), w, 1, color);
     fill_rect(img, x, y, 1, h, color);
-    fill_rect(img, x + w - 1, y, 1, h, color);
+    fill_rect(img, x.saturating_add(w - 1), y, 1, h, color);
 }
 
 /// Fills a disc of radius `r` pixels centred on `(cx, cy)`.
@@ -95,12 +95,11 @@ pub fn line_clipped(
     let lo = -(w - 1) / 2;
     let hi = lo + w;
     loop {
-        for oy in lo..hi {
-            for ox in lo..hi {
-                let (px, py) = (x + ox, y + oy);
-                if px >= clip[0] && px <= clip[2] && py >= clip[1] && py <= clip[3] {
-                    img.put_pixel(px as u32, py as u32, Rgb(color));
-                }
+        // The pen square around (x, y), cut to the clip rectangle (a pen wider than the
+        // image costs no more than the image).
+        for py in (y + lo).max(clip[1])..(y + hi).min(clip[3] + 1) {
+            for px in (x + lo).max(clip[0])..(x + hi).min(clip[2] + 1) {
+                img.put_pixel(px as u32, py as u32, Rgb(color));
             }
         }
         if x == ex && y == ey {

@@ -63,6 +63,13 @@ impl PointArrays {
                 "must not be empty",
             ));
         }
+        if name.chars().any(char::is_control) {
+            return Err(Error::invalid(
+                "array name",
+                format!("{name:?}"),
+                "must not contain control characters (XML attributes cannot hold them)",
+            ));
+        }
         if self
             .scalars
             .iter()
@@ -115,14 +122,16 @@ impl PointArrays {
                 "vectors have 2 or 3 components; use add_scalar for 1",
             ));
         }
-        if data.len() != points * components {
+        let expected = points.checked_mul(components);
+        if expected != Some(data.len()) {
+            let expected =
+                expected.map_or_else(|| "more than usize::MAX".into(), |e| e.to_string());
             return Err(Error::invalid(
                 format!("{name}.len()"),
                 data.len(),
                 format!(
-                    "expected {components} values per point ({points} points = {}), \
-                     interleaved x, y[, z]",
-                    points * components
+                    "expected {components} values per point ({points} points = {expected}), \
+                     interleaved x, y[, z]"
                 ),
             ));
         }
@@ -410,6 +419,8 @@ impl Particles {
 /// Writes a ParaView collection (`.pvd`) listing `(time, file)` pairs, so that a series of
 /// `.vti`/`.vtu` files opens as one time-dependent dataset. File paths are written as given
 /// (relative paths are relative to the `.pvd` file's directory).
+///
+/// Errors: a non-finite time, a file path with control characters, or an I/O failure.
 pub fn write_pvd<P: AsRef<Path>>(path: impl AsRef<Path>, entries: &[(f64, P)]) -> Result<()> {
     let mut out = String::new();
     header(&mut out, "Collection");
@@ -423,6 +434,13 @@ pub fn write_pvd<P: AsRef<Path>>(path: impl AsRef<Path>, entries: &[(f64, P)]) -
             ));
         }
         let file = file.as_ref().to_string_lossy().replace('\\', "/");
+        if file.chars().any(char::is_control) {
+            return Err(Error::invalid(
+                format!("entries[{i}].file"),
+                format!("{file:?}"),
+                "must not contain control characters (XML attributes cannot hold them)",
+            ));
+        }
         let _ = writeln!(
             out,
             "    <DataSet timestep=\"{}\" group=\"\" part=\"0\" file=\"{}\"/>",

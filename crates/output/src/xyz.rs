@@ -31,6 +31,9 @@ use crate::numfmt;
 use crate::vtk::check_interleaved;
 use simkit_backend::{Error, Result};
 
+/// Comment-line keys that [`XyzFrame`] writes itself.
+const RESERVED_KEYS: [&str; 4] = ["Lattice", "Properties", "Time", "pbc"];
+
 #[derive(Debug, Clone, PartialEq)]
 struct Column {
     name: String,
@@ -98,7 +101,8 @@ impl XyzFrame {
         self.positions.is_empty()
     }
 
-    /// Sets one species name per particle (non-empty, no whitespace or quotes).
+    /// Sets one species name per particle (non-empty, no whitespace, control characters or
+    /// quotes).
     pub fn species<S: AsRef<str>>(&mut self, names: &[S]) -> Result<&mut Self> {
         if names.len() != self.len() {
             return Err(Error::invalid(
@@ -163,8 +167,27 @@ impl XyzFrame {
     }
 
     /// Adds a `key=value` number to the comment line (e.g. `step`, `energy`).
+    ///
+    /// Errors: a key that is not a name (letters, digits, `_`), one the comment line already
+    /// has, one of the keys this type writes itself (`Lattice`, `Properties`, `Time`, `pbc`,
+    /// in any case: set them with [`lattice`](Self::lattice), [`time`](Self::time),
+    /// [`pbc`](Self::pbc)), or a non-finite value.
     pub fn info(&mut self, key: &str, value: f64) -> Result<&mut Self> {
         check_name(key)?;
+        if RESERVED_KEYS.iter().any(|r| r.eq_ignore_ascii_case(key)) {
+            return Err(Error::invalid(
+                "info key",
+                key,
+                "is written by XyzFrame itself; use lattice, box_2d, time or pbc instead",
+            ));
+        }
+        if self.info.iter().any(|(k, _)| k == key) {
+            return Err(Error::invalid(
+                "info key",
+                key,
+                "is already on this frame's comment line; use each key once",
+            ));
+        }
         finite(key, value)?;
         self.info.push((key.into(), numfmt::exact(value)));
         Ok(self)
@@ -342,12 +365,12 @@ fn finite(name: &str, v: f64) -> Result<()> {
 fn check_word(name: &str, s: &str) -> Result<()> {
     if s.is_empty()
         || s.chars()
-            .any(|c| c.is_whitespace() || c == '"' || c == '\'')
+            .any(|c| c.is_whitespace() || c.is_control() || c == '"' || c == '\'')
     {
         return Err(Error::invalid(
             name,
             format!("{s:?}"),
-            "must be non-empty without whitespace or quotes",
+            "must be non-empty without whitespace, control characters or quotes",
         ));
     }
     Ok(())

@@ -162,7 +162,7 @@ pub fn check_gpu<const D: usize>(
     let half_pairs: Vec<(u32, u32)> = got.keys().map(|&(i, j)| (i as u32, j as u32)).collect();
     assert_eq!(
         full.download(ctx).unwrap(),
-        NeighborLists::from_pairs(p.len(), &half_pairs),
+        NeighborLists::from_pairs(p.len(), &half_pairs).unwrap(),
         "GPU full list differs from the GPU half list"
     );
     let rc2 = grid.cutoff() * grid.cutoff();
