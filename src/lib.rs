@@ -9,6 +9,7 @@
 //! | [`lattice_gas`] | FHP D2Q6 lattice-gas automaton |
 //! | [`rd`] | reaction–diffusion with a tiled stencil |
 //! | [`pp_coulomb`] | normalised direct-sum Coulomb particle–particle method |
+//! | [`md`] | multi-species molecular dynamics with a species-pair table of Lennard-Jones-type potentials |
 //! | [`backend`] | GPU context, buffers, kernels, scan, shared RNG, common trait and error |
 //! | [`output`] | PNG heat maps and plots, GIF, VTK, extended XYZ, CSV (atomic writes) |
 //!
@@ -34,6 +35,7 @@
 pub use simkit_backend as backend;
 pub use simkit_dem as dem;
 pub use simkit_lattice_gas as lattice_gas;
+pub use simkit_md as md;
 pub use simkit_neighbor as neighbor;
 pub use simkit_output as output;
 pub use simkit_pp_coulomb as pp_coulomb;
@@ -53,6 +55,7 @@ pub mod prelude {
     pub use crate::backend::{Backend, Error, Precision, Real, Result, Simulation};
     pub use crate::dem::Dem;
     pub use crate::lattice_gas::{Lattice, LatticeGas};
+    pub use crate::md::Md;
     pub use crate::neighbor::{CellGrid, NeighborSearch, Neighbors, SortedCells};
     pub use crate::pp_coulomb::PpCoulomb;
     pub use crate::rd::Rd;

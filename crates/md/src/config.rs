@@ -1,0 +1,187 @@
+//! Run settings and the time-step guidance.
+
+use serde::{Deserialize, Serialize};
+use simkit_backend::{Error, Precision, Result};
+
+use crate::System;
+
+/// Time integration scheme (both second order, symplectic and time reversible; one force
+/// evaluation per step).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum Integrator {
+    /// Velocity Verlet: `v += a dt/2`, `x += v dt`, forces, `v += a dt/2`; the stored
+    /// velocities are those at the step (default).
+    #[default]
+    VelocityVerlet,
+    /// Leapfrog in kick–drift–kick form with the two half kicks of consecutive steps fused:
+    /// the stored velocities are the half-step ones `v(t + dt/2)`, advanced by one full kick
+    /// `v += a dt` per step; `Md::state` (the [`simkit_backend::Simulation`] method) reports `v(t) = v(t + dt/2) - a(t) dt/2`.
+    Leapfrog,
+}
+
+/// Default time step as a fraction of the shortest pair period: `dt = T_min / 120` (about
+/// `0.0049` for Lennard-Jones with `sigma = eps = m = 1`, the usual `0.005`).
+pub const DEFAULT_STEPS_PER_PERIOD: f64 = 120.0;
+
+/// The safe bound: a time step above `T_min / 20` is refused unless
+/// [`Config::allow_unstable_dt`] is set.
+pub const MIN_STEPS_PER_PERIOD: f64 = 20.0;
+
+/// Default Verlet-list skin (absolute length; LAMMPS's `neighbor 0.3 bin` in LJ units).
+pub const DEFAULT_SKIN: f64 = 0.3;
+
+/// Run settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Config {
+    /// Time step; `None` picks `T_min / DEFAULT_STEPS_PER_PERIOD` (see [`time_step_guide`]).
+    pub dt: Option<f64>,
+    /// Integrator.
+    pub integrator: Integrator,
+    /// CPU precision (`f64` default; the GPU backend computes in `f32` whatever this says).
+    pub precision: Precision,
+    /// Verlet-list skin (absolute length, `>= 0`): the list holds pairs within
+    /// `r_c + skin` and is rebuilt when a particle has moved more than `skin / 2` since the
+    /// last build.
+    pub skin: f64,
+    /// Interval, in steps, of the blow-up check inside `step(n)` (counted from step 0; see
+    /// [`simkit_backend::guard`]): non-finite positions, velocities or forces, or a particle
+    /// that left a closed box, stop the run with [`Error::BlowUp`], rolled back to the last
+    /// state that passed. `0` turns the interval checks off; the check at the end of every
+    /// `step(n)` call stays. Default [`simkit_backend::guard::DEFAULT_CHECK_EVERY`].
+    pub check_every: u32,
+    /// Shift every pair's energy by `phi(r_c)` so that it is continuous at the cutoff
+    /// (forces unchanged). Off by default.
+    pub shift: bool,
+    /// Accept a time step above the safe bound `T_min / 20` (for studies of instability).
+    pub allow_unstable_dt: bool,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Self {
+            dt: None,
+            integrator: Integrator::default(),
+            precision: Precision::default(),
+            skin: DEFAULT_SKIN,
+            check_every: simkit_backend::guard::DEFAULT_CHECK_EVERY,
+            shift: false,
+            allow_unstable_dt: false,
+        }
+    }
+}
+
+impl Config {
+    /// Default settings with time step `dt`.
+    pub fn with_dt(dt: f64) -> Self {
+        Self {
+            dt: Some(dt),
+            ..Self::default()
+        }
+    }
+
+    /// Checks the settings against `system` and returns the time step to use.
+    ///
+    /// Errors: a non-finite or non-positive `dt`, a negative or non-finite skin, a time
+    /// step over the safe bound without [`allow_unstable_dt`](Self::allow_unstable_dt), or
+    /// no `dt` for a system without interacting pairs (no guidance exists then).
+    pub fn resolve_dt(&self, system: &System) -> Result<f64> {
+        if !(self.skin.is_finite() && self.skin >= 0.0) {
+            return Err(Error::invalid(
+                "skin",
+                self.skin,
+                "must be finite and >= 0 (e.g. 0.3 sigma)",
+            ));
+        }
+        let guide = time_step_guide(system);
+        let dt = match (self.dt, guide) {
+            (Some(dt), _) => {
+                if !(dt.is_finite() && dt > 0.0) {
+                    return Err(Error::invalid("dt", dt, "must be finite and > 0"));
+                }
+                dt
+            }
+            (None, Some(g)) => g.default_dt,
+            (None, None) => {
+                return Err(Error::invalid(
+                    "dt",
+                    "None",
+                    "no pair interacts (every eps or a + b is 0), so no time step can be \
+                     derived; give Config::dt",
+                ));
+            }
+        };
+        if let Some(g) = guide
+            && dt > g.bound
+            && !self.allow_unstable_dt
+        {
+            return Err(Error::Unstable {
+                dt,
+                bound: g.bound,
+                reason: format!(
+                    "dt <= T / {MIN_STEPS_PER_PERIOD} with T = 2 pi / omega = {:e} the \
+                     oscillation period of species pair ({}, {}) at r = {:e}",
+                    g.period, g.pair.0, g.pair.1, g.distance
+                ),
+            });
+        }
+        Ok(dt)
+    }
+}
+
+/// The time-step guidance of a system: the stiffest pair and the steps it implies.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepGuide {
+    /// The species pair with the shortest period.
+    pub pair: (usize, usize),
+    /// Where its stiffness was measured ([`crate::PairParams::stiffness_distance`]).
+    pub distance: f64,
+    /// Its period `T = 2 pi sqrt(mu / phi''(r*))`, `mu = m_i m_j / (m_i + m_j)`.
+    pub period: f64,
+    /// `T / DEFAULT_STEPS_PER_PERIOD`.
+    pub default_dt: f64,
+    /// `T / MIN_STEPS_PER_PERIOD`: larger steps are refused by default.
+    pub bound: f64,
+}
+
+/// Time-step guidance from the stiffest species pair.
+///
+/// For every pair with `eps > 0` the curvature `k = phi''(r*)` is taken at
+/// `r* = sigma (2a/b)^(1/6)` (the minimum of `phi`) when `a, b > 0`, and at
+/// `r* = sigma a^(1/12)` (where the repulsion equals `4 eps`) for a purely repulsive pair;
+/// the pair then oscillates with `omega = sqrt(k / mu)`, `mu` the reduced mass, period
+/// `T = 2 pi / omega`. For Lennard-Jones `k = 72 eps / (2^(1/3) sigma^2) = 57.15 eps /
+/// sigma^2`, so with `m = 1` (`mu = 1/2`) `T = 0.588 sigma sqrt(m / eps)`: the default
+/// `T / 120` is `0.0049`, the bound `T / 20` is `0.0294`. Velocity Verlet is linearly stable for
+/// `omega dt < 2` (`dt < T / pi`); the bound keeps a margin of six for the stiffer
+/// repulsive core that hot collisions reach. `None` when no pair interacts.
+pub fn time_step_guide(system: &System) -> Option<StepGuide> {
+    let table = system.table();
+    let masses = system.masses();
+    let n = table.n_species();
+    let mut best: Option<StepGuide> = None;
+    for si in 0..n {
+        for sj in si..n {
+            let Some(p) = table.get(si, sj) else { continue };
+            if p.eps == 0.0 || p.a == 0.0 {
+                continue;
+            }
+            let r = p.stiffness_distance();
+            let k = p.curvature(r);
+            let mu = masses[si] * masses[sj] / (masses[si] + masses[sj]);
+            if !(k > 0.0 && k.is_finite()) {
+                continue;
+            }
+            let period = 2.0 * std::f64::consts::PI * (mu / k).sqrt();
+            if best.is_none_or(|b| period < b.period) {
+                best = Some(StepGuide {
+                    pair: (si, sj),
+                    distance: r,
+                    period,
+                    default_dt: period / DEFAULT_STEPS_PER_PERIOD,
+                    bound: period / MIN_STEPS_PER_PERIOD,
+                });
+            }
+        }
+    }
+    best
+}

@@ -1,0 +1,43 @@
+//! The backend-neutral engine interface behind [`crate::Md`], and the engine part of a
+//! checkpoint.
+
+use serde::{Deserialize, Serialize};
+use simkit_backend::Result;
+
+use crate::{Diagnostics, State};
+
+/// One backend instance (the CPU at some dimension and precision).
+pub(crate) trait Engine: Send {
+    /// Advances `steps` time steps with the blow-up check (see [`simkit_backend::guard`]);
+    /// on a failed check the engine is back at the last state that passed and returns
+    /// [`simkit_backend::Error::BlowUp`].
+    fn step(&mut self, steps: u32) -> Result<()>;
+    /// Time, positions, velocities (at the step) and species, in the system's order.
+    fn state(&mut self) -> Result<State>;
+    /// Energies, virial pressure and per-species temperatures of the current state.
+    fn diagnostics(&mut self) -> Result<Diagnostics>;
+    /// The forces on every particle at the current positions (`[fx, fy, 0]` in 2D).
+    fn forces(&mut self) -> Result<Vec<[f64; 3]>>;
+    /// Backend description (device, precision, threads).
+    fn name(&self) -> String;
+    /// Steps done since the start of the run (checkpoints included).
+    fn steps_done(&self) -> u64;
+    /// The checkpoint model string (backend kind, precision, dimension).
+    fn model(&self) -> String;
+    /// The complete dynamic state.
+    fn save(&mut self) -> Result<EngineState>;
+}
+
+/// The dynamic state of an engine as a checkpoint stores it. Vectors are flat, `D` values
+/// per particle, and hold the engine's numbers exactly (`f32` widens to `f64` without
+/// rounding). The forces are not stored: they are a deterministic function of the
+/// positions and are recomputed, bit for bit, on resume.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub(crate) struct EngineState {
+    /// Steps done.
+    pub steps: u64,
+    /// Positions (periodic axes wrapped into the box).
+    pub pos: Vec<f64>,
+    /// Velocities as the integrator stores them (leapfrog: at the half step `t + dt/2`).
+    pub vel: Vec<f64>,
+}

@@ -1,0 +1,624 @@
+//! GPU backend (wgpu, `f32`): the whole step on the device.
+//!
+//! Per step, recorded into one command buffer (64 steps per submission) without host round
+//! trips: `md_drift` (velocity Verlet: opening half kick; drift; periodic wrap or
+//! reflection), `neighbor`'s [`GpuCellList`] build over cells at least `max r_c` wide, and
+//! `md_force` (one invocation per particle gathering the pair forces over the full shell of
+//! neighbour cells with the table entry of each pair, then the closing kick). Particle `i`
+//! only writes its own entries, so there are no write conflicts.
+//!
+//! Blow-up check: at every check step (`Config::check_every`, and at the end of a call) a
+//! [`GpuGuard`] checks positions, velocities, accelerations (with the energies) and
+//! virials for non-finite values and snapshots them while all is well; the drift kernel
+//! turns a coordinate that left the box into NaN, so that case is caught too. One small
+//! download per `step(n)` call reads the outcome; after a failure the snapshots are copied
+//! back.
+
+use bytemuck::{Pod, Zeroable};
+
+use simkit_neighbor::{CELLS_WGSL, CellGrid, GpuCellList, OutOfBox};
+
+use simkit_backend::gpu::{DISPATCH_WGSL, GpuGuard, Uniform, Watch};
+use simkit_backend::guard::{blow_up, chunks};
+use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Precision, Result};
+
+use crate::config::Integrator;
+use crate::diagnostics::assemble;
+use crate::engine::{Engine, EngineState};
+use crate::{Config, Diagnostics, Dim, State, System};
+
+pub(crate) const PARAMS_WGSL: &str = simkit_backend::wgsl!("params.wgsl");
+/// The pair law (twin of [`crate::pair_force_energy`]).
+pub(crate) const LAW_WGSL: &str = simkit_backend::wgsl!("law.wgsl");
+const DRIFT_WGSL: &str = simkit_backend::wgsl!("drift.wgsl");
+const FORCE_WGSL: &str = simkit_backend::wgsl!("force.wgsl");
+
+/// Steps recorded into one command buffer.
+const STEPS_PER_SUBMIT: u32 = 64;
+/// Storage buffers the force kernel binds.
+const STORAGE_BUFFERS_NEEDED: u32 = 8;
+
+/// Mirror of `MdParams` in `shaders/params.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub(crate) struct GpuParams {
+    pub lo: [f32; 4],
+    pub hi: [f32; 4],
+    pub len: [f32; 4],
+    pub periodic: [u32; 4],
+    pub dt: f32,
+    pub half_dt: f32,
+    pub n: u32,
+    pub n_species: u32,
+    pub leapfrog: u32,
+    pub dim: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+}
+
+enum Cells {
+    Two(GpuCellList<2>),
+    Three(GpuCellList<3>),
+}
+
+/// The cell-list buffers the force kernel binds.
+struct CellBuffers<'a> {
+    grid: &'a Uniform<simkit_neighbor::GpuGridParams>,
+    cell_start: &'a GpuBuffer<u32>,
+    sorted_ids: &'a GpuBuffer<u32>,
+    sorted_pos: &'a GpuBuffer<[f32; 4]>,
+    wrapped: &'a GpuBuffer<[f32; 4]>,
+}
+
+impl Cells {
+    fn new(ctx: &GpuContext, sys: &System, pos: &GpuBuffer<[f32; 4]>, n: usize) -> Result<Self> {
+        fn grid<const D: usize>(sys: &System) -> Result<CellGrid<D>> {
+            let (lo, len, per) = (sys.lo(), sys.lengths(), sys.periodic());
+            Ok(CellGrid::new(
+                std::array::from_fn(|d| lo[d]),
+                std::array::from_fn(|d| len[d]),
+                std::array::from_fn(|d| per[d]),
+                sys.table().max_cutoff(),
+            )?
+            .with_out_of_box(OutOfBox::Clamp))
+        }
+        Ok(match sys.dim() {
+            Dim::Two => Cells::Two(GpuCellList::with_count(ctx, &grid::<2>(sys)?, pos, n)?),
+            Dim::Three => Cells::Three(GpuCellList::with_count(ctx, &grid::<3>(sys)?, pos, n)?),
+        })
+    }
+
+    fn encode(&self, ctx: &GpuContext, pass: &mut wgpu::ComputePass<'_>) -> Result<()> {
+        match self {
+            Cells::Two(c) => c.encode(ctx, pass),
+            Cells::Three(c) => c.encode(ctx, pass),
+        }
+    }
+
+    fn check(&self, ctx: &GpuContext) -> Result<()> {
+        match self {
+            Cells::Two(c) => c.check(ctx),
+            Cells::Three(c) => c.check(ctx),
+        }
+    }
+
+    fn buffers(&self) -> CellBuffers<'_> {
+        match self {
+            Cells::Two(c) => CellBuffers {
+                grid: c.params(),
+                cell_start: c.cell_start(),
+                sorted_ids: c.sorted_ids(),
+                sorted_pos: c.sorted_pos(),
+                wrapped: c.wrapped(),
+            },
+            Cells::Three(c) => CellBuffers {
+                grid: c.params(),
+                cell_start: c.cell_start(),
+                sorted_ids: c.sorted_ids(),
+                sorted_pos: c.sorted_pos(),
+                wrapped: c.wrapped(),
+            },
+        }
+    }
+}
+
+/// Buffers only the kernels touch (held so they live as long as the bind groups).
+struct BoundOnly {
+    _table: GpuBuffer<[f32; 4]>,
+    _params: Uniform<GpuParams>,
+}
+
+pub(crate) struct GpuEngine {
+    ctx: GpuContext,
+    system: System,
+    dt: f64,
+    integrator: Integrator,
+    check_every: u32,
+    n: usize,
+    axes: usize,
+    pos: GpuBuffer<[f32; 4]>,
+    vel: GpuBuffer<[f32; 4]>,
+    acc: GpuBuffer<[f32; 4]>,
+    vir: GpuBuffer<f32>,
+    cells: Cells,
+    drift: (Kernel, wgpu::BindGroup),
+    force: (Kernel, wgpu::BindGroup),
+    guard: GpuGuard,
+    steps: u64,
+    _bound: BoundOnly,
+}
+
+fn kernel(ctx: &GpuContext, src: &[&str], entry: &str, consts: &[(&str, f64)]) -> Result<Kernel> {
+    let mut sources = vec![DISPATCH_WGSL, CELLS_WGSL, PARAMS_WGSL, LAW_WGSL];
+    sources.extend_from_slice(src);
+    Kernel::new(
+        ctx,
+        &KernelDesc {
+            label: entry,
+            sources: &sources,
+            entry,
+            workgroup_size: 64,
+            constants: consts,
+        },
+    )
+}
+
+/// Records one compute pass into `encoder`.
+fn in_pass(
+    encoder: &mut wgpu::CommandEncoder,
+    label: &str,
+    record: impl FnOnce(&mut wgpu::ComputePass<'_>) -> Result<()>,
+) -> Result<()> {
+    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some(label),
+        timestamp_writes: None,
+    });
+    record(&mut pass)
+}
+
+fn bad_checkpoint(reason: String) -> Error {
+    Error::Checkpoint {
+        source_name: "<bytes>".into(),
+        reason,
+    }
+}
+
+impl GpuEngine {
+    /// The engine for a validated system at `dt`, at its initial state or, with `saved`,
+    /// at a checkpointed one.
+    pub fn new(
+        ctx: &GpuContext,
+        system: &System,
+        config: &Config,
+        dt: f64,
+        saved: Option<&EngineState>,
+    ) -> Result<Self> {
+        let have = ctx.limits().max_storage_buffers_per_shader_stage;
+        if have < STORAGE_BUFFERS_NEEDED {
+            return Err(Error::Unsupported(format!(
+                "the md GPU force kernel binds {STORAGE_BUFFERS_NEEDED} storage buffers, this \
+                 device allows {have} per stage; use the CPU backend"
+            )));
+        }
+        let n = system.particle_count();
+        let axes = system.dim().axes();
+        let species = system.species();
+        let to4 = |v: &[f64], w: f32| -> [f32; 4] {
+            let mut o = [0.0f32, 0.0, 0.0, w];
+            for d in 0..axes {
+                o[d] = v[d] as f32;
+            }
+            o
+        };
+        let (lo, len) = (system.lo(), system.lengths());
+        let mut params = GpuParams {
+            lo: [0.0; 4],
+            hi: [1.0; 4],
+            len: [1.0; 4],
+            periodic: [0; 4],
+            dt: dt as f32,
+            half_dt: (0.5 * dt) as f32,
+            n: n as u32,
+            n_species: system.table().n_species() as u32,
+            leapfrog: u32::from(config.integrator == Integrator::Leapfrog),
+            dim: axes as u32,
+            _pad0: 0,
+            _pad1: 0,
+        };
+        for d in 0..axes {
+            params.lo[d] = lo[d] as f32;
+            params.hi[d] = (lo[d] + len[d]) as f32;
+            params.len[d] = len[d] as f32;
+            params.periodic[d] = u32::from(system.periodic()[d]);
+        }
+        let (mut pos_h, vel_h, steps): (Vec<[f32; 4]>, Vec<[f32; 4]>, u64) = match saved {
+            None => (
+                system
+                    .positions()
+                    .iter()
+                    .zip(species)
+                    .map(|(x, &s)| to4(x, s as f32))
+                    .collect(),
+                system.velocities().iter().map(|v| to4(v, 0.0)).collect(),
+                0,
+            ),
+            Some(s) => {
+                fn unflat<'a>(
+                    v: &'a [f64],
+                    what: &str,
+                    n: usize,
+                    axes: usize,
+                ) -> Result<Vec<&'a [f64]>> {
+                    if Some(v.len()) != n.checked_mul(axes) {
+                        return Err(bad_checkpoint(format!(
+                            "the stored {what} have {} values for {n} particles in {axes}D",
+                            v.len()
+                        )));
+                    }
+                    if v.iter().any(|x| !x.is_finite()) {
+                        return Err(bad_checkpoint(format!("the stored {what} are not finite")));
+                    }
+                    Ok(v.chunks_exact(axes).collect())
+                }
+                let p = unflat(&s.pos, "positions", n, axes)?;
+                let v = unflat(&s.vel, "velocities", n, axes)?;
+                (
+                    p.iter()
+                        .zip(species)
+                        .map(|(x, &k)| to4(x, k as f32))
+                        .collect(),
+                    v.iter().map(|x| to4(x, 0.0)).collect(),
+                    s.steps,
+                )
+            }
+        };
+        // A position just below an upper periodic face may round up onto it in f32.
+        for x in &mut pos_h {
+            for (d, c) in x.iter_mut().enumerate().take(axes) {
+                if params.periodic[d] != 0 && *c >= params.hi[d] {
+                    *c = params.lo[d];
+                }
+            }
+        }
+        // Buffers hold at least one element (an empty system is legal).
+        let pad = |mut v: Vec<[f32; 4]>| {
+            if v.is_empty() {
+                v.push([0.0; 4]);
+            }
+            v
+        };
+        let pos = GpuBuffer::from_slice(ctx, "md pos", &pad(pos_h))?;
+        let vel = GpuBuffer::from_slice(ctx, "md vel", &pad(vel_h))?;
+        let acc = GpuBuffer::<[f32; 4]>::zeroed(ctx, "md acc", n.max(1))?;
+        let vir = GpuBuffer::<f32>::zeroed(ctx, "md vir", n.max(1))?;
+        let mut table: Vec<[f32; 4]> = system
+            .table()
+            .coefficients::<f32>(config.shift)
+            .iter()
+            .map(|c| [c.c12, c.c6, c.rc2, c.shift])
+            .collect();
+        table.extend(
+            system
+                .masses()
+                .iter()
+                .map(|&m| [(1.0 / m) as f32, 0.0, 0.0, 0.0]),
+        );
+        let table = GpuBuffer::from_slice(ctx, "md table", &table)?;
+        let uniform = Uniform::new(ctx, "md params", &params);
+        let cells = Cells::new(ctx, system, &pos, n)?;
+        let CellBuffers {
+            grid,
+            cell_start,
+            sorted_ids,
+            sorted_pos,
+            wrapped,
+        } = cells.buffers();
+        let k = kernel(ctx, &[DRIFT_WGSL], "md_drift", &[])?;
+        let b = k.bind(
+            ctx,
+            &[
+                uniform.binding(),
+                pos.binding(),
+                vel.binding(),
+                acc.binding(),
+            ],
+        )?;
+        let drift = (k, b);
+        let force_resources = [
+            grid.binding(),
+            uniform.binding(),
+            cell_start.binding(),
+            sorted_ids.binding(),
+            sorted_pos.binding(),
+            wrapped.binding(),
+            table.binding(),
+            acc.binding(),
+            vel.binding(),
+            vir.binding(),
+        ];
+        let kick = match config.integrator {
+            Integrator::VelocityVerlet => 1.0,
+            Integrator::Leapfrog => 2.0,
+        };
+        let k = kernel(ctx, &[FORCE_WGSL], "md_force", &[("KICK", kick)])?;
+        let b = k.bind(ctx, &force_resources)?;
+        let force = (k, b);
+        // Initial forces; a fresh leapfrog run also takes its half kick v(dt/2).
+        let start_kick = if saved.is_none() && config.integrator == Integrator::Leapfrog {
+            1.0
+        } else {
+            0.0
+        };
+        let init = kernel(ctx, &[FORCE_WGSL], "md_force", &[("KICK", start_kick)])?;
+        let init_bind = init.bind(ctx, &force_resources)?;
+        let mut encoder = ctx.encoder("md init");
+        in_pass(&mut encoder, "md init forces", |pass| {
+            cells.encode(ctx, pass)?;
+            init.dispatch_items(ctx, pass, &init_bind, n as u64)
+        })?;
+        ctx.submit(encoder);
+        cells.check(ctx)?;
+        let guard = GpuGuard::new(
+            ctx,
+            &[
+                Watch::checked(&pos, Precision::F32),
+                Watch::checked(&vel, Precision::F32),
+                Watch::checked(&acc, Precision::F32),
+                Watch::checked(&vir, Precision::F32),
+            ],
+        )?;
+        let engine = Self {
+            ctx: ctx.clone(),
+            system: system.clone(),
+            dt,
+            integrator: config.integrator,
+            check_every: config.check_every,
+            n,
+            axes,
+            pos,
+            vel,
+            acc,
+            vir,
+            cells,
+            drift,
+            force,
+            guard,
+            steps,
+            _bound: BoundOnly {
+                _table: table,
+                _params: uniform,
+            },
+        };
+        // The initial state must be finite, as on the CPU.
+        let a = engine.acc.download(ctx)?;
+        let v = engine.synced()?;
+        let bad = a[..n]
+            .iter()
+            .map(|x| &x[..axes])
+            .chain(v.iter().map(|x| &x[..axes]))
+            .position(|x| x.iter().any(|c| !c.is_finite()));
+        if let Some(k) = bad {
+            let (what, i) = if k < n {
+                ("force", k)
+            } else {
+                ("velocity", k - n)
+            };
+            let msg = format!("particle {i}: {what} not finite");
+            return Err(match saved {
+                Some(_) => bad_checkpoint(format!("the stored state is not valid: {msg}")),
+                None => Error::invalid(
+                    "initial state",
+                    msg,
+                    "particles (nearly) on top of each other or dt too large; move the \
+                     particles apart or lower dt",
+                ),
+            });
+        }
+        Ok(engine)
+    }
+
+    /// Records one step into `encoder`.
+    fn record_step(&self, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
+        let ctx = &self.ctx;
+        let n = self.n as u64;
+        in_pass(encoder, "md step", |pass| {
+            self.drift.0.dispatch_items(ctx, pass, &self.drift.1, n)?;
+            self.cells.encode(ctx, pass)?;
+            self.force.0.dispatch_items(ctx, pass, &self.force.1, n)
+        })
+    }
+
+    /// Velocities at the step (leapfrog: `v(t + dt/2) - a(t) dt / 2`), `[x, y, z, 0]`.
+    fn synced(&self) -> Result<Vec<[f32; 4]>> {
+        let mut v = self.vel.download(&self.ctx)?;
+        v.truncate(self.n);
+        if self.integrator == Integrator::Leapfrog {
+            let a = self.acc.download(&self.ctx)?;
+            let h = (0.5 * self.dt) as f32;
+            for (v, a) in v.iter_mut().zip(&a) {
+                for d in 0..3 {
+                    v[d] -= a[d] * h;
+                }
+            }
+        }
+        Ok(v)
+    }
+
+    fn widen(&self, v: &[[f32; 4]]) -> Vec<[f64; 3]> {
+        v.iter()
+            .take(self.n)
+            .map(|x| std::array::from_fn(|d| if d < self.axes { f64::from(x[d]) } else { 0.0 }))
+            .collect()
+    }
+}
+
+impl Engine for GpuEngine {
+    fn step(&mut self, steps: u32) -> Result<()> {
+        let ctx = &self.ctx;
+        self.guard.begin(ctx)?;
+        // The step of every recorded check; the first is the starting state.
+        let mut checks = vec![self.steps];
+        let mut encoder = ctx.encoder("md steps");
+        self.guard.record(ctx, &mut encoder)?;
+        let mut recorded = 0;
+        for stretch in chunks(self.steps, steps, self.check_every) {
+            for _ in 0..stretch {
+                self.record_step(&mut encoder)?;
+                recorded += 1;
+                if recorded == STEPS_PER_SUBMIT {
+                    ctx.submit(std::mem::replace(&mut encoder, ctx.encoder("md steps")));
+                    recorded = 0;
+                }
+            }
+            self.guard.record(ctx, &mut encoder)?;
+            let last = checks[checks.len() - 1];
+            checks.push(last + u64::from(stretch));
+        }
+        ctx.submit(encoder);
+        let report = self.guard.report(ctx)?;
+        match report.bad {
+            None => {
+                self.steps = checks[checks.len() - 1];
+                // A cell over the adapter's per-cell limit means truncated force loops.
+                self.cells.check(ctx)
+            }
+            Some((label, index)) => {
+                let passed = (report.passed as usize).clamp(1, checks.len() - 1);
+                let (good, bad) = (checks[passed - 1], checks[passed]);
+                self.guard.rollback(ctx)?;
+                self.steps = good;
+                let (what, i) = match label.as_str() {
+                    "md vir" => ("virial", index),
+                    "md pos" => ("position", index / 4),
+                    "md vel" => ("velocity", index / 4),
+                    "md acc" => ("acceleration (or energy)", index / 4),
+                    other => (other, index / 4),
+                };
+                Err(blow_up(
+                    bad,
+                    good,
+                    format!(
+                        "particle {i}: {what} component {} is not finite (a NaN position \
+                         marks a particle that moved more than a box length in one step)",
+                        index % 4
+                    ),
+                    "a time step too large for the stiffest pair (see time_step_guide) or \
+                     particles started (nearly) on top of each other; lower Config::dt",
+                ))
+            }
+        }
+    }
+
+    fn state(&mut self) -> Result<State> {
+        let pos = self.pos.download(&self.ctx)?;
+        let vel = self.synced()?;
+        Ok(State {
+            time: self.steps as f64 * self.dt,
+            positions: self.widen(&pos),
+            velocities: self.widen(&vel),
+            species: self.system.species().to_vec(),
+        })
+    }
+
+    fn diagnostics(&mut self) -> Result<Diagnostics> {
+        let ns = self.system.table().n_species();
+        let masses = self.system.masses();
+        let vel = self.synced()?;
+        let acc = self.acc.download(&self.ctx)?;
+        let vir = self.vir.download(&self.ctx)?;
+        let mut kin = vec![0.0f64; ns];
+        let mut count = vec![0usize; ns];
+        for (v, &s) in vel.iter().zip(self.system.species()) {
+            let v2: f64 = v[..self.axes].iter().map(|&x| f64::from(x).powi(2)).sum();
+            kin[s as usize] += 0.5 * masses[s as usize] * v2;
+            count[s as usize] += 1;
+        }
+        let potential = 0.5 * acc[..self.n].iter().map(|a| f64::from(a[3])).sum::<f64>();
+        let virial = 0.5 * vir[..self.n].iter().map(|&w| f64::from(w)).sum::<f64>();
+        Ok(assemble(
+            self.steps as f64 * self.dt,
+            self.axes,
+            self.system.volume(),
+            &kin,
+            &count,
+            potential,
+            virial,
+        ))
+    }
+
+    fn forces(&mut self) -> Result<Vec<[f64; 3]>> {
+        let acc = self.acc.download(&self.ctx)?;
+        let masses = self.system.masses();
+        Ok(acc
+            .iter()
+            .zip(self.system.species())
+            .map(|(a, &s)| {
+                let m = masses[s as usize];
+                std::array::from_fn(|d| {
+                    if d < self.axes {
+                        f64::from(a[d]) * m
+                    } else {
+                        0.0
+                    }
+                })
+            })
+            .collect())
+    }
+
+    fn name(&self) -> String {
+        format!("gpu f32 ({})", self.ctx.adapter_info().name)
+    }
+
+    fn steps_done(&self) -> u64 {
+        self.steps
+    }
+
+    fn model(&self) -> String {
+        crate::sim::model_name(true, Precision::F32, self.axes)
+    }
+
+    fn save(&mut self) -> Result<EngineState> {
+        let flat = |v: Vec<[f32; 4]>, n: usize, axes: usize| -> Vec<f64> {
+            v.iter()
+                .take(n)
+                .flat_map(|x| x[..axes].iter().map(|&c| f64::from(c)))
+                .collect()
+        };
+        Ok(EngineState {
+            steps: self.steps,
+            pos: flat(self.pos.download(&self.ctx)?, self.n, self.axes),
+            vel: flat(self.vel.download(&self.ctx)?, self.n, self.axes),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::mem::offset_of;
+
+    use simkit_backend::testing::assert_mirrors;
+
+    use super::*;
+
+    #[test]
+    fn gpu_params_mirror_md_params() {
+        assert_mirrors::<GpuParams>(
+            PARAMS_WGSL,
+            "MdParams",
+            &[
+                ("lo", offset_of!(GpuParams, lo)),
+                ("hi", offset_of!(GpuParams, hi)),
+                ("len", offset_of!(GpuParams, len)),
+                ("periodic", offset_of!(GpuParams, periodic)),
+                ("dt", offset_of!(GpuParams, dt)),
+                ("half_dt", offset_of!(GpuParams, half_dt)),
+                ("n", offset_of!(GpuParams, n)),
+                ("n_species", offset_of!(GpuParams, n_species)),
+                ("leapfrog", offset_of!(GpuParams, leapfrog)),
+                ("dim", offset_of!(GpuParams, dim)),
+                ("_pad0", offset_of!(GpuParams, _pad0)),
+                ("_pad1", offset_of!(GpuParams, _pad1)),
+            ],
+        );
+    }
+}

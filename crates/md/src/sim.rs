@@ -1,0 +1,271 @@
+//! The user-facing simulation object and its state snapshot.
+
+use serde::{Deserialize, Serialize};
+use simkit_backend::{Backend, Error, Precision, Restart, Result, Simulation, checkpoint};
+
+use crate::cpu::CpuEngine;
+use crate::engine::{Engine, EngineState};
+use crate::{Config, Diagnostics, Dim, Integrator, System};
+
+/// The checkpoint model string of an engine: backend, precision, dimension.
+pub(crate) fn model_name(gpu: bool, precision: Precision, axes: usize) -> String {
+    if gpu {
+        format!("Md<gpu f32, {axes}>")
+    } else {
+        format!("Md<cpu {}, {axes}>", precision.wgsl())
+    }
+}
+
+/// [`Config`] as a checkpoint stores it.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct ConfigRecord {
+    dt: Option<f64>,
+    integrator: Integrator,
+    single: bool,
+    skin: f64,
+    check_every: u32,
+    shift: bool,
+    allow_unstable_dt: bool,
+}
+
+impl From<&Config> for ConfigRecord {
+    fn from(c: &Config) -> Self {
+        Self {
+            dt: c.dt,
+            integrator: c.integrator,
+            single: c.precision == Precision::F32,
+            skin: c.skin,
+            check_every: c.check_every,
+            shift: c.shift,
+            allow_unstable_dt: c.allow_unstable_dt,
+        }
+    }
+}
+
+impl From<ConfigRecord> for Config {
+    fn from(c: ConfigRecord) -> Self {
+        Self {
+            dt: c.dt,
+            integrator: c.integrator,
+            precision: if c.single {
+                Precision::F32
+            } else {
+                Precision::F64
+            },
+            skin: c.skin,
+            check_every: c.check_every,
+            shift: c.shift,
+            allow_unstable_dt: c.allow_unstable_dt,
+        }
+    }
+}
+
+/// Everything a checkpoint holds: the inputs (validated again on resume) and the engine's
+/// dynamic state.
+#[derive(Serialize, Deserialize)]
+struct Payload {
+    system: System,
+    config: ConfigRecord,
+    engine: EngineState,
+}
+
+/// Host-side snapshot: time, positions, velocities (`[x, y, 0]` in 2D) and species, in the
+/// system's particle order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct State {
+    /// Simulation time (`steps * dt`).
+    pub time: f64,
+    /// Positions (periodic axes wrapped into the box).
+    pub positions: Vec<[f64; 3]>,
+    /// Velocities at `time`.
+    pub velocities: Vec<[f64; 3]>,
+    /// Species of every particle.
+    pub species: Vec<u32>,
+}
+
+/// A molecular-dynamics run of a [`System`] on a chosen backend.
+///
+/// ```
+/// use simkit_backend::{Backend, Simulation};
+/// use simkit_md::{Config, Dim, Md, PairParams, PairTable, System};
+/// # fn main() -> simkit_backend::Result<()> {
+/// let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5))?;
+/// let mut sys = System::new(Dim::Three, [0.0; 3], [6.0; 3], [true; 3], vec![1.0], table)?;
+/// // Two atoms 1.5 sigma apart attract each other.
+/// sys.add_particle(0, [2.0, 3.0, 3.0], [0.0; 3])?;
+/// sys.add_particle(0, [3.5, 3.0, 3.0], [0.0; 3])?;
+/// let mut md = Md::new(&sys, &Config::default(), Backend::Cpu)?;
+/// let e0 = md.diagnostics()?.total;
+/// md.step(20)?;
+/// let v = md.state()?.velocities;
+/// assert!(v[0][0] > 0.0 && v[1][0] < 0.0);
+/// assert!((md.diagnostics()?.total - e0).abs() < 1e-4);
+/// # Ok(())
+/// # }
+/// ```
+pub struct Md {
+    engine: Box<dyn Engine>,
+    system: System,
+    config: Config,
+    dt: f64,
+}
+
+impl Md {
+    /// Validates the system and settings and builds the backend.
+    ///
+    /// Errors: invalid settings or a time step over the safe bound (see
+    /// [`Config::resolve_dt`]), particles so close that a force is not finite, or any GPU
+    /// failure (the GPU computes in `f32` whatever [`Config::precision`] says, and refuses
+    /// a cell of the neighbour grid, at least `max r_c` wide, holding more particles than
+    /// the adapter's loop limit allows: [`Error::Unsupported`]).
+    pub fn new(system: &System, config: &Config, backend: Backend<'_>) -> Result<Self> {
+        Self::build(system, config, backend, None)
+    }
+
+    fn build(
+        system: &System,
+        config: &Config,
+        backend: Backend<'_>,
+        saved: Option<&EngineState>,
+    ) -> Result<Self> {
+        let dt = config.resolve_dt(system)?;
+        let engine: Box<dyn Engine> = match backend {
+            Backend::Cpu => match (system.dim(), config.precision) {
+                (Dim::Two, Precision::F64) => {
+                    Box::new(CpuEngine::<2, f64>::new(system, config, dt, saved)?)
+                }
+                (Dim::Two, Precision::F32) => {
+                    Box::new(CpuEngine::<2, f32>::new(system, config, dt, saved)?)
+                }
+                (Dim::Three, Precision::F64) => {
+                    Box::new(CpuEngine::<3, f64>::new(system, config, dt, saved)?)
+                }
+                (Dim::Three, Precision::F32) => {
+                    Box::new(CpuEngine::<3, f32>::new(system, config, dt, saved)?)
+                }
+            },
+            #[cfg(feature = "gpu")]
+            Backend::Gpu(ctx) => {
+                Box::new(crate::gpu::GpuEngine::new(ctx, system, config, dt, saved)?)
+            }
+        };
+        Ok(Self {
+            engine,
+            system: system.clone(),
+            config: *config,
+            dt,
+        })
+    }
+
+    /// The time step in use.
+    pub fn dt(&self) -> f64 {
+        self.dt
+    }
+
+    /// The system the run started from.
+    pub fn system(&self) -> &System {
+        &self.system
+    }
+
+    /// The settings of the run.
+    pub fn config(&self) -> &Config {
+        &self.config
+    }
+
+    /// Energies, virial pressure and per-species temperatures of the current state.
+    pub fn diagnostics(&mut self) -> Result<Diagnostics> {
+        self.engine.diagnostics()
+    }
+
+    /// The force on every particle at the current positions (`[fx, fy, 0]` in 2D).
+    pub fn forces(&mut self) -> Result<Vec<[f64; 3]>> {
+        self.engine.forces()
+    }
+}
+
+impl Simulation for Md {
+    type State = State;
+
+    /// Advances `steps` steps, checking the state every [`Config::check_every`] steps and
+    /// at the end; a failed check returns [`Error::BlowUp`] with the run rolled back to the
+    /// last state that passed ([`Simulation::steps_done`] and [`Simulation::state`] give
+    /// it).
+    fn step(&mut self, steps: u32) -> Result<()> {
+        self.engine.step(steps)
+    }
+
+    fn state(&mut self) -> Result<State> {
+        self.engine.state()
+    }
+
+    fn steps_done(&self) -> u64 {
+        self.engine.steps_done()
+    }
+
+    fn backend_name(&self) -> String {
+        self.engine.name()
+    }
+}
+
+/// Whether `backend` is a GPU.
+fn is_gpu(backend: Backend<'_>) -> bool {
+    match backend {
+        Backend::Cpu => false,
+        #[cfg(feature = "gpu")]
+        Backend::Gpu(_) => true,
+    }
+}
+
+/// Checkpoints hold the system, the settings, the step count, the positions and the
+/// velocities as the integrator stores them; forces are recomputed on resume (bit for bit:
+/// they depend on the positions only; on the GPU from the same cell order, since the cell
+/// list is rebuilt from the same positions). A checkpoint resumes on the backend and
+/// precision that wrote it.
+impl Restart for Md {
+    fn checkpoint(&mut self) -> Result<Vec<u8>> {
+        let payload = Payload {
+            system: self.system.clone(),
+            config: ConfigRecord::from(&self.config),
+            engine: self.engine.save()?,
+        };
+        checkpoint::encode(
+            env!("CARGO_PKG_NAME"),
+            env!("CARGO_PKG_VERSION"),
+            &self.engine.model(),
+            &payload,
+        )
+    }
+
+    fn resume(bytes: &[u8], backend: Backend<'_>) -> Result<Self> {
+        let header = checkpoint::header(bytes)?;
+        let payload: Payload = checkpoint::decode(
+            bytes,
+            env!("CARGO_PKG_NAME"),
+            env!("CARGO_PKG_VERSION"),
+            &header.model,
+        )?;
+        let fail = |reason: String| Error::Checkpoint {
+            source_name: "<bytes>".into(),
+            reason,
+        };
+        payload
+            .system
+            .validate()
+            .map_err(|e| fail(format!("the stored system is not valid: {e}")))?;
+        let config = Config::from(payload.config);
+        let want = model_name(
+            is_gpu(backend),
+            config.precision,
+            payload.system.dim().axes(),
+        );
+        if header.model != want {
+            return Err(fail(format!(
+                "holds a {} run, and {} on this backend would be a {want} run; resume it on \
+                 the backend that wrote it",
+                header.model,
+                backend.name()
+            )));
+        }
+        Self::build(&payload.system, &config, backend, Some(&payload.engine))
+    }
+}

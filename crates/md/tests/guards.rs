@@ -1,0 +1,162 @@
+//! The blow-up guard, the time-step bound and the checks on the initial state.
+
+use simkit_backend::testing::backends;
+use simkit_backend::{Backend, Error, Result, Simulation};
+use simkit_md::{Config, Dim, Md, PairParams, PairTable, System, scenes};
+
+fn liquid() -> Result<System> {
+    let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5))?;
+    scenes::fcc_lattice([3; 3], 0.8442, 1.44, table, &[0], 7)
+}
+
+/// Just above the bound (0.0294): the liquid blows up after a few hundred steps.
+fn unstable() -> Config {
+    Config {
+        allow_unstable_dt: true,
+        check_every: 10,
+        ..Config::with_dt(0.03)
+    }
+}
+
+#[test]
+fn a_step_over_the_bound_is_refused_unless_allowed() -> Result<()> {
+    let sys = liquid()?;
+    let e = Md::new(&sys, &Config::with_dt(0.08), Backend::Cpu)
+        .err()
+        .unwrap();
+    match e {
+        Error::Unstable { dt, bound, .. } => {
+            assert_eq!(dt, 0.08);
+            // T / 20 of Lennard-Jones at m = 1 (reduced mass 1/2): 0.0294.
+            assert!((bound - 0.0294).abs() < 1e-3, "{bound}");
+        }
+        other => panic!("{other}"),
+    }
+    Md::new(&sys, &unstable(), Backend::Cpu)?;
+    Ok(())
+}
+
+#[test]
+fn a_blow_up_is_reported_and_rolled_back_to_the_last_good_check() -> Result<()> {
+    let sys = liquid()?;
+    for backend in backends("a_blow_up_is_reported_and_rolled_back_to_the_last_good_check") {
+        let mut md = Md::new(&sys, &unstable(), backend)?;
+        let e = md.step(2000).expect_err("dt = 0.03 must blow up");
+        let Error::BlowUp {
+            step,
+            rolled_back_to,
+            what,
+            cause,
+        } = e
+        else {
+            panic!("{e}")
+        };
+        eprintln!(
+            "{}: blow-up at {step}: {what}; {cause}; back to {rolled_back_to}",
+            md.backend_name()
+        );
+        assert!(step > rolled_back_to && step <= rolled_back_to + 10);
+        assert!(rolled_back_to > 0 && rolled_back_to % 10 == 0);
+        assert!(what.contains("particle"), "{what}");
+        assert!(cause.contains("dt"), "{cause}");
+        assert_eq!(md.steps_done(), rolled_back_to);
+        let s = md.state()?;
+        assert!(
+            s.positions
+                .iter()
+                .chain(&s.velocities)
+                .flatten()
+                .all(|x| x.is_finite())
+        );
+        // The same run stepped exactly to that step has the same bits.
+        let mut again = Md::new(&sys, &unstable(), backend)?;
+        again.step(rolled_back_to as u32)?;
+        assert_eq!(again.state()?, s);
+        let d = md.diagnostics()?;
+        assert!(d.total.is_finite());
+        // The run goes on from there (and blows up again).
+        assert!(matches!(md.step(2000), Err(Error::BlowUp { .. })));
+    }
+    Ok(())
+}
+
+#[test]
+fn the_check_does_not_perturb_a_stable_run() -> Result<()> {
+    let sys = liquid()?;
+    for backend in backends("the_check_does_not_perturb_a_stable_run") {
+        let run = |check_every| -> Result<simkit_md::State> {
+            let config = Config {
+                check_every,
+                ..Config::with_dt(0.005)
+            };
+            let mut md = Md::new(&sys, &config, backend)?;
+            md.step(137)?;
+            md.step(63)?;
+            md.state()
+        };
+        let a = run(0)?;
+        assert_eq!(a, run(100)?);
+        assert_eq!(a, run(1)?);
+    }
+    Ok(())
+}
+
+#[test]
+fn particles_on_top_of_each_other_are_refused() -> Result<()> {
+    let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5))?;
+    let mut sys = System::new(Dim::Three, [0.0; 3], [10.0; 3], [true; 3], vec![1.0], table)?;
+    sys.add_particle(0, [1.0, 1.0, 1.0], [0.0; 3])?;
+    sys.add_particle(0, [1.0, 1.0, 1.0], [0.0; 3])?;
+    let e = Md::new(&sys, &Config::default(), Backend::Cpu)
+        .err()
+        .unwrap();
+    assert!(e.to_string().contains("initial state"), "{e}");
+    Ok(())
+}
+
+#[test]
+fn a_particle_thrown_through_a_closed_box_is_a_blow_up() -> Result<()> {
+    // Faster than a box length per step: the reflection cannot bring it back.
+    let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5))?;
+    let mut sys = System::new(
+        Dim::Three,
+        [0.0; 3],
+        [10.0; 3],
+        [false; 3],
+        vec![1.0],
+        table,
+    )?;
+    sys.add_particle(0, [5.0, 5.0, 5.0], [3000.0, 0.0, 0.0])?;
+    let config = Config {
+        check_every: 5,
+        ..Config::with_dt(0.01)
+    };
+    let mut md = Md::new(&sys, &config, Backend::Cpu)?;
+    let e = md.step(20).err().unwrap();
+    assert!(
+        matches!(
+            e,
+            Error::BlowUp {
+                rolled_back_to: 0,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    assert_eq!(md.steps_done(), 0);
+    assert_eq!(md.state()?.positions[0], [5.0, 5.0, 5.0]);
+    Ok(())
+}
+
+#[test]
+fn both_backends_refuse_the_same_initial_states() -> Result<()> {
+    let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5))?;
+    let mut sys = System::new(Dim::Three, [0.0; 3], [10.0; 3], [true; 3], vec![1.0], table)?;
+    sys.add_particle(0, [1.0, 1.0, 1.0], [0.0; 3])?;
+    sys.add_particle(0, [1.0, 1.0, 1.0], [0.0; 3])?;
+    for backend in backends("both_backends_refuse_the_same_initial_states") {
+        let e = Md::new(&sys, &Config::default(), backend).err().unwrap();
+        assert!(e.to_string().contains("initial state"), "{e}");
+    }
+    Ok(())
+}

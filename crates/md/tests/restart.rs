@@ -1,0 +1,144 @@
+//! Checkpoint and restart, bit for bit (in a new process), and refused checkpoints.
+
+use simkit_backend::testing::{backends, check_restart};
+use simkit_backend::{Backend, Error, Precision, Restart, Result, Simulation, checkpoint};
+use simkit_md::{Config, Dim, Integrator, Md, PairParams, PairTable, System, scenes};
+
+fn mix() -> System {
+    scenes::three_phase_mix([6; 3], 0.4, 1.0, 9).unwrap()
+}
+
+fn box_2d() -> System {
+    let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5)).unwrap();
+    let mut sys = System::new(
+        Dim::Two,
+        [0.0; 3],
+        [9.0, 6.0, 0.0],
+        [true, false, false],
+        vec![2.0],
+        table,
+    )
+    .unwrap();
+    for i in 0..7 {
+        for j in 0..5 {
+            let v = [0.3 * (i as f64 - 3.0), 0.5 * (j as f64 - 2.0), 0.0];
+            sys.add_particle(0, [0.6 + 1.2 * i as f64, 0.6 + 1.2 * j as f64, 0.0], v)
+                .unwrap();
+        }
+    }
+    sys
+}
+
+/// A labelled scene and its settings.
+type Case = (&'static str, fn() -> System, Config);
+
+#[test]
+fn restart_is_bit_exact() {
+    let name = "restart_is_bit_exact";
+    let cases: [Case; 3] = [
+        (
+            "3D mix, f64, velocity Verlet",
+            mix,
+            Config {
+                check_every: 7,
+                ..Config::default()
+            },
+        ),
+        (
+            "3D mix, f32, leapfrog, shifted",
+            mix,
+            Config {
+                precision: Precision::F32,
+                integrator: Integrator::Leapfrog,
+                shift: true,
+                ..Config::default()
+            },
+        ),
+        (
+            "2D closed walls, f64, leapfrog",
+            box_2d,
+            Config {
+                integrator: Integrator::Leapfrog,
+                ..Config::with_dt(0.004)
+            },
+        ),
+    ];
+    for backend in backends(name) {
+        for (label, system, config) in cases {
+            check_restart(name, label, backend, 60, |b| Md::new(&system(), &config, b));
+        }
+    }
+}
+
+#[test]
+fn the_clock_and_the_step_count_are_restored() -> Result<()> {
+    let mut md = Md::new(&box_2d(), &Config::with_dt(0.004), Backend::Cpu)?;
+    md.step(25)?;
+    let again = Md::resume(&md.checkpoint()?, Backend::Cpu)?;
+    assert_eq!(again.steps_done(), 25);
+    let mut again = again;
+    assert_eq!(again.state()?.time, md.state()?.time);
+    assert_eq!(again.state()?.time, 25.0 * 0.004);
+    Ok(())
+}
+
+#[test]
+fn bad_checkpoints_are_refused_with_a_checkpoint_error() -> Result<()> {
+    let mut md = Md::new(&box_2d(), &Config::with_dt(0.004), Backend::Cpu)?;
+    md.step(3)?;
+    let bytes = md.checkpoint()?;
+    let is_ckpt = |r: Result<Md>| matches!(r, Err(Error::Checkpoint { .. }));
+    // Truncated, corrupted.
+    assert!(is_ckpt(Md::resume(&bytes[..bytes.len() / 2], Backend::Cpu)));
+    let mut bad = bytes.clone();
+    let k = bad.len() - 40;
+    bad[k] ^= 0x10;
+    assert!(is_ckpt(Md::resume(&bad, Backend::Cpu)));
+    // Another package, another model with this package's name, garbage payload.
+    let other = checkpoint::encode(
+        "simkit-dem",
+        env!("CARGO_PKG_VERSION"),
+        "Dem<cpu f64, 2>",
+        &1u8,
+    )?;
+    assert!(is_ckpt(Md::resume(&other, Backend::Cpu)));
+    let garbage = checkpoint::encode(
+        "simkit-md",
+        env!("CARGO_PKG_VERSION"),
+        "Md<cpu f64, 2>",
+        &[7u8; 5],
+    )?;
+    assert!(is_ckpt(Md::resume(&garbage, Backend::Cpu)));
+    // A checkpoint whose model does not match its settings (f32 label on an f64 run).
+    let header = checkpoint::header(&bytes)?;
+    assert_eq!(header.model, "Md<cpu f64, 2>");
+    let start = bytes
+        .windows(14)
+        .position(|w| w == b"Md<cpu f64, 2>")
+        .unwrap();
+    let mut relabelled = bytes.clone();
+    relabelled[start..start + 14].copy_from_slice(b"Md<cpu f32, 2>");
+    let crc_at = relabelled.len() - 4;
+    let crc = crc32(&relabelled[..crc_at]);
+    relabelled[crc_at..].copy_from_slice(&crc.to_le_bytes());
+    let e = Md::resume(&relabelled, Backend::Cpu).err().unwrap();
+    assert!(matches!(e, Error::Checkpoint { .. }), "{e}");
+    assert!(e.to_string().contains("f32"), "{e}");
+    Ok(())
+}
+
+/// CRC-32 (IEEE), bitwise.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut crc = !0u32;
+    for &b in bytes {
+        crc ^= u32::from(b);
+        for _ in 0..8 {
+            crc = if crc & 1 != 0 {
+                (crc >> 1) ^ 0xEDB8_8320
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    !crc
+}
