@@ -17,15 +17,18 @@ use simkit::pp_coulomb::{Config as PpConfig, ForceLaw, PpCoulomb};
 use simkit::rd::scenes::{colony_scene, gray_scott_square};
 use simkit::rd::{Config as RdConfig, GrayScott, Rd, Stepping};
 
+/// A built simulation's `step`.
+type Stepper = Box<dyn FnMut(u32) -> Result<()>>;
+
 /// One scene: builds a simulation with the given `check_every` (not timed), then the
 /// timed part steps it.
 struct Case {
     name: &'static str,
     steps: u32,
-    build: Box<dyn Fn(u32) -> Result<Box<dyn FnMut(u32) -> Result<()>>>>,
+    build: Box<dyn Fn(u32) -> Result<Stepper>>,
 }
 
-fn stepper<S: Simulation + 'static>(mut sim: S) -> Box<dyn FnMut(u32) -> Result<()>> {
+fn stepper<S: Simulation + 'static>(mut sim: S) -> Stepper {
     Box::new(move |n| sim.step(n))
 }
 

@@ -15,17 +15,19 @@
 //! ```
 //! `--checkpoint-every N` saves the run every N steps to `out/bacterial_colony/checkpoint.ckpt`;
 //! `--resume FILE` continues it up to `--steps` in total, bit for bit as the uninterrupted
-//! run (frames, CSV rows and the GIF then cover the resumed part).
+//! run (frames, CSV rows and the GIF then cover the resumed part). Options: `--steps N`
+//! (total steps, at least 16; 40,000), `--gpu`, `--checkpoint-every N`, `--resume FILE`.
 
 use std::path::PathBuf;
+use std::process::ExitCode;
 use std::time::Instant;
 
-use simkit::backend::{Backend, Error, GpuContext, Result, Simulation};
+use clap::Parser;
+use simkit::backend::{Backend, GpuContext, Result, Simulation};
 use simkit::output::csv::CsvWriter;
 use simkit::output::gif::write_gif;
 use simkit::output::heatmap::{HeatmapOptions, render_heatmap};
 use simkit::output::plot::{Plot, Series};
-use simkit::output::progress::Progress;
 use simkit::output::vtk::ImageData;
 use simkit::rd::scenes::{colony_scene, gap_width};
 use simkit::rd::{Config, Rd, Stepping};
@@ -35,23 +37,35 @@ const FRAMES: u32 = 16;
 /// b below this counts as empty space when measuring the gap.
 const GAP_THRESHOLD: f64 = 0.05;
 
-fn main() -> Result<()> {
-    let args: Vec<String> = std::env::args().collect();
-    let steps: u32 = match args.iter().position(|a| a == "--steps") {
-        Some(i) => args
-            .get(i + 1)
-            .and_then(|s| s.parse().ok())
-            .filter(|&s: &u32| s >= FRAMES)
-            .ok_or_else(|| {
-                Error::invalid(
-                    "--steps",
-                    args.get(i + 1).map_or("", |s| s),
-                    "give an integer >= 16",
-                )
-            })?,
-        None => 40_000,
-    };
-    let ctx = if args.iter().any(|a| a == "--gpu") {
+#[path = "common/checkpoint.rs"]
+mod checkpoint;
+#[path = "common/progress.rs"]
+mod progress;
+
+/// The source's bacterial colony (512 x 512 cells, f32): two colonies grow towards each
+/// other and leave a gap; frames, GIF, gap curve and VTK under out/bacterial_colony/.
+#[derive(Parser, Debug)]
+#[command(version)]
+struct Args {
+    /// Total Euler steps (dt = 0.005 time units; at least 16, one per frame; a resumed run
+    /// continues up to this many)
+    #[arg(long, value_name = "N", default_value_t = 40_000,
+          value_parser = clap::value_parser!(u32).range(i64::from(FRAMES)..))]
+    steps: u32,
+    /// Run on the GPU backend instead of the CPU
+    #[arg(long)]
+    gpu: bool,
+    #[command(flatten)]
+    checkpoint: checkpoint::CheckpointArgs,
+}
+
+fn main() -> ExitCode {
+    simkit::cli::exit_code(run(&Args::parse()))
+}
+
+fn run(args: &Args) -> Result<()> {
+    let steps = args.steps;
+    let ctx = if args.gpu {
         Some(GpuContext::new()?)
     } else {
         None
@@ -61,7 +75,7 @@ fn main() -> Result<()> {
 
     let (grid, model) = colony_scene::<f32>(N, N, 2026)?;
     let (cy, left, right) = (N * 127 / 512, N * 103 / 512, N * 151 / 512);
-    let checkpoints = simkit::cli::Checkpoints::from_args(&out)?;
+    let checkpoints = args.checkpoint.checkpoints(&out);
     let mut sim = checkpoints.start(backend, |b| {
         Rd::new(grid, model, &Config::new(Stepping::euler(0.005)), b)
     })?;
@@ -82,7 +96,9 @@ fn main() -> Result<()> {
     )?;
     let mut frames = Vec::new();
     let (mut ts, mut gaps) = (Vec::new(), Vec::new());
-    let mut progress = Progress::new("colony", u64::from(steps).saturating_sub(first));
+    let bar = progress::bar("colony", u64::from(steps), "steps");
+    bar.set_position(first.min(u64::from(steps)));
+    bar.reset_eta();
     let chunk = steps / FRAMES;
     let mut stepping_secs = 0.0;
     for f in 0..=FRAMES {
@@ -96,11 +112,15 @@ fn main() -> Result<()> {
             continue;
         }
         if end > sim.steps_done() {
-            let n = (end - sim.steps_done()) as u32;
+            // In tenths of a frame interval, for the progress bar (same result).
+            let piece = (chunk / 10).max(1);
             let t = Instant::now();
-            checkpoints.step(&mut sim, n)?;
+            while sim.steps_done() < end {
+                let n = piece.min((end - sim.steps_done()) as u32);
+                checkpoints.step(&mut sim, n)?;
+                bar.inc(u64::from(n));
+            }
             stepping_secs += t.elapsed().as_secs_f64();
-            progress.inc(u64::from(n));
         }
         let g = sim.state()?;
         let gap = gap_width(&g, cy, left, right, GAP_THRESHOLD);
@@ -108,14 +128,16 @@ fn main() -> Result<()> {
         csv.row(&[sim.steps_done() as f64, sim.time(), gap, tb, tn])?;
         ts.push(sim.time());
         gaps.push(gap);
-        println!(
-            "{:>7} {:>8.1} {:>9.2} {:>10.2} {:>10.2}",
-            sim.steps_done(),
-            sim.time(),
-            gap,
-            tb,
-            tn
-        );
+        bar.suspend(|| {
+            println!(
+                "{:>7} {:>8.1} {:>9.2} {:>10.2} {:>10.2}",
+                sim.steps_done(),
+                sim.time(),
+                gap,
+                tb,
+                tn
+            );
+        });
         let opts = HeatmapOptions::new().range(0.0, 1.5).title(format!(
             "b at t = {:.1} (step {})",
             sim.time(),
@@ -125,7 +147,7 @@ fn main() -> Result<()> {
         simkit::output::png::write_png(out.join(format!("b_{:06}.png", sim.steps_done())), &img)?;
         frames.push(img);
     }
-    progress.finish();
+    bar.finish();
     csv.finish()?;
     write_gif(out.join("colony.gif"), &frames, 300)?;
     Plot::new("gap between the colonies")

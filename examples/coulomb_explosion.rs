@@ -7,39 +7,64 @@
 //! cargo run --release --example coulomb_explosion -- --gpu --n 8192
 //! ```
 //! Writes `out/coulomb_explosion/radius.png` (measured xi(t) against the analytic curve),
-//! `radius.csv`, and VTK frames `frame_*.vtu` with `explosion.pvd` for ParaView.
+//! `radius.csv`, and VTK frames `frame_*.vtu` with `explosion.pvd` for ParaView. Options:
+//! `--n N` (charges, 20,000), `--f64` (double precision; f32 by default), `--gpu`.
 
 use std::path::PathBuf;
+use std::process::ExitCode;
 
+use clap::Parser;
 use simkit::backend::{Backend, GpuContext, Result, Simulation};
+use simkit::output::csv::write_csv;
 use simkit::output::plot::{Plot, Series, Style};
 use simkit::output::vtk::{self, Particles as VtkParticles};
-use simkit::output::{csv::write_csv, progress::Progress};
 use simkit::pp_coulomb::analytic::{explosion_omega, explosion_time, explosion_xi};
 use simkit::pp_coulomb::scenes::{Expansion, cold_sphere, crossing_time, run_explosion};
 use simkit::pp_coulomb::{Config, ForceLaw, PpCoulomb, Precision};
 
-fn arg_value(name: &str) -> Option<String> {
-    let args: Vec<String> = std::env::args().collect();
-    args.iter()
-        .position(|a| a == name)
-        .and_then(|i| args.get(i + 1).cloned())
+#[path = "common/progress.rs"]
+mod progress;
+
+/// Coulomb explosion of a cold uniform sphere of equal charges (radius 1, total charge 1)
+/// against the analytic radius; plot, CSV and VTK frames under out/coulomb_explosion/.
+#[derive(Parser, Debug)]
+#[command(version)]
+struct Args {
+    /// Number of charges
+    #[arg(long, value_name = "N", default_value_t = 20_000)]
+    n: usize,
+    /// Double precision (f64) instead of f32
+    #[arg(long)]
+    f64: bool,
+    /// Run on the GPU backend instead of the CPU
+    #[arg(long)]
+    gpu: bool,
 }
 
-fn main() -> Result<()> {
-    let flag = |f: &str| std::env::args().any(|a| a == f);
-    let n: usize = match arg_value("--n") {
-        Some(s) => s
-            .parse()
-            .map_err(|_| simkit::backend::Error::invalid("--n", &s, "must be an integer"))?,
-        None => 20_000,
-    };
-    let precision = if flag("--f64") {
+/// The number of steps [`run_explosion`] takes if the radius follows the analytic curve
+/// exactly: the progress bar's length (the run may take a step or two more or fewer).
+fn expected_steps(omega: f64, courant: f64, xi_max: f64, t_max: f64) -> u64 {
+    let (mut t, mut xi, mut steps) = (0.0, 1.0f64, 0);
+    while xi < xi_max && t < t_max {
+        t += courant * xi.powf(1.5) / omega;
+        xi = explosion_xi(t, omega);
+        steps += 1;
+    }
+    steps
+}
+
+fn main() -> ExitCode {
+    simkit::cli::exit_code(run(&Args::parse()))
+}
+
+fn run(args: &Args) -> Result<()> {
+    let n = args.n;
+    let precision = if args.f64 {
         Precision::F64
     } else {
         Precision::F32
     };
-    let ctx = if flag("--gpu") {
+    let ctx = if args.gpu {
         Some(GpuContext::new()?)
     } else {
         None
@@ -62,7 +87,11 @@ fn main() -> Result<()> {
 
     let (xi_max, courant) = (5.0, 0.05);
     let t_end = explosion_time(xi_max, omega);
-    let mut bar = Progress::new("explosion", 60);
+    let bar = progress::bar(
+        "explosion",
+        expected_steps(omega, courant, xi_max, 2.0 * t_end),
+        "steps",
+    );
     let mut frames: Vec<(f64, String)> = Vec::new();
     let start = std::time::Instant::now();
     let mut write_frame = |p: &simkit::pp_coulomb::Particles, t: f64| -> Result<()> {
@@ -90,7 +119,10 @@ fn main() -> Result<()> {
         xi_max,
         2.0 * t_end,
         |p, s| {
-            bar.set(((s.time / t_end) * 60.0).min(60.0) as u64);
+            bar.inc(1);
+            if bar.position() >= bar.length().unwrap_or(0) {
+                bar.inc_length(1); // more steps than the analytic estimate
+            }
             if s.time >= next_frame {
                 next_frame += 0.5;
                 write_frame(p, s.time)?;
@@ -98,6 +130,7 @@ fn main() -> Result<()> {
             Ok(())
         },
     )?;
+    bar.set_length(bar.position());
     bar.finish();
     let elapsed = start.elapsed().as_secs_f64();
     vtk::write_pvd(out.join("explosion.pvd"), &frames)?;

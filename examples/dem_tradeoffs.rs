@@ -8,15 +8,34 @@
 //! - the wall time per step of that gas (2 threads).
 //!
 //! ```text
-//! cargo run --release --example dem_tradeoffs
+//! cargo run --release --example dem_tradeoffs                    # writes out/dem_tradeoffs/dem.png
+//! cargo run --release --example dem_tradeoffs -- --update-docs   # writes docs/tradeoffs/dem.png
 //! ```
-//! Prints a Markdown table and writes `docs/tradeoffs/dem.png`.
+//! Prints a Markdown table (the one of docs/tradeoffs/dem.md) and writes the plot
+//! `out/dem_tradeoffs/dem.png`; `--update-docs` writes it to `docs/tradeoffs/dem.png`
+//! instead.
 
+use std::process::ExitCode;
 use std::time::Instant;
 
+use clap::Parser;
 use simkit::backend::{Backend, Result, Simulation};
 use simkit::dem::{Config, Dem, Dim, Integrator, Material, Particle, Precision, Scene};
 use simkit::output::plot::{Plot, Scale, Series, Style};
+
+#[path = "common/progress.rs"]
+mod progress;
+#[path = "common/tradeoffs.rs"]
+mod tradeoffs;
+
+/// DEM trade-off sweep (time step, integrator, precision): restitution and energy errors
+/// and time per step; prints a Markdown table and writes the plot under out/dem_tradeoffs/.
+#[derive(Parser, Debug)]
+#[command(version)]
+struct Args {
+    #[command(flatten)]
+    out: tradeoffs::TradeoffArgs,
+}
 
 const TC: f64 = 0.05;
 
@@ -81,7 +100,11 @@ fn energy(scene: &Scene, cfg: &Config, div: f64) -> Result<(f64, f64)> {
     Ok((worst, secs / f64::from(20 * chunk)))
 }
 
-fn main() -> Result<()> {
+fn main() -> ExitCode {
+    simkit::cli::exit_code(run(&Args::parse()))
+}
+
+fn run(args: &Args) -> Result<()> {
     let divs = [5.0, 10.0, 20.0, 30.0, 50.0, 100.0];
     let e = 0.5;
     let scene = gas()?;
@@ -90,6 +113,7 @@ fn main() -> Result<()> {
     );
     println!("|---|---|---|---|---|---|---|");
     let mut series = Vec::new();
+    let bar = progress::bar("dem sweep", 4 * divs.len() as u64, "configurations");
     for integrator in [Integrator::VelocityVerlet, Integrator::PositionVerlet] {
         for precision in [Precision::F64, Precision::F32] {
             let mut xs = Vec::new();
@@ -106,10 +130,13 @@ fn main() -> Result<()> {
                 }
                 let rerr = (mean - e).abs() / e;
                 let (eerr, spt) = energy(&scene, &cfg, div)?;
-                println!(
-                    "| {integrator:?} | {precision:?} | {div} | {rerr:.2e} | {worst:.2e} | {eerr:.2e} | {:.0} µs |",
-                    spt * 1e6
-                );
+                bar.inc(1);
+                bar.suspend(|| {
+                    println!(
+                        "| {integrator:?} | {precision:?} | {div} | {rerr:.2e} | {worst:.2e} | {eerr:.2e} | {:.0} µs |",
+                        spt * 1e6
+                    );
+                });
                 xs.push(div);
                 re.push(rerr.max(1e-8));
                 ee.push(eerr.max(1e-8));
@@ -142,7 +169,9 @@ fn main() -> Result<()> {
     for s in series {
         plot = plot.series(s);
     }
-    plot.write("docs/tradeoffs/dem.png")?;
-    println!("\nwrote docs/tradeoffs/dem.png");
+    bar.finish();
+    let path = args.out.dir("dem_tradeoffs").join("dem.png");
+    plot.write(&path)?;
+    println!("\nwrote {}", path.display());
     Ok(())
 }

@@ -2,11 +2,12 @@
 //! `nu(d) = 1/(12 d (1-d)^3) - 1/8`, for FHP-I and the full collision table.
 //!
 //! ```text
-//! cargo run --release --example fhp_viscosity [-- WIDTH HEIGHT RUNS]
+//! cargo run --release --example fhp_viscosity [-- --width W --height H --runs R]
 //! ```
-//! Defaults: 8192 x 80 sites (wavelength 69 lattice units), 8 runs (seeds) per density,
-//! averaged. Environment overrides: `SKIP` (steps before the fit, 30), `STOP` (fit until the
-//! amplitude falls to this fraction, 0.3), `AMP` (velocity amplitude, 0.1). The measured
+//! Options (defaults): `--width` 8192 and `--height` 80 sites (wavelength 69 lattice units),
+//! `--runs` 8 (seeds per density, averaged), `--skip` (steps before the fit, 30), `--stop`
+//! (fit until the amplitude falls to this fraction, 0.3), `--amp` (velocity amplitude,
+//! 0.1). The measured
 //! viscosity grows slowly with the wavelength (the logarithmic long-time-tail renormalisation
 //! of 2D lattice gases), so compare at several heights: see docs/lattice-gas.md.
 //!
@@ -15,27 +16,70 @@
 //! ```
 //! runs the trade-off sweep of docs/tradeoffs/lattice-gas.md instead: velocity noise of
 //! block- and time-averaged fields in a 1024 x 1024 box at rest (d = 0.3) against block size
-//! and averaging window, with the time each costs; writes `out/fhp_tradeoffs/noise.png`.
+//! and averaging window, with the time each costs; prints the table and writes
+//! `out/fhp_viscosity/noise.png`, or `docs/tradeoffs/lattice-gas.png` (the tracked plot) with
+//! `--tradeoffs --update-docs`.
 
+use std::process::ExitCode;
 use std::time::Instant;
 
-use simkit::backend::Simulation;
+use clap::Parser;
+use simkit::backend::{Result, Simulation};
 use simkit::lattice_gas::observables::{BlockField, TimeAverage};
 use simkit::lattice_gas::viscosity::{ShearWave, fhp1_viscosity};
 use simkit::lattice_gas::{Config, Lattice, MultiSpinCpu, ROW_SPACING, RuleSet};
 use simkit::output::plot::{Plot, Scale, Series, Style};
 
-fn main() -> simkit::backend::Result<()> {
-    if std::env::args().any(|a| a == "--tradeoffs") {
-        return tradeoffs();
-    }
-    let args: Vec<usize> = std::env::args()
-        .skip(1)
-        .filter_map(|a| a.parse().ok())
-        .collect();
-    let width = args.first().copied().unwrap_or(8192);
-    let height = args.get(1).copied().unwrap_or(80);
-    let runs = args.get(2).copied().unwrap_or(8).max(1);
+#[path = "common/progress.rs"]
+mod progress;
+#[path = "common/tradeoffs.rs"]
+mod tradeoffs;
+
+/// FHP shear viscosity from the decay of a shear wave against the FHP-I theory, for FHP-I
+/// and the full collision table (multi-spin CPU); or, with --tradeoffs, the noise sweep.
+#[derive(Parser, Debug)]
+#[command(version, allow_negative_numbers = true)]
+struct Args {
+    /// Lattice width in sites
+    #[arg(long, value_name = "SITES", default_value_t = 8192)]
+    width: usize,
+    /// Lattice height in rows (one wavelength of the shear wave)
+    #[arg(long, value_name = "ROWS", default_value_t = 80)]
+    height: usize,
+    /// Runs (seeds) per density, averaged
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..))]
+    runs: u32,
+    /// Steps before the fit starts
+    #[arg(long, value_name = "STEPS", default_value_t = 30)]
+    skip: u32,
+    /// Fit until the wave amplitude has fallen to this fraction of its start
+    #[arg(long, value_name = "FRACTION", default_value_t = 0.3)]
+    stop: f64,
+    /// Initial velocity amplitude of the wave (lattice units per step)
+    #[arg(long, default_value_t = 0.1)]
+    amp: f64,
+    /// Run the block-size / averaging-window noise sweep instead (1024 x 1024 at rest)
+    #[arg(long)]
+    tradeoffs: bool,
+    /// With --tradeoffs: write the plot to docs/tradeoffs/lattice-gas.png (the tracked
+    /// documentation) instead of out/fhp_viscosity/noise.png
+    #[arg(long, requires = "tradeoffs")]
+    update_docs: bool,
+}
+
+fn main() -> ExitCode {
+    let args = Args::parse();
+    simkit::cli::exit_code(if args.tradeoffs {
+        noise_sweep(&tradeoffs::TradeoffArgs {
+            update_docs: args.update_docs,
+        })
+    } else {
+        run(&args)
+    })
+}
+
+fn run(args: &Args) -> Result<()> {
+    let (width, height, runs) = (args.width, args.height, args.runs);
     println!(
         "shear-wave viscosity, {width} x {height} sites, {runs} runs per point (multi-spin CPU)\n"
     );
@@ -43,11 +87,17 @@ fn main() -> simkit::backend::Result<()> {
         "{:<8} {:>6} {:>12} {:>10} {:>12} {:>9} {:>8}",
         "rules", "d", "nu measured", "+- (sem)", "nu FHP-I th", "error %", "time s"
     );
+    let densities = [0.15, 0.2, 0.3, 0.4, 0.5];
+    let bar = progress::bar(
+        "shear waves",
+        2 * densities.len() as u64 * u64::from(runs),
+        "runs",
+    );
     for rules in [RuleSet::FhpI, RuleSet::Full] {
-        for d in [0.15, 0.2, 0.3, 0.4, 0.5] {
+        for d in densities {
             let t = Instant::now();
             let mut values = Vec::new();
-            for seed in 0..runs as u32 {
+            for seed in 0..runs {
                 // About 20 samples over the expected FHP-I decay, at most every 10 steps.
                 let k = std::f64::consts::TAU / (height as f64 * ROW_SPACING);
                 let decay_steps = (1.0 / 0.3f64).ln() / (fhp1_viscosity(d) * k * k);
@@ -55,12 +105,13 @@ fn main() -> simkit::backend::Result<()> {
                     rules,
                     sample_every: (decay_steps / 20.0).clamp(1.0, 10.0) as u32,
                     seed: seed + 1,
-                    skip: env_or("SKIP", 30.0) as u32,
-                    stop_fraction: env_or("STOP", 0.3),
-                    amplitude: env_or("AMP", 0.1),
+                    skip: args.skip,
+                    stop_fraction: args.stop,
+                    amplitude: args.amp,
                     ..ShearWave::new(width, height, d)
                 };
                 values.push(wave.measure()?.viscosity);
+                bar.inc(1);
             }
             let n = values.len() as f64;
             let mean = values.iter().sum::<f64>() / n;
@@ -74,25 +125,21 @@ fn main() -> simkit::backend::Result<()> {
                 RuleSet::FhpI => "FHP-I",
                 RuleSet::Full => "full",
             };
-            println!(
-                "{label:<8} {d:>6.2} {mean:>12.4} {sem:>10.4} {theory:>12.4} {:>9.2} {:>8.2}",
-                100.0 * (mean / theory - 1.0),
-                t.elapsed().as_secs_f64()
-            );
+            let secs = t.elapsed().as_secs_f64();
+            bar.suspend(|| {
+                println!(
+                    "{label:<8} {d:>6.2} {mean:>12.4} {sem:>10.4} {theory:>12.4} {:>9.2} {secs:>8.2}",
+                    100.0 * (mean / theory - 1.0),
+                );
+            });
         }
     }
+    bar.finish();
     Ok(())
 }
 
-fn env_or(name: &str, default: f64) -> f64 {
-    std::env::var(name)
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(default)
-}
-
 /// Velocity noise of block- and time-averaged fields at rest against block size and window.
-fn tradeoffs() -> simkit::backend::Result<()> {
+fn noise_sweep(out: &tradeoffs::TradeoffArgs) -> Result<()> {
     let (n, d, gap) = (1024usize, 0.3, 10u32);
     let blocks = [4usize, 8, 16, 32, 64];
     let windows = [1usize, 4, 16, 64];
@@ -102,11 +149,14 @@ fn tradeoffs() -> simkit::backend::Result<()> {
     sim.step(50)?;
     let max_window = *windows.last().expect("windows");
     let mut snapshots = Vec::with_capacity(max_window);
+    let bar = progress::bar("snapshots", max_window as u64, "samples");
     let t = Instant::now();
     for _ in 0..max_window {
         sim.step(gap)?;
         snapshots.push(sim.state()?);
+        bar.inc(1);
     }
+    bar.finish_and_clear();
     // Stepping plus the bit-plane to byte conversion, per sample.
     let per_sample = t.elapsed().as_secs_f64() / max_window as f64;
     println!(
@@ -168,7 +218,12 @@ fn tradeoffs() -> simkit::backend::Result<()> {
     println!(
         "\none 16x16 block field: {planes_ms:.2} ms from the bit-planes, {bytes_ms:.2} ms via a byte snapshot"
     );
-    plot.write("out/fhp_tradeoffs/noise.png")?;
-    println!("\nwrote out/fhp_tradeoffs/noise.png");
+    let path = out.dir("fhp_viscosity").join(if out.update_docs {
+        "lattice-gas.png"
+    } else {
+        "noise.png"
+    });
+    plot.write(&path)?;
+    println!("\nwrote {}", path.display());
     Ok(())
 }

@@ -1,6 +1,7 @@
 //! neighbor trade-off sweep: Verlet skin vs rebuild frequency vs time per step, for
-//! particles on a random walk. Writes `docs/tradeoffs/neighbor.md` and
-//! `docs/tradeoffs/neighbor.png`.
+//! particles on a random walk. Writes `out/neighbor_tradeoffs/neighbor.md` and
+//! `neighbor.png`; with `--update-docs`, `docs/tradeoffs/neighbor.md` and
+//! `docs/tradeoffs/neighbor.png` (the tracked documentation) instead.
 //!
 //! N = 20000 points at number density 1 in a periodic cube, cutoff rc = 2.5; every step each
 //! particle moves by `delta` (0.01, 0.03, 0.1 rc) in a random diagonal direction, then the
@@ -11,15 +12,35 @@
 //! then `REPS` passes in which the configurations take turns (so a burst of load hits all of
 //! them alike); the table gives the median and the min-max range per configuration, plus the
 //! machine load before and after.
-//! `cargo run --release --example neighbor_tradeoffs`
+//!
+//! ```text
+//! cargo run --release --example neighbor_tradeoffs                    # out/neighbor_tradeoffs/
+//! cargo run --release --example neighbor_tradeoffs -- --update-docs   # docs/tradeoffs/
+//! ```
 
 use std::fmt::Write as _;
+use std::process::ExitCode;
 use std::time::Instant;
 
+use clap::Parser;
 use rand::{RngExt, SeedableRng};
 use simkit::backend::{Error, Result};
 use simkit::neighbor::{CellGrid, ListKind, SortedCells, VerletList};
 use simkit::output::plot::{Plot, Scale, Series};
+
+#[path = "common/progress.rs"]
+mod progress;
+#[path = "common/tradeoffs.rs"]
+mod tradeoffs;
+
+/// Verlet skin vs rebuild frequency vs time per step (N = 20,000 points on a random walk);
+/// writes neighbor.md and neighbor.png under out/neighbor_tradeoffs/.
+#[derive(Parser, Debug)]
+#[command(version)]
+struct Args {
+    #[command(flatten)]
+    out: tradeoffs::TradeoffArgs,
+}
 
 const N: usize = 20_000;
 const RC: f64 = 2.5;
@@ -91,7 +112,11 @@ fn run(
     Ok((t.elapsed().as_secs_f64() / STEPS as f64, rebuilds, pairs))
 }
 
-fn main() -> Result<()> {
+fn main() -> ExitCode {
+    simkit::cli::exit_code(sweep(&Args::parse()))
+}
+
+fn sweep(args: &Args) -> Result<()> {
     let side = (N as f64).cbrt();
     let grid = CellGrid::new([0.0; 3], [side; 3], [true; 3], RC)?;
     let mut rng = rand_pcg::Pcg64::seed_from_u64(4);
@@ -107,6 +132,11 @@ fn main() -> Result<()> {
     let mut times = vec![Vec::new(); configs.len()];
     let mut rebuilds = vec![0u64; configs.len()];
     let mut reference = 0usize;
+    let bar = progress::bar(
+        "walks",
+        ((REPS + 1) * configs.len()) as u64,
+        "runs (pass 0 is the warm-up)",
+    );
     for pass in 0..=REPS {
         for (k, &(d, skin)) in configs.iter().enumerate() {
             let (t, r, pairs) = run(&grid, &start, d * RC, skin.map(|s| s * RC))?;
@@ -124,20 +154,22 @@ fn main() -> Result<()> {
                 }
                 Some(_) => {}
             }
+            bar.inc(1);
             rebuilds[k] = r;
             if pass > 0 {
                 times[k].push(t);
             }
         }
-        println!("pass {pass} of {REPS} done (pass 0 is the warm-up)");
+        bar.suspend(|| println!("pass {pass} of {REPS} done (pass 0 is the warm-up)"));
     }
+    bar.finish();
     let load_after = load();
     let mut md = String::new();
     let _ = writeln!(
         md,
         "# neighbor: Verlet skin vs rebuild frequency vs time per step\n\n\
-         Regenerate: `cargo run --release --example neighbor_tradeoffs` (writes this file and \
-         `neighbor.png`; about 3 minutes on 2 cores).\n\n\
+         Regenerate: `cargo run --release --example neighbor_tradeoffs -- --update-docs` \
+         (writes this file and `neighbor.png`; about 3 minutes on 2 cores).\n\n\
          N = {N} random points, number density 1, periodic cube, cutoff rc = {RC}; each step \
          every particle moves by delta in a random diagonal direction, the half Verlet list is \
          updated (rebuilt when a particle moved more than skin/2 since the last build) and all \
@@ -225,8 +257,10 @@ fn main() -> Result<()> {
          step depends on the cost per candidate pair: here it is a bare pair count, the \
          cheapest case for cells."
     );
-    plot.write("docs/tradeoffs/neighbor.png")?;
-    simkit::output::write_atomic("docs/tradeoffs/neighbor.md", |w| w.write_all(md.as_bytes()))?;
+    let dir = args.out.dir("neighbor_tradeoffs");
+    plot.write(dir.join("neighbor.png"))?;
+    simkit::output::write_atomic(dir.join("neighbor.md"), |w| w.write_all(md.as_bytes()))?;
     print!("{md}");
+    println!("\nwrote {}/neighbor.md and neighbor.png", dir.display());
     Ok(())
 }

@@ -10,11 +10,13 @@
 //! Output under `out/obstacle_flow/`. Defaults: 1024 x 512 sites, 6000 steps, the CPU method
 //! `CpuMethod::Auto` picks. `--checkpoint-every N` saves the run every N steps;
 //! `--resume FILE` continues a saved run up to `--steps` in total, bit for bit as the
-//! uninterrupted run (frames are written from the resumed step on).
+//! uninterrupted run (frames are written from the resumed step on). `--help` lists them.
 
 use std::path::PathBuf;
+use std::process::ExitCode;
 use std::time::Instant;
 
+use clap::Parser;
 use simkit::backend::{Backend, GpuContext, Result, Simulation};
 use simkit::lattice_gas::observables::{BlockField, TimeAverage};
 use simkit::lattice_gas::{Config, Lattice, LatticeGas, Obstacle, ROW_SPACING, RuleSet};
@@ -22,31 +24,54 @@ use simkit::output::gif::GifWriter;
 use simkit::output::heatmap::HeatmapOptions;
 use simkit::output::vector_field::{VectorFieldOptions, render_vector_field};
 
-fn arg_value(args: &[String], name: &str) -> Option<String> {
-    args.iter()
-        .position(|a| a == name)
-        .and_then(|i| args.get(i + 1).cloned())
+#[path = "common/checkpoint.rs"]
+mod checkpoint;
+#[path = "common/progress.rs"]
+mod progress;
+
+/// FHP channel flow past a disc: velocity frames, GIF and VTK under out/obstacle_flow/.
+#[derive(Parser, Debug)]
+#[command(version)]
+struct Args {
+    /// Total steps of the run (a resumed run continues up to this many)
+    #[arg(long, value_name = "N", default_value_t = 6000)]
+    steps: u32,
+    /// Lattice size in sites, WIDTHxHEIGHT
+    #[arg(long, value_name = "WxH", default_value = "1024x512", value_parser = parse_size)]
+    size: (usize, usize),
+    /// Run on the GPU backend instead of the CPU
+    #[arg(long)]
+    gpu: bool,
+    #[command(flatten)]
+    checkpoint: checkpoint::CheckpointArgs,
 }
 
-fn main() -> Result<()> {
-    let args: Vec<String> = std::env::args().collect();
-    let steps: u32 = arg_value(&args, "--steps")
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(6000);
-    let (w, h) = arg_value(&args, "--size")
-        .and_then(|s| {
-            let (a, b) = s.split_once('x')?;
-            Some((a.parse().ok()?, b.parse().ok()?))
-        })
-        .unwrap_or((1024usize, 512usize));
-    let ctx = if args.iter().any(|a| a == "--gpu") {
+/// `WIDTHxHEIGHT`, e.g. `1024x512`.
+fn parse_size(s: &str) -> std::result::Result<(usize, usize), String> {
+    let (w, h) = s
+        .split_once('x')
+        .ok_or_else(|| format!("`{s}` is not WIDTHxHEIGHT (e.g. 1024x512)"))?;
+    let parse = |v: &str| {
+        v.parse::<usize>()
+            .map_err(|e| format!("`{v}` in `{s}` is not a size in sites: {e}"))
+    };
+    Ok((parse(w)?, parse(h)?))
+}
+
+fn main() -> ExitCode {
+    simkit::cli::exit_code(run(&Args::parse()))
+}
+
+fn run(args: &Args) -> Result<()> {
+    let (steps, (w, h)) = (args.steps, args.size);
+    let ctx = if args.gpu {
         Some(GpuContext::new()?)
     } else {
         None
     };
     let backend = ctx.as_ref().map_or(Backend::Cpu, Backend::Gpu);
     let out = PathBuf::from("out/obstacle_flow");
-    let checkpoints = simkit::cli::Checkpoints::from_args(&out)?;
+    let checkpoints = args.checkpoint.checkpoints(&out);
     let config = Config {
         periodic_x: false,
         periodic_y: false,
@@ -79,6 +104,9 @@ fn main() -> Result<()> {
     let mut frame = done / frame_every;
     let first = done;
     let first_frame = frame;
+    let bar = progress::bar("channel", u64::from(steps), "steps");
+    bar.set_position(u64::from(done));
+    bar.reset_eta();
     while done < steps {
         // Samples at multiples of `sample_every` of the whole run (a resumed run too).
         let n = (sample_every - done % sample_every).min(steps - done);
@@ -87,6 +115,7 @@ fn main() -> Result<()> {
         let state = sim.state()?;
         stepping += t.elapsed().as_secs_f64();
         done += n;
+        bar.inc(u64::from(n));
         avg.add(&BlockField::from_lattice(&state, block)?)?;
         if done.is_multiple_of(frame_every) || done == steps {
             let field = avg.field().expect("at least one sample");
@@ -112,6 +141,7 @@ fn main() -> Result<()> {
             frame += 1;
         }
     }
+    bar.finish();
     gif.finish()?;
     let updates = (w * h) as f64 * f64::from(steps - first);
     println!(

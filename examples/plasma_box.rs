@@ -13,27 +13,58 @@
 //! Prints the normalised units, interactions/s and the energy before and after (for a
 //! resumed run: at the resumed step and at the end). `--checkpoint-every N` saves the run
 //! every N steps to `out/plasma_box/checkpoint.ckpt`; `--resume FILE` continues it up to
-//! `--steps` in total, bit for bit as the uninterrupted run.
+//! `--steps` in total, bit for bit as the uninterrupted run. Options: `--steps N` (10),
+//! `--n N` (macro-particles, 50,000), `--f32` (single precision; f64 by default), `--gpu`,
+//! `--checkpoint-every N`, `--resume FILE`.
 
+use std::process::ExitCode;
 use std::time::Instant;
 
+use clap::Parser;
 use simkit::backend::{Backend, GpuContext, Result, Simulation};
-use simkit::cli::{Checkpoints, arg};
-use simkit::output::progress::Progress;
 use simkit::pp_coulomb::units::PhysicalInputs;
 use simkit::pp_coulomb::{Config, Integrator, PpCoulomb, Precision, scenes};
 
-fn main() -> Result<()> {
-    let flag = |f: &str| std::env::args().any(|a| a == f);
-    let steps: u32 = arg("--steps", 10)?;
+#[path = "common/checkpoint.rs"]
+mod checkpoint;
+#[path = "common/progress.rs"]
+mod progress;
+
+/// The source's plasma box from its physical inputs (electrons at 10 eV, n0 = 5e16 m^-3,
+/// dt = 1.5e-11 s, exclusion radius = Debye length): interactions/s and the energy change.
+#[derive(Parser, Debug)]
+#[command(version)]
+struct Args {
+    /// Total time steps of 1.5e-11 s (a resumed run continues up to this many)
+    #[arg(long, value_name = "N", default_value_t = 10)]
+    steps: u32,
+    /// Number of macro-particles (electrons; the box and density stay the source's)
+    #[arg(long, value_name = "N", default_value_t = PhysicalInputs::source_plasma().particles)]
+    n: usize,
+    /// Single precision (f32) instead of f64
+    #[arg(long)]
+    f32: bool,
+    /// Run on the GPU backend instead of the CPU
+    #[arg(long)]
+    gpu: bool,
+    #[command(flatten)]
+    checkpoint: checkpoint::CheckpointArgs,
+}
+
+fn main() -> ExitCode {
+    simkit::cli::exit_code(run(&Args::parse()))
+}
+
+fn run(args: &Args) -> Result<()> {
+    let steps = args.steps;
     let mut inputs = PhysicalInputs::source_plasma();
-    inputs.particles = arg("--n", inputs.particles)?;
-    let precision = if flag("--f32") {
+    inputs.particles = args.n;
+    let precision = if args.f32 {
         Precision::F32
     } else {
         Precision::F64
     };
-    let ctx = if flag("--gpu") {
+    let ctx = if args.gpu {
         Some(GpuContext::new()?)
     } else {
         None
@@ -53,7 +84,9 @@ fn main() -> Result<()> {
     let config = Config::new(1.0, law)
         .with_integrator(Integrator::SymplecticEuler)
         .with_precision(precision);
-    let checkpoints = Checkpoints::from_args(std::path::Path::new("out/plasma_box"))?;
+    let checkpoints = args
+        .checkpoint
+        .checkpoints(std::path::Path::new("out/plasma_box"));
     let mut sim = checkpoints.start(backend, |b| PpCoulomb::new(particles, &config, b))?;
     let first = u32::try_from(sim.steps_done())
         .unwrap_or(u32::MAX)
@@ -66,7 +99,7 @@ fn main() -> Result<()> {
         sim.backend_name()
     );
     let d0 = sim.diagnostics()?;
-    let mut bar = Progress::new("plasma box", u64::from(steps));
+    let bar = progress::bar("plasma box", u64::from(steps), "steps");
     let start = Instant::now();
     for _ in 0..steps {
         checkpoints.step(&mut sim, 1)?;

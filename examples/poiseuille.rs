@@ -5,29 +5,62 @@
 //! row (see `simkit::lattice_gas::poiseuille`), against the FHP-I theory.
 //!
 //! ```text
-//! cargo run --release --example poiseuille [-- DENSITY P HEIGHT]
+//! cargo run --release --example poiseuille [-- --density D --force P --height H]
 //! ```
-//! Defaults: d = 0.2, p = 0.0005, 64 rows (4096 x 64 sites; other heights keep ~2^18
-//! sites); writes out/poiseuille/profile.csv. The in-suite check is
+//! Options (defaults): `--density` d = 0.2 (particles per link), `--force` p = 0.0005
+//! (probability per site and step), `--height` 64 rows (4096 x 64 sites; other heights keep
+//! ~2^18 sites); writes out/poiseuille/profile.csv. The in-suite check is
 //! `crates/lattice-gas/tests/viscosity.rs::poiseuille_profile_gives_the_fhp_viscosity`.
 
+use std::process::ExitCode;
+use std::time::Duration;
+
+use clap::Parser;
+use indicatif::{ProgressBar, ProgressStyle};
 use simkit::backend::Result;
 use simkit::lattice_gas::poiseuille::PoiseuilleChannel;
 use simkit::output::csv::write_csv;
 
-fn main() -> Result<()> {
-    let args: Vec<f64> = std::env::args()
-        .skip(1)
-        .filter_map(|a| a.parse().ok())
-        .collect();
-    let d = args.first().copied().unwrap_or(0.2);
-    let p = args.get(1).copied().unwrap_or(0.0005);
-    let h = args.get(2).map_or(64, |&x| x as usize);
+/// Plane Poiseuille flow of the FHP lattice gas: fits the velocity profile and compares the
+/// viscosity it implies with the FHP-I theory; writes out/poiseuille/profile.csv.
+#[derive(Parser, Debug)]
+#[command(version, allow_negative_numbers = true)]
+struct Args {
+    /// Reduced density d (mean occupation per link, in (0, 1))
+    #[arg(long, value_name = "D", default_value_t = 0.2)]
+    density: f64,
+    /// Body force p: probability per site and step that a west-mover turns east (in (0, 1))
+    #[arg(long, value_name = "P", default_value_t = 0.0005)]
+    force: f64,
+    /// Channel height in rows (even, at least 8); the width keeps about 2^18 sites
+    #[arg(long, value_name = "ROWS", default_value_t = 64)]
+    height: usize,
+}
+
+fn main() -> ExitCode {
+    simkit::cli::exit_code(run(&Args::parse()))
+}
+
+fn run(args: &Args) -> Result<()> {
+    let (d, p, h) = (args.density, args.force, args.height);
     // About 2^18 sites, the width a multiple of 64.
     let w = ((1usize << 18) / h.max(1)).div_ceil(64) * 64;
     let channel = PoiseuilleChannel::new(w, h, d, p);
+    // One library call without a progress hook: a spinner with the elapsed time (drawn only
+    // when stderr is a terminal).
+    let style = ProgressStyle::with_template("{spinner} {msg} ({elapsed})")
+        .expect("the spinner template is valid");
+    let spinner = ProgressBar::new_spinner()
+        .with_style(style)
+        .with_message(format!(
+            "measuring: {} steps of {w} x {h} sites",
+            channel.relax + channel.average
+        ));
+    spinner.enable_steady_tick(Duration::from_millis(200));
     let t = std::time::Instant::now();
-    let r = channel.measure()?;
+    let r = channel.measure();
+    spinner.finish_and_clear();
+    let r = r?;
     let elapsed = t.elapsed().as_secs_f64();
     println!(
         "Poiseuille channel {w} x {h}, d = {d}, p = {p}, {} steps ({elapsed:.1} s)",

@@ -10,19 +10,59 @@
 //! cargo run --release --example segregation -- --gpu
 //! ```
 //! Writes top views `out/segregation/top_NNN.png` (species A orange, B blue) and
-//! `order.csv`, and prints the order parameter over time.
+//! `order.csv`, and prints the order parameter over time. Options (scene defaults from
+//! `MonolayerParams::default()`): `--n`, `--radius` (cylinder radius in diameters),
+//! `--gamma`, `--freq` (Hz), `--seed`, `--mu`, `--cycles` (300), `--samples` (30), `--gpu`.
 
 use std::path::Path;
+use std::process::ExitCode;
 use std::time::Instant;
 
+use clap::Parser;
 use simkit::backend::{Backend, Error, GpuContext, Result, Simulation};
-use simkit::cli::arg;
 use simkit::dem::scenes::{MonolayerParams, like_neighbor_fraction, segregation_monolayer};
 use simkit::dem::{Config, Dem, Scene, State};
 use simkit::output::csv::CsvWriter;
 use simkit::output::png::write_png;
 use simkit::output::raster::{fill_disc, fill_rect};
 use simkit::output::{RgbImage, plot};
+
+#[path = "common/progress.rs"]
+mod progress;
+
+/// The source's segregating binary monolayer in a vibrated cylinder (species differing only
+/// in restitution): top views and the like-neighbour fraction under out/segregation/.
+#[derive(Parser, Debug)]
+#[command(version, allow_negative_numbers = true)]
+struct Args {
+    /// Number of spheres (half of each species)
+    #[arg(long, default_value_t = MonolayerParams::default().n)]
+    n: usize,
+    /// Cylinder radius in sphere diameters
+    #[arg(long, value_name = "DIAMETERS", default_value_t = MonolayerParams::default().radius)]
+    radius: f64,
+    /// Vibration strength Gamma = A omega^2 / g (dimensionless)
+    #[arg(long, default_value_t = MonolayerParams::default().gamma)]
+    gamma: f64,
+    /// Vibration frequency in Hz
+    #[arg(long, value_name = "HZ", default_value_t = MonolayerParams::default().freq_hz)]
+    freq: f64,
+    /// Seed of the random species swaps
+    #[arg(long, default_value_t = MonolayerParams::default().seed)]
+    seed: u32,
+    /// Coulomb friction coefficient (0 = frictionless)
+    #[arg(long, default_value_t = MonolayerParams::default().mu)]
+    mu: f64,
+    /// Vibration cycles to run
+    #[arg(long, default_value_t = 300)]
+    cycles: u32,
+    /// Order-parameter samples (and top views) over the run
+    #[arg(long, default_value_t = 30)]
+    samples: u32,
+    /// Run on the GPU backend instead of the CPU
+    #[arg(long)]
+    gpu: bool,
+}
 
 /// Top view (x-y) of the cylinder: species 0 orange, species 1 blue.
 fn top_view(scene: &Scene, s: &State, radius: f64) -> RgbImage {
@@ -50,21 +90,23 @@ fn top_view(scene: &Scene, s: &State, radius: f64) -> RgbImage {
     img
 }
 
-fn main() -> Result<()> {
-    let flag = |f: &str| std::env::args().any(|a| a == f);
+fn main() -> ExitCode {
+    simkit::cli::exit_code(run(&Args::parse()))
+}
+
+fn run(args: &Args) -> Result<()> {
     let d = MonolayerParams::default();
     let params = MonolayerParams {
-        n: arg("--n", d.n)?,
-        radius: arg("--radius", d.radius)?,
-        gamma: arg("--gamma", d.gamma)?,
-        freq_hz: arg("--freq", d.freq_hz)?,
-        seed: arg("--seed", d.seed)?,
-        mu: arg("--mu", d.mu)?,
+        n: args.n,
+        radius: args.radius,
+        gamma: args.gamma,
+        freq_hz: args.freq,
+        seed: args.seed,
+        mu: args.mu,
         ..d
     };
-    let cycles: u32 = arg("--cycles", 300)?;
-    let samples: u32 = arg("--samples", 30)?;
-    let ctx = if flag("--gpu") {
+    let (cycles, samples) = (args.cycles, args.samples);
+    let ctx = if args.gpu {
         Some(GpuContext::new()?)
     } else {
         None
@@ -103,11 +145,17 @@ fn main() -> Result<()> {
         0
     );
     let mut curve = vec![(0.0, mixed)];
+    // The loop below runs whole samples: up to the next multiple of `cycles_per_sample`.
+    let total = cycles.div_ceil(cycles_per_sample) * cycles_per_sample;
+    let bar = progress::bar("segregation", u64::from(total), "cycles");
     let t0 = Instant::now();
     let mut cycle = 0;
     let mut frame = 1;
     while cycle < cycles {
-        sim.step(per_cycle * cycles_per_sample)?;
+        for _ in 0..cycles_per_sample {
+            sim.step(per_cycle)?;
+            bar.inc(1);
+        }
         cycle += cycles_per_sample;
         let s = sim.state()?;
         if !sim.diagnostics_of(&s)?.finite {
@@ -116,7 +164,7 @@ fn main() -> Result<()> {
         let f = like_neighbor_fraction(&scene, &s.positions, range);
         csv.row(&[f64::from(cycle), f])?;
         curve.push((f64::from(cycle), f));
-        println!("{cycle:5}  {f:.4}");
+        bar.suspend(|| println!("{cycle:5}  {f:.4}"));
         write_png(
             out.join(format!("top_{frame:03}.png")),
             &top_view(&scene, &s, params.radius),
@@ -124,6 +172,7 @@ fn main() -> Result<()> {
         frame += 1;
     }
     let secs = t0.elapsed().as_secs_f64();
+    bar.finish();
     csv.finish()?;
     let (xs, ys): (Vec<f64>, Vec<f64>) = curve.iter().copied().unzip();
     plot::Plot::new("segregation: like-species neighbour fraction")

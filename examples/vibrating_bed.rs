@@ -13,13 +13,17 @@
 //! the centre-of-mass height against the vibration phase over the last cycle.
 //! `--checkpoint-every N` saves the run every N steps to `out/vibrating_bed/checkpoint.ckpt`;
 //! `--resume FILE` continues it (with the same scene options) up to `--cycles` in total, bit
-//! for bit as the uninterrupted run, the wall phase included.
+//! for bit as the uninterrupted run, the wall phase included. Scene options (defaults from
+//! `BedParams::default()` except `--n 512 --width 32`): `--n`, `--width` (grain diameters),
+//! `--gamma`, `--freq` (Hz), `--e-pp`, `--e-pw`, `--mu`, `--tc` (contact time, s);
+//! `--cycles` (3), `--gpu`. `--help` lists them with their units and defaults.
 
 use std::path::Path;
+use std::process::ExitCode;
 use std::time::Instant;
 
+use clap::Parser;
 use simkit::backend::{Backend, GpuContext, Result, Simulation};
-use simkit::cli::{Checkpoints, arg};
 use simkit::dem::scenes::{BedParams, vibrating_bed};
 use simkit::dem::{Config, Dem, Scene, State};
 use simkit::output::gif::GifWriter;
@@ -27,6 +31,50 @@ use simkit::output::png::write_png;
 use simkit::output::raster::{fill_disc, fill_rect};
 use simkit::output::vtk::{Particles, write_pvd};
 use simkit::output::{Colormap, RgbImage};
+
+#[path = "common/checkpoint.rs"]
+mod checkpoint;
+#[path = "common/progress.rs"]
+mod progress;
+
+/// The source's 2D vibrated bed from physical inputs (discs of 0.6 cm and 0.2 g): frames,
+/// GIF and VTK under out/vibrating_bed/, and the centre-of-mass height against the phase.
+#[derive(Parser, Debug)]
+#[command(version, allow_negative_numbers = true)]
+struct Args {
+    /// Number of discs
+    #[arg(long, default_value_t = 512)]
+    n: usize,
+    /// Box width in grain diameters
+    #[arg(long, value_name = "DIAMETERS", default_value_t = 32)]
+    width: usize,
+    /// Vibration strength Gamma = A omega^2 / g (dimensionless)
+    #[arg(long, default_value_t = BedParams::default().gamma)]
+    gamma: f64,
+    /// Vibration frequency f in Hz
+    #[arg(long, value_name = "HZ", default_value_t = BedParams::default().freq_hz)]
+    freq: f64,
+    /// Particle-particle restitution e_pp
+    #[arg(long, value_name = "E", default_value_t = BedParams::default().e_pp)]
+    e_pp: f64,
+    /// Particle-wall restitution e_pw
+    #[arg(long, value_name = "E", default_value_t = BedParams::default().e_pw)]
+    e_pw: f64,
+    /// Coulomb friction coefficient mu (0 = frictionless)
+    #[arg(long, default_value_t = BedParams::default().mu)]
+    mu: f64,
+    /// Contact time t_c in seconds (dt = t_c / 30)
+    #[arg(long, value_name = "SECONDS", default_value_t = BedParams::default().contact_time_s)]
+    tc: f64,
+    /// Vibration cycles in total (a resumed run continues up to this many)
+    #[arg(long, default_value_t = 3)]
+    cycles: u32,
+    /// Run on the GPU backend instead of the CPU
+    #[arg(long)]
+    gpu: bool,
+    #[command(flatten)]
+    checkpoint: checkpoint::CheckpointArgs,
+}
 
 /// Discs coloured by speed, the vibrating plates in grey; `zw` is the plate displacement.
 fn draw(scene: &Scene, s: &State, zw: f64, vmax: f64) -> RgbImage {
@@ -59,22 +107,24 @@ fn draw(scene: &Scene, s: &State, zw: f64, vmax: f64) -> RgbImage {
     img
 }
 
-fn main() -> Result<()> {
-    let flag = |f: &str| std::env::args().any(|a| a == f);
-    let d = BedParams::default();
+fn main() -> ExitCode {
+    simkit::cli::exit_code(run(&Args::parse()))
+}
+
+fn run(args: &Args) -> Result<()> {
     let params = BedParams {
-        n: arg("--n", 512)?,
-        width: arg("--width", 32)?,
-        gamma: arg("--gamma", d.gamma)?,
-        freq_hz: arg("--freq", d.freq_hz)?,
-        e_pp: arg("--e-pp", d.e_pp)?,
-        e_pw: arg("--e-pw", d.e_pw)?,
-        mu: arg("--mu", d.mu)?,
-        contact_time_s: arg("--tc", d.contact_time_s)?,
+        n: args.n,
+        width: args.width,
+        gamma: args.gamma,
+        freq_hz: args.freq,
+        e_pp: args.e_pp,
+        e_pw: args.e_pw,
+        mu: args.mu,
+        contact_time_s: args.tc,
     };
-    let cycles: u32 = arg("--cycles", 3)?;
+    let cycles = args.cycles;
     let frames_per_cycle: u32 = 16;
-    let ctx = if flag("--gpu") {
+    let ctx = if args.gpu {
         Some(GpuContext::new()?)
     } else {
         None
@@ -92,7 +142,7 @@ fn main() -> Result<()> {
         units.time(params.contact_time_s)
     );
     let out = Path::new("out/vibrating_bed");
-    let checkpoints = Checkpoints::from_args(out)?;
+    let checkpoints = args.checkpoint.checkpoints(out);
     let mut sim = checkpoints.start(backend, |b| Dem::new(&scene, &Config::default(), b))?;
     let period = 2.0 * std::f64::consts::PI;
     let per_frame = (period / f64::from(frames_per_cycle) / sim.dt()).round() as u32;
@@ -110,12 +160,17 @@ fn main() -> Result<()> {
     let t0 = Instant::now();
     let first = sim.steps_done();
     let first_frame = u32::try_from(first / u64::from(per_frame)).unwrap_or(u32::MAX);
+    let total = u64::from(cycles * frames_per_cycle) * u64::from(per_frame);
+    let bar = progress::bar("vibrated bed", total, "steps");
+    bar.set_position(first.min(total));
+    bar.reset_eta();
     for frame in first_frame..cycles * frames_per_cycle {
         // A blow-up is an error from `step` (the run is checked every 100 steps).
         // Frames at multiples of `per_frame` steps of the whole run (a resumed run too).
         let target = u64::from(frame + 1) * u64::from(per_frame);
         let n = (target - sim.steps_done()) as u32;
         checkpoints.step(&mut sim, n)?;
+        bar.inc(u64::from(n));
         let s = sim.state()?;
         let d = sim.diagnostics_of(&s)?;
         let zw = sim.wall_displacement(s.time);
@@ -132,6 +187,7 @@ fn main() -> Result<()> {
         }
     }
     let secs = t0.elapsed().as_secs_f64();
+    bar.finish();
     gif.finish()?;
     write_pvd(out.join("bed.pvd"), &pvd)?;
     println!(

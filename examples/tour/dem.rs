@@ -30,8 +30,14 @@ pub fn run(backend: Backend<'_>, out: &Path) -> Result<Row> {
     let t = Instant::now();
     let samples = 16;
     let (mut com, mut worst) = (0.0, 0.0f64);
+    let bar = crate::progress::bar(
+        "dem",
+        u64::from(cycles * samples * (per_cycle / samples)),
+        "steps",
+    );
     for _ in 0..cycles * samples {
         sim.step(per_cycle / samples)?;
+        bar.inc(u64::from(per_cycle / samples));
         let d = sim.diagnostics()?;
         if !d.finite {
             return Err(Error::invalid("dem tour state", "NaN", "the bed blew up"));
@@ -40,6 +46,7 @@ pub fn run(backend: Backend<'_>, out: &Path) -> Result<Row> {
         worst = worst.max(d.max_overlap_ratio);
     }
     let secs = t.elapsed().as_secs_f64();
+    bar.finish_and_clear();
     let s = sim.state()?;
     let (lo, hi) = (scene.lo(), scene.hi());
     let inside = s

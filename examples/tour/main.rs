@@ -5,11 +5,18 @@
 //! cargo run --release --example tour            # best backend (GPU if any, else CPU)
 //! cargo run --release --example tour -- --cpu   # force the CPU backends
 //! ```
+//! Options: `--cpu` (run every scene on the CPU backends). Exits non-zero if a scene fails.
 
 use std::path::{Path, PathBuf};
+use std::process::ExitCode;
 use std::time::Instant;
 
+use clap::Parser;
 use simkit::backend::{Backend, GpuContext, Result};
+
+// The scenes that can run longer than a second show a progress bar.
+#[path = "../common/progress.rs"]
+mod progress;
 
 // Scene modules: one per crate, each `pub fn run(backend: Backend<'_>, out: &Path) -> Result<Row>`.
 // TOUR-MODULES (keep this marker: crate work adds `mod <crate>;` lines below it)
@@ -18,6 +25,16 @@ mod lattice_gas;
 mod neighbor;
 mod pp_coulomb;
 mod rd;
+
+/// The simkit tour: every crate's flagship scene at a small size on the best backend found
+/// (a GPU if any, else the CPU), with pictures and data under out/tour/ and a summary table.
+#[derive(Parser, Debug)]
+#[command(version)]
+struct Args {
+    /// Run every scene on the CPU backends, even when a GPU is available
+    #[arg(long)]
+    cpu: bool,
+}
 
 /// One line of the summary table.
 pub struct Row {
@@ -48,8 +65,8 @@ fn scenes() -> Vec<(&'static str, Scene)> {
     ]
 }
 
-fn main() {
-    let force_cpu = std::env::args().any(|a| a == "--cpu");
+fn main() -> ExitCode {
+    let force_cpu = Args::parse().cpu;
     let out = PathBuf::from("out/tour");
     println!("simkit tour\n===========\n");
     let adapters = GpuContext::list_adapters();
@@ -97,8 +114,9 @@ fn main() {
     println!("\nOutputs under {}/", out.display());
     if failures > 0 {
         eprintln!("{failures} scene(s) failed");
-        std::process::exit(1);
+        return ExitCode::FAILURE;
     }
+    ExitCode::SUCCESS
 }
 
 fn print_table(rows: &[Row]) {

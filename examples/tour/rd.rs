@@ -14,15 +14,21 @@ use crate::Row;
 /// (conserved by the model: the reaction moves n into b, the fluxes only move things) holds.
 pub fn run(backend: Backend<'_>, out: &Path) -> Result<Row> {
     let n = 128;
-    let steps = 3000;
+    let steps: u32 = 3000; // a multiple of 30 (progress pieces)
     let (grid, model) = colony_scene::<f32>(n, n, 7)?;
     let start = grid.total(0) + grid.total(1);
     let b0 = grid.total(0);
     let mut sim = Rd::new(grid, model, &Config::new(Stepping::euler(0.005)), backend)?;
+    let bar = crate::progress::bar("rd", u64::from(steps), "steps");
     let t = Instant::now();
-    sim.step(steps)?;
-    let secs = t.elapsed().as_secs_f64();
+    // In 30 pieces for the progress bar (the same result as one call).
+    for _ in 0..30 {
+        sim.step(steps / 30)?;
+        bar.inc(u64::from(steps / 30));
+    }
     let g = sim.state()?;
+    let secs = t.elapsed().as_secs_f64();
+    bar.finish_and_clear();
     write_heatmap(
         out.join("b.png"),
         g.field(0),
