@@ -1,6 +1,6 @@
 //! Outputs shared by every simkit example: PNG heat maps, vector fields and line plots,
-//! animated GIF, VTK (`.vti` image data, `.vtu` particles), extended XYZ, CSV time series and
-//! a progress bar.
+//! animated GIF, VTK (`.vti` image data, `.vtu` particles), extended XYZ and CSV time series.
+//! (Progress bars: the examples use `indicatif`.)
 //!
 //! Every file is written atomically through [`atomic::write_atomic`] (temporary file in the
 //! same directory, flush, sync, rename), so a crash or an error never leaves a half-written
@@ -16,7 +16,6 @@
 //! | [`vtk`] | ParaView files: `.vti` image data, `.vtu` particles, `.pvd` series |
 //! | [`xyz`] | extended XYZ trajectories (OVITO) |
 //! | [`csv`] | CSV time series |
-//! | [`progress`] | a terminal progress bar |
 //! | [`colormap`], [`font`], [`raster`], [`numfmt`], [`png`], [`atomic`] | building blocks |
 //!
 //! ```
@@ -41,7 +40,6 @@ pub mod heatmap;
 pub mod numfmt;
 pub mod plot;
 pub mod png;
-pub mod progress;
 pub mod raster;
 pub mod vector_field;
 pub mod vtk;

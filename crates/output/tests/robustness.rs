@@ -25,7 +25,6 @@ use simkit_output::csv::{CsvWriter, write_csv};
 use simkit_output::gif::{GifWriter, MAX_DELAY_MS, write_gif};
 use simkit_output::heatmap::{HeatmapOptions, MAX_SIDE, render_heatmap, write_heatmap};
 use simkit_output::plot::{Plot, Scale, Series, Style};
-use simkit_output::progress::Progress;
 use simkit_output::vector_field::{VectorFieldOptions, render_vector_field, write_vector_field};
 use simkit_output::vtk::{Encoding, ImageData, Particles, write_pvd};
 use simkit_output::xyz::{XyzFrame, XyzWriter, write_xyz};
@@ -733,34 +732,6 @@ proptest! {
         raster::line(&mut img, fx, fy, fx1, fy1, scale, [1, 2, 3]);
     }
 
-    /// Progress counts of any size.
-    #[test]
-    fn progress_with_any_counts(
-        label in text(),
-        total in prop_oneof![3 => 0..100u64, 1 => any::<u64>()],
-        steps in prop::collection::vec(prop_oneof![3 => 0..10u64, 1 => any::<u64>()], 0..5),
-        set in prop::option::of(any::<u64>()),
-    ) {
-        let mut p = Progress::hidden(label, total);
-        let mut done = 0u64;
-        for &s in &steps {
-            p.inc(s);
-            done = done.saturating_add(s);
-        }
-        if let Some(d) = set {
-            p.set(d);
-            done = d;
-        }
-        prop_assert_eq!(p.done(), done);
-        prop_assert_eq!(p.total(), total);
-        let line = p.line();
-        let counts = format!("{done}/{total}");
-        prop_assert!(line.contains(&counts), "{}", line);
-        prop_assert!(p.summary().contains(&counts));
-        prop_assert!(p.rate() >= 0.0);
-        let _ = p.eta();
-        p.finish();
-    }
 }
 
 /// Coordinates anywhere in `i64`, mostly near a small image.
@@ -1095,17 +1066,6 @@ fn huge_text_scales_and_pens_are_clipped_to_the_image() {
     raster::fill_rect(&mut img, i64::MAX, i64::MAX, i64::MAX, i64::MAX, [1; 3]);
     raster::stroke_rect(&mut img, i64::MIN, i64::MIN, i64::MAX, i64::MAX, [1; 3]);
     assert!(img.pixels().all(|p| p.0 == [7; 3]));
-}
-
-/// A progress bar whose estimate passes `Duration::MAX` (2^64 s) used to panic in `eta`.
-#[test]
-fn progress_estimates_past_the_largest_duration_are_unknown() {
-    let mut p = Progress::hidden("huge", u64::MAX);
-    p.inc(1);
-    // The estimate is (total - done) / rate = 2^64 * elapsed: past 2^64 s after a second.
-    std::thread::sleep(std::time::Duration::from_millis(1050));
-    assert_eq!(p.eta(), None);
-    assert!(p.line().contains("ETA ?"), "{}", p.line());
 }
 
 /// Heat maps of values at the ends of `f64` get a finite range and distinct colours.
