@@ -228,6 +228,38 @@ fn coincident_particles_are_one_pair_at_zero_distance() {
 }
 
 #[test]
+fn a_pair_exactly_at_the_cutoff_is_a_neighbor_and_one_ulp_beyond_is_not() {
+    // Separations with exact squared distances (3-4-5 triangles, rc = 5): r2 = rc^2 exactly
+    // in one cell, across cells and across the periodic x face is a pair (the rule is
+    // r2 <= rc^2); a separation one ulp longer is not. The cells are 6.67 wide (3 per axis).
+    // Every CPU method must give the expected set itself, not only agree with brute force.
+    let grid = CellGrid::new([0.0; 3], [20.0, 20.0, 20.0], [true, false, false], 5.0).unwrap();
+    let p = vec![
+        [10.0, 10.0, 10.0],            // 0
+        [13.0, 14.0, 10.0],            // 1: (3, 4, 0) from 0, the next cell in y
+        [10.0, 10.0, 15.0],            // 2: (0, 0, 5) from 0, the next cell in z
+        [10.0, 6.0 - 1e-9, 19.0],      // 3: no partner
+        [2.5, 1.0, 1.0],               // 4
+        [17.5, 1.0, 1.0],              // 5: 2.5 - 17.5 + 20 = 5 from 4 across the face
+        [3.0, 17.0, 3.0],              // 6
+        [6.0f64.next_up(), 13.0, 3.0], // 7: (3 + ulp, 4, 0) from 6: just beyond
+        [2.5, 4.0, 5.0],               // 8: (0, 3, 4) from 4, the same cell
+    ];
+    let r = check_cpu(&grid, &p);
+    let mut keys: Vec<(usize, usize)> = r.keys().copied().collect();
+    keys.sort_unstable();
+    assert_eq!(keys, vec![(0, 1), (0, 2), (4, 5), (4, 8)], "{r:?}");
+    for k in keys {
+        assert_eq!(r[&k].1, 25.0, "pair {k:?} at exactly rc^2");
+    }
+    #[cfg(feature = "gpu")]
+    if let Some(ctx) = gpu_or_skip("a_pair_exactly_at_the_cutoff") {
+        // f32 decides these pairs either way (check_gpu allows it for r2 within 1e-4 rc^2).
+        check_gpu(&ctx, &grid, &p, &r);
+    }
+}
+
+#[test]
 fn cutoff_over_half_a_periodic_box_counts_each_pair_once() {
     // L = 3 with cutoff 2: one cell, several images within the cutoff; the minimum image
     // decides and the pair is reported once.
@@ -419,7 +451,7 @@ fn reorder_and_restore_are_inverse_permutations() {
 #[cfg(feature = "gpu")]
 #[test]
 fn gpu_cell_at_the_per_cell_limit_works_and_one_more_is_an_error() {
-    use simkit_neighbor::{GPU_MAX_PER_CELL, GpuCellList};
+    use simkit_neighbor::{GPU_LOOP_RESERVE, GPU_MAX_PER_CELL, GpuCellList};
     // All particles in one cell. At the adapter's limit the build must give every id once,
     // ascending (the cell order), and the neighbour lists must match the CPU's; one particle
     // more must be refused. On llvmpipe the limit comes from its shader loop limit (one cell
@@ -430,7 +462,22 @@ fn gpu_cell_at_the_per_cell_limit_works_and_one_more_is_an_error() {
     let grid = CellGrid::new([0.0; 3], [10.0; 3], [false; 3], 2.5).unwrap();
     let max = GpuCellList::<3>::max_per_cell(&ctx);
     match ctx.shader_loop_limit() {
-        Some(_) => assert!(max < 2_400, "{max}"),
+        Some(limit) => {
+            // A full-shell walk over 3^D cells of `max + 1` steps each (population plus
+            // the exit test) must leave GPU_LOOP_RESERVE iterations of the loop limit:
+            // 2,388 in 3D and 7,166 in 2D for llvmpipe's 65,535 (docs/neighbor.md).
+            let walk = (limit - GPU_LOOP_RESERVE) as usize;
+            assert_eq!(max, walk / 27 - 1, "3D limit under loop limit {limit}");
+            assert!(27 * (max + 1) <= walk && 27 * (max + 2) > walk);
+            let max_2d = GpuCellList::<2>::max_per_cell(&ctx);
+            assert_eq!(max_2d, walk / 9 - 1, "2D limit under loop limit {limit}");
+            println!(
+                "gpu_cell_at_the_per_cell_limit: RELAXED: adapter '{}' ends shader loops after \
+                 {limit} iterations, so the per-cell limit tested here is {max} (3D; 2D: \
+                 {max_2d}), not GPU_MAX_PER_CELL = {GPU_MAX_PER_CELL}",
+                ctx.adapter_info().name
+            );
+        }
         None => assert_eq!(max, GPU_MAX_PER_CELL),
     }
     let positions = |n: usize| -> Vec<[f64; 3]> {
@@ -477,6 +524,12 @@ fn gpu_cell_at_the_per_cell_limit_works_and_one_more_is_an_error() {
                         "particle {i}"
                     );
                 }
+            } else {
+                println!(
+                    "gpu_cell_at_the_per_cell_limit: SKIPPED the full-list check at n = {n}: \
+                     n (n - 1) = {} entries is too large for a test; checked the cell order only",
+                    n * (n - 1)
+                );
             }
         } else {
             let e = r.unwrap_err().to_string();

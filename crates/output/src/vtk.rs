@@ -5,8 +5,10 @@
 //! Files follow the VTK XML format (`VTKFile` version 0.1, `byte_order="LittleEndian"`).
 //! Arrays are `Float64`; by default they are stored `format="binary"` (base64 of a `UInt32`
 //! byte count followed by the little-endian values), which keeps NaN exact and files small;
-//! [`Encoding::Ascii`] writes readable text instead (and then rejects non-finite values,
-//! which text readers cannot parse). Vectors with 2 components are padded to 3 with zeros,
+//! [`Encoding::Ascii`] writes readable text instead, each value in the shortest form that
+//! parses back to the same `f64` ([`numfmt::exact`]), and then rejects
+//! non-finite values, which text readers cannot parse. Either way a value read back equals
+//! the value written bit for bit. Vectors with 2 components are padded to 3 with zeros,
 //! as ParaView's glyph and stream filters expect.
 //!
 //! ```
@@ -399,11 +401,11 @@ impl Particles {
         let ids: Vec<i64> = (0..n as i64).collect();
         let offsets: Vec<i64> = (1..=n as i64).collect();
         out.push_str("        <DataArray type=\"Int64\" Name=\"connectivity\" ");
-        write_raw(&mut out, &ids, enc, |v| v.to_le_bytes().to_vec())?;
+        write_raw(&mut out, &ids, enc)?;
         out.push_str("        <DataArray type=\"Int64\" Name=\"offsets\" ");
-        write_raw(&mut out, &offsets, enc, |v| v.to_le_bytes().to_vec())?;
+        write_raw(&mut out, &offsets, enc)?;
         out.push_str("        <DataArray type=\"UInt8\" Name=\"types\" ");
-        write_raw(&mut out, &vec![1u8; n], enc, |v| vec![*v])?; // VTK_VERTEX = 1
+        write_raw(&mut out, &vec![1u8; n], enc)?; // VTK_VERTEX = 1
         let _ = writeln!(out, "      </Cells>");
         let _ = writeln!(out, "    </Piece>\n  </UnstructuredGrid>\n</VTKFile>");
         Ok(out)
@@ -480,32 +482,64 @@ fn write_f64s(out: &mut String, name: &str, data: &[f64], enc: Encoding) -> Resu
             "ASCII VTK cannot store non-finite values; use Encoding::Binary or clean the data",
         ));
     }
-    write_raw(out, data, enc, |v| v.to_le_bytes().to_vec())
+    write_raw(out, data, enc)
 }
 
-fn write_raw<T: std::fmt::Display + Copy>(
-    out: &mut String,
-    data: &[T],
-    enc: Encoding,
-    bytes: impl Fn(&T) -> Vec<u8>,
-) -> Result<()> {
+/// A value type of a VTK `DataArray`: its little-endian bytes (binary) and its text (ASCII).
+trait VtkValue: Copy {
+    /// Appends the little-endian bytes.
+    fn push_le(self, raw: &mut Vec<u8>);
+    /// Appends the text form, which parses back to the same value.
+    fn push_text(self, out: &mut String);
+}
+
+impl VtkValue for f64 {
+    fn push_le(self, raw: &mut Vec<u8>) {
+        raw.extend_from_slice(&self.to_le_bytes());
+    }
+    /// Shortest round-trip form ([`numfmt::exact`]): `1e-300`, not 300 zeros.
+    fn push_text(self, out: &mut String) {
+        out.push_str(&numfmt::exact(self));
+    }
+}
+
+impl VtkValue for i64 {
+    fn push_le(self, raw: &mut Vec<u8>) {
+        raw.extend_from_slice(&self.to_le_bytes());
+    }
+    fn push_text(self, out: &mut String) {
+        let _ = write!(out, "{self}");
+    }
+}
+
+impl VtkValue for u8 {
+    fn push_le(self, raw: &mut Vec<u8>) {
+        raw.push(self);
+    }
+    fn push_text(self, out: &mut String) {
+        let _ = write!(out, "{self}");
+    }
+}
+
+fn write_raw<T: VtkValue>(out: &mut String, data: &[T], enc: Encoding) -> Result<()> {
     match enc {
         Encoding::Ascii => {
             out.push_str("format=\"ascii\">\n");
             for chunk in data.chunks(9) {
                 out.push_str("         ");
-                for v in chunk {
-                    let _ = write!(out, " {v}");
+                for &v in chunk {
+                    out.push(' ');
+                    v.push_text(out);
                 }
                 out.push('\n');
             }
         }
         Encoding::Binary => {
             out.push_str("format=\"binary\">\n          ");
-            let mut raw = Vec::with_capacity(4 + data.len() * 8);
+            let mut raw = Vec::with_capacity(4 + std::mem::size_of_val(data));
             raw.extend_from_slice(&[0; 4]);
-            for v in data {
-                raw.extend_from_slice(&bytes(v));
+            for &v in data {
+                v.push_le(&mut raw);
             }
             let n = u32::try_from(raw.len() - 4).map_err(|_| {
                 Error::invalid(

@@ -1,9 +1,12 @@
-//! VTK, extended XYZ and CSV files parse back with the right counts.
+//! VTK, extended XYZ and CSV files parse back with the right structure and counts, and with
+//! the values written, bit for bit (small parsers in this file read them back: XML with
+//! base64 arrays decoded by their declared header type, extended XYZ by its `Properties`).
 
 use std::collections::HashMap;
 use std::path::PathBuf;
 
 use simkit_output::csv::{CsvWriter, write_csv};
+use simkit_output::numfmt;
 use simkit_output::vtk::{Encoding, ImageData, Particles, write_pvd};
 use simkit_output::xyz::{XyzFrame, XyzWriter, write_xyz};
 
@@ -33,6 +36,26 @@ impl Elem {
         self.attrs
             .get(a)
             .unwrap_or_else(|| panic!("<{}> has no {a}", self.name))
+    }
+    /// An attribute with the XML entities of attribute values decoded.
+    fn attr_text(&self, a: &str) -> String {
+        let mut out = String::new();
+        let mut rest = self.attr(a);
+        while let Some(amp) = rest.find('&') {
+            out.push_str(&rest[..amp]);
+            let semi = rest[amp..].find(';').expect("entity without ';'") + amp;
+            out.push(match &rest[amp + 1..semi] {
+                "amp" => '&',
+                "lt" => '<',
+                "gt" => '>',
+                "quot" => '"',
+                "apos" => '\'',
+                e => panic!("unknown entity &{e};"),
+            });
+            rest = &rest[semi + 1..];
+        }
+        out.push_str(rest);
+        out
     }
     fn arrays(&self) -> Vec<&Elem> {
         self.children
@@ -138,8 +161,16 @@ fn b64_decode(s: &str) -> Vec<u8> {
     out
 }
 
-/// Values of a DataArray (binary or ascii) as f64.
-fn values(a: &Elem) -> Vec<f64> {
+/// The type of the byte count before each binary array: the root's `header_type`, or
+/// `UInt32` where it declares none (the VTK XML default).
+fn header_type(root: &Elem) -> &str {
+    root.attrs
+        .get("header_type")
+        .map_or("UInt32", String::as_str)
+}
+
+/// Values of a DataArray (binary or ascii) as f64; `header` from [`header_type`].
+fn values(a: &Elem, header: &str) -> Vec<f64> {
     match a.attr("format") {
         "ascii" => a
             .text
@@ -148,8 +179,17 @@ fn values(a: &Elem) -> Vec<f64> {
             .collect(),
         "binary" => {
             let raw = b64_decode(&a.text);
-            let n = u32::from_le_bytes(raw[..4].try_into().unwrap()) as usize;
-            let data = &raw[4..];
+            let (n, data) = match header {
+                "UInt32" => (
+                    u32::from_le_bytes(raw[..4].try_into().unwrap()) as usize,
+                    &raw[4..],
+                ),
+                "UInt64" => (
+                    u64::from_le_bytes(raw[..8].try_into().unwrap()) as usize,
+                    &raw[8..],
+                ),
+                h => panic!("unexpected header_type {h}"),
+            };
             assert_eq!(n, data.len(), "binary header byte count");
             match a.attr("type") {
                 "Float64" => data
@@ -206,9 +246,9 @@ fn vti_parses_back() {
         let arrays = pd.arrays();
         assert_eq!(arrays.len(), 2);
         assert_eq!(arrays[0].attr("Name"), "rho");
-        assert_eq!(values(arrays[0]), rho);
+        assert_eq!(values(arrays[0], header_type(&root)), rho);
         assert_eq!(arrays[1].attr("NumberOfComponents"), "3");
-        let u = values(arrays[1]);
+        let u = values(arrays[1], header_type(&root));
         assert_eq!(u.len(), 3 * n);
         assert_eq!(&u[..6], &[0.0, 1.0, 0.0, 2.0, 3.0, 0.0]);
     }
@@ -246,12 +286,14 @@ fn vtu_parses_back() {
         let points = piece.child("Points").arrays();
         assert_eq!(points.len(), 1);
         assert_eq!(points[0].attr("NumberOfComponents"), "3");
-        let xyz = values(points[0]);
+        let xyz = values(points[0], header_type(&root));
         assert_eq!(xyz.len(), 15);
         assert_eq!(&xyz[..6], &[0.0, 0.25, 0.0, 0.5, 0.75, 0.0]);
         let cells = piece.child("Cells").arrays();
-        let by_name: HashMap<&str, Vec<f64>> =
-            cells.iter().map(|a| (a.attr("Name"), values(a))).collect();
+        let by_name: HashMap<&str, Vec<f64>> = cells
+            .iter()
+            .map(|a| (a.attr("Name"), values(a, header_type(&root))))
+            .collect();
         assert_eq!(by_name["connectivity"], [0.0, 1.0, 2.0, 3.0, 4.0]);
         assert_eq!(by_name["offsets"], [1.0, 2.0, 3.0, 4.0, 5.0]);
         assert_eq!(by_name["types"], [1.0; 5]);
@@ -260,9 +302,17 @@ fn vtu_parses_back() {
         assert_eq!(arrays.len(), 3);
         for a in arrays {
             let comps: usize = a.attr("NumberOfComponents").parse().unwrap();
-            assert_eq!(values(a).len(), comps * n, "{}", a.attr("Name"));
+            assert_eq!(
+                values(a, header_type(&root)).len(),
+                comps * n,
+                "{}",
+                a.attr("Name")
+            );
         }
-        assert_eq!(values(pd.arrays()[1]), [0.0, 1.0, 0.0, 1.0, 0.0]);
+        assert_eq!(
+            values(pd.arrays()[1], header_type(&root)),
+            [0.0, 1.0, 0.0, 1.0, 0.0]
+        );
     }
     // Empty particle sets are valid files.
     let p = Particles::from_xyz(&[]).unwrap();
@@ -398,5 +448,350 @@ fn csv_parses_back() {
     assert!(write_csv(dir.join("bad.csv"), &["a", "b"], &[vec![1.0]]).is_err());
     assert!(!dir.join("bad.csv").exists());
     assert!(CsvWriter::create(dir.join("none.csv"), &[] as &[&str]).is_err());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Values that a text format must not round: decimal fractions with no finite binary form,
+/// repeating fractions, the extremes, subnormals, both zeros, integers up to 2^53, and the
+/// neighbours of the points where `numfmt::exact` switches between plain and exponent form.
+fn awkward() -> Vec<f64> {
+    let v = vec![
+        0.1,
+        1.0 / 3.0,
+        -2.0 / 3.0,
+        1e-300,
+        -2.5e300,
+        f64::MIN_POSITIVE / 3.0,
+        -5e-324,
+        f64::MIN_POSITIVE.next_down(),
+        f64::MIN_POSITIVE,
+        0.0,
+        -0.0,
+        f64::MAX,
+        f64::MIN,
+        0.30000000000000004,
+        1e-5,
+        1e-5f64.next_down(),
+        1e16,
+        1e16f64.next_down(),
+        9_007_199_254_740_992.0,
+        123_456_789.0,
+        -7.0,
+        std::f64::consts::PI,
+        f64::EPSILON,
+    ];
+    assert_eq!(v.iter().filter(|x| x.is_subnormal()).count(), 3);
+    v
+}
+
+/// Integers given as `u32` (written as `f64`, exact up to 2^53).
+fn awkward_ints(n: usize) -> Vec<u32> {
+    (0..n)
+        .map(|i| [0, 1, 7, 123_456_789, u32::MAX][i % 5])
+        .collect()
+}
+
+fn bits(v: &[f64]) -> Vec<u64> {
+    v.iter().map(|x| x.to_bits()).collect()
+}
+
+/// 2-component vectors as written: padded with `+0` to 3.
+fn padded(v2: &[f64]) -> Vec<f64> {
+    v2.chunks(2).flat_map(|c| [c[0], c[1], 0.0]).collect()
+}
+
+/// Three numbers of an attribute such as `Origin="a b c"`.
+fn three(s: &str) -> Vec<f64> {
+    let v: Vec<f64> = s.split(' ').map(|x| x.parse().unwrap()).collect();
+    assert_eq!(v.len(), 3, "{s}");
+    v
+}
+
+#[test]
+fn vtk_values_read_back_bit_for_bit() {
+    let dir = tmp("vtk-exact");
+    let vals = awkward();
+    let n = vals.len();
+    let ints = awkward_ints(n);
+    let ints_f: Vec<f64> = ints.iter().map(|&i| f64::from(i)).collect();
+    let vec2: Vec<f64> = vals
+        .iter()
+        .zip(vals.iter().rev())
+        .flat_map(|(&a, &b)| [a, b])
+        .collect();
+    let xyz: Vec<f64> = (0..n)
+        .flat_map(|i| [vals[i], vals[(i + 1) % n], vals[(i + 2) % n]])
+        .collect();
+    // Names with XML metacharacters, non-ASCII letters and spaces.
+    let names = ["rho", "a<\"b\">&'c", "µ ünï", " v "];
+    let want: [&[f64]; 4] = [&vals, &ints_f, &padded(&vec2), &xyz];
+    let origin = [1.0 / 3.0, -2.5e300, -5e-324];
+    let spacing = [0.1, 1e-300, f64::MAX];
+    for enc in [Encoding::Binary, Encoding::Ascii] {
+        // Particles: positions and every kind of point array.
+        let mut p = Particles::new(&xyz, 3).unwrap().encoding(enc);
+        p.add_scalar(names[0], &vals)
+            .unwrap()
+            .add_scalar(names[1], &ints)
+            .unwrap()
+            .add_vector(names[2], &vec2, 2)
+            .unwrap()
+            .add_vector(names[3], &xyz, 3)
+            .unwrap();
+        let path = dir.join(format!("exact_{enc:?}.vtu"));
+        p.write(&path).unwrap();
+        let root = parse_xml(&std::fs::read_to_string(&path).unwrap());
+        let hdr = header_type(&root);
+        let piece = root.child("UnstructuredGrid").child("Piece");
+        assert_eq!(piece.attr("NumberOfPoints"), n.to_string());
+        let points = piece.child("Points").arrays();
+        assert_eq!(bits(&values(points[0], hdr)), bits(&xyz), "{enc:?} points");
+        let pd = piece.child("PointData");
+        if enc == Encoding::Ascii {
+            // Shortest round-trip text, exponent form for tiny and huge magnitudes
+            // (`1e-300`, not 300 zeros).
+            let tokens: Vec<&str> = pd.arrays()[0].text.split_whitespace().collect();
+            let exact: Vec<String> = vals.iter().map(|&v| numfmt::exact(v)).collect();
+            assert_eq!(tokens, exact);
+            assert!(tokens.contains(&"1e-300") && tokens.contains(&"-2.5e300"));
+        }
+        assert_eq!(pd.attr_text("Scalars"), names[0]);
+        assert_eq!(pd.attr_text("Vectors"), names[2]);
+        let arrays = pd.arrays();
+        assert_eq!(arrays.len(), 4);
+        for ((a, name), want) in arrays.iter().zip(names).zip(want) {
+            assert_eq!(a.attr_text("Name"), name);
+            assert_eq!(a.attr("type"), "Float64");
+            let got = values(a, hdr);
+            let comps: usize = a.attr("NumberOfComponents").parse().unwrap();
+            assert_eq!(got.len(), comps * n, "{enc:?} {name}");
+            assert_eq!(bits(&got), bits(want), "{enc:?} {name}: {got:?}");
+        }
+
+        // Image data: awkward origin and spacing, a scalar and a padded vector field.
+        let mut g = ImageData::new([n, 1, 1], origin, spacing)
+            .unwrap()
+            .encoding(enc);
+        g.add_scalar(names[1], &vals)
+            .unwrap()
+            .add_vector(names[0], &vec2, 2)
+            .unwrap();
+        let path = dir.join(format!("exact_{enc:?}.vti"));
+        g.write(&path).unwrap();
+        let root = parse_xml(&std::fs::read_to_string(&path).unwrap());
+        let img = root.child("ImageData");
+        assert_eq!(bits(&three(img.attr("Origin"))), bits(&origin));
+        assert_eq!(bits(&three(img.attr("Spacing"))), bits(&spacing));
+        let arrays = img.child("Piece").child("PointData").arrays();
+        assert_eq!(arrays[0].attr_text("Name"), names[1]);
+        assert_eq!(bits(&values(arrays[0], header_type(&root))), bits(&vals));
+        assert_eq!(arrays[1].attr_text("Name"), names[0]);
+        let got = values(arrays[1], header_type(&root));
+        assert_eq!(bits(&got), bits(&padded(&vec2)), "{enc:?}");
+    }
+    // Binary keeps what text cannot: NaN payloads and infinities.
+    let odd = [
+        f64::from_bits(0x7ff8_0000_dead_beef),
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    ];
+    let mut p = Particles::new(&[0.0; 9], 3).unwrap();
+    p.add_scalar("odd", &odd).unwrap();
+    let root = parse_xml(&p.to_xml().unwrap());
+    let pd = root
+        .child("UnstructuredGrid")
+        .child("Piece")
+        .child("PointData");
+    assert_eq!(
+        bits(&values(pd.arrays()[0], header_type(&root))),
+        bits(&odd)
+    );
+    // Series: awkward times and file names.
+    let entries = [
+        (1.0 / 3.0, "a&b<c>.vtu"),
+        (1e-300, "d\"e'.vti"),
+        (-2.5e300, "µ.vtu"),
+    ];
+    write_pvd(dir.join("series.pvd"), &entries).unwrap();
+    let root = parse_xml(&std::fs::read_to_string(dir.join("series.pvd")).unwrap());
+    let sets = &root.child("Collection").children;
+    assert_eq!(sets.len(), entries.len());
+    for (set, (t, file)) in sets.iter().zip(entries) {
+        let got: f64 = set.attr("timestep").parse().unwrap();
+        assert_eq!(got.to_bits(), t.to_bits());
+        assert_eq!(set.attr_text("file"), file);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// One extended XYZ frame as read back: the comment line's `key=value` pairs (quotes
+/// removed) and one line of tokens per particle.
+struct XyzRead {
+    comment: Vec<(String, String)>,
+    rows: Vec<Vec<String>>,
+}
+
+impl XyzRead {
+    fn get(&self, key: &str) -> &str {
+        let mut hits = self.comment.iter().filter(|(k, _)| k == key);
+        let v = &hits.next().unwrap_or_else(|| panic!("no {key}")).1;
+        assert!(hits.next().is_none(), "{key} twice");
+        v
+    }
+
+    /// Column `name` of the `Properties` spec as text tokens, `width` per particle.
+    fn column(&self, name: &str) -> (char, Vec<Vec<String>>) {
+        let spec: Vec<&str> = self.get("Properties").split(':').collect();
+        assert_eq!(spec.len() % 3, 0);
+        let mut start = 0;
+        for f in spec.chunks(3) {
+            let width: usize = f[2].parse().unwrap();
+            if f[0] == name {
+                let kind = f[1].chars().next().unwrap();
+                let cols = self.rows.iter().map(|r| r[start..start + width].to_vec());
+                return (kind, cols.collect());
+            }
+            start += width;
+        }
+        panic!("no column {name}");
+    }
+
+    /// Real column `name` (type `R`), all particles' values in order.
+    fn reals(&self, name: &str) -> Vec<f64> {
+        let (kind, rows) = self.column(name);
+        assert_eq!(kind, 'R', "{name}");
+        rows.iter().flatten().map(|t| t.parse().unwrap()).collect()
+    }
+}
+
+/// A small extended XYZ reader: count line, comment line, one line per particle.
+fn parse_xyz(text: &str) -> Vec<XyzRead> {
+    let mut lines = text.lines();
+    let mut frames = Vec::new();
+    while let Some(count) = lines.next() {
+        let n: usize = count.parse().unwrap();
+        let mut comment = Vec::new();
+        let mut rest = lines.next().unwrap().trim();
+        while !rest.is_empty() {
+            let eq = rest.find('=').unwrap();
+            let key = rest[..eq].to_string();
+            let (value, tail) = match rest[eq + 1..].strip_prefix('"') {
+                Some(q) => q.split_once('"').unwrap(),
+                None => rest[eq + 1..]
+                    .split_once(' ')
+                    .unwrap_or((&rest[eq + 1..], "")),
+            };
+            comment.push((key, value.to_string()));
+            rest = tail.trim_start();
+        }
+        let rows = (0..n)
+            .map(|_| lines.next().unwrap().split(' ').map(String::from).collect())
+            .collect();
+        frames.push(XyzRead { comment, rows });
+    }
+    frames
+}
+
+#[test]
+fn xyz_values_read_back_bit_for_bit() {
+    let dir = tmp("xyz-exact");
+    let vals = awkward();
+    let n = vals.len();
+    let ints = awkward_ints(n);
+    let xyz: Vec<f64> = (0..n)
+        .flat_map(|i| [vals[i], vals[(i + 1) % n], vals[(i + 2) % n]])
+        .collect();
+    let vec2: Vec<f64> = vals
+        .iter()
+        .zip(vals.iter().rev())
+        .flat_map(|(&a, &b)| [a, b])
+        .collect();
+    let species: Vec<&str> = (0..n)
+        .map(|i| ["H", "Ca2+", "Fe_3", "ü", "X"][i % 5])
+        .collect();
+    let lattice = [
+        [1.0 / 3.0, 0.1, 1e-300],
+        [-0.0, 2.5e300, 5e-324],
+        [7.0, 0.2, 1e16],
+    ];
+
+    let mut f = XyzFrame::new(&xyz, 3).unwrap();
+    f.species(&species)
+        .unwrap()
+        .lattice(lattice)
+        .unwrap()
+        .pbc([true, false, true])
+        .time(1e-300)
+        .unwrap()
+        .info("energy", -2.5e300)
+        .unwrap()
+        .info("step", 12_345_678_901.0)
+        .unwrap()
+        .add_scalar("charge", &vals)
+        .unwrap()
+        .add_scalar("id", &ints)
+        .unwrap()
+        .add_vector("v", &vec2, 2)
+        .unwrap()
+        .add_vector("f", &xyz, 3)
+        .unwrap();
+    let pairs: Vec<[f64; 2]> = vec2.chunks(2).map(|c| [c[0], c[1]]).collect();
+    let mut g = XyzFrame::from_xy(&pairs).unwrap();
+    g.box_2d(1.0 / 3.0, 0.1).unwrap().time(2.0 / 3.0).unwrap();
+    let path = dir.join("exact.xyz");
+    write_xyz(&path, &[f, g]).unwrap();
+
+    let frames = parse_xyz(&std::fs::read_to_string(&path).unwrap());
+    assert_eq!(frames.len(), 2);
+    let a = &frames[0];
+    assert_eq!(a.rows.len(), n);
+    assert_eq!(
+        a.get("Properties"),
+        "species:S:1:pos:R:3:charge:R:1:id:R:1:v:R:3:f:R:3"
+    );
+    let cell: Vec<f64> = a
+        .get("Lattice")
+        .split(' ')
+        .map(|t| t.parse().unwrap())
+        .collect();
+    assert_eq!(bits(&cell), bits(lattice.as_flattened()));
+    assert_eq!(a.get("pbc"), "T F T");
+    for (key, want) in [
+        ("Time", 1e-300f64),
+        ("energy", -2.5e300),
+        ("step", 12_345_678_901.0),
+    ] {
+        let got: f64 = a.get(key).parse().unwrap();
+        assert_eq!(got.to_bits(), want.to_bits(), "{key}");
+    }
+    let (kind, names) = a.column("species");
+    assert_eq!(kind, 'S');
+    assert_eq!(names.concat(), species);
+    assert_eq!(bits(&a.reals("pos")), bits(&xyz), "positions");
+    assert_eq!(bits(&a.reals("charge")), bits(&vals), "charge");
+    let ints_f: Vec<f64> = ints.iter().map(|&i| f64::from(i)).collect();
+    assert_eq!(bits(&a.reals("id")), bits(&ints_f), "id");
+    assert_eq!(bits(&a.reals("v")), bits(&padded(&vec2)), "v");
+    assert_eq!(bits(&a.reals("f")), bits(&xyz), "f");
+
+    // The 2D frame: z = +0, the default species, a 2D box.
+    let b = &frames[1];
+    assert_eq!(b.get("Properties"), "species:S:1:pos:R:3");
+    assert_eq!(bits(&b.reals("pos")), bits(&padded(&vec2)));
+    assert!(b.column("species").1.iter().all(|s| s == &["X"]));
+    let cell: Vec<f64> = b
+        .get("Lattice")
+        .split(' ')
+        .map(|t| t.parse().unwrap())
+        .collect();
+    assert_eq!(
+        bits(&cell),
+        bits(&[1.0 / 3.0, 0.0, 0.0, 0.0, 0.1, 0.0, 0.0, 0.0, 1.0])
+    );
+    assert_eq!(b.get("pbc"), "T T F");
+    assert_eq!(
+        b.get("Time").parse::<f64>().unwrap().to_bits(),
+        (2.0f64 / 3.0).to_bits()
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }

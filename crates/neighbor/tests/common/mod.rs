@@ -147,6 +147,11 @@ pub fn check_gpu<const D: usize>(
         .unwrap_or(0);
     let limit = GpuCellList::<D>::max_per_cell(ctx);
     if fullest > limit {
+        println!(
+            "check_gpu: SKIPPED the pair comparison: a cell holds {fullest} particles, over \
+             this adapter's per-cell limit {limit} (GpuCellList::max_per_cell); checked that \
+             the build refuses it instead"
+        );
         let e = gpu
             .build(p)
             .expect_err("a cell over the per-cell limit must be refused");
@@ -165,6 +170,12 @@ pub fn check_gpu<const D: usize>(
         NeighborLists::from_pairs(p.len(), &half_pairs).unwrap(),
         "GPU full list differs from the GPU half list"
     );
+    // The GPU decides in f32 (derived bound for the cases of this crate's tests): a
+    // coordinate of magnitude up to 41.5 (edge-case positions 2.5 box lengths of 15 below
+    // the origin -4) is off by up to half an ulp, 1.9e-6, and its wrap into [0, 15) by
+    // 4.8e-7 more, so a separation by up to 4.8e-6 per axis and r2 near the cutoff by up to
+    // 2 sqrt(3) rc 4.8e-6 = 8.3e-5 rc^2 at the smallest cutoff, 0.2. The tolerance 1e-4 is
+    // 1.2x that; the test prints the largest distance from rc^2 it had to accept.
     let rc2 = grid.cutoff() * grid.cutoff();
     let borderline = |r2: f64| (r2 - rc2).abs() <= 1e-4 * rc2;
     for (k, (_, r2)) in reference {
@@ -183,9 +194,30 @@ pub fn check_gpu<const D: usize>(
             );
         }
     }
-    let exact = reference.values().all(|(_, r2)| !borderline(*r2))
-        && got.values().all(|(_, r2)| !borderline(*r2));
-    if exact {
-        assert_eq!(counts(p.len(), &got), counts(p.len(), reference));
+    // Pairs f32 decided the other way: accepted, and said so.
+    let differ: Vec<f64> = reference
+        .iter()
+        .filter(|&(k, _)| !got.contains_key(k))
+        .chain(got.iter().filter(|&(k, _)| !reference.contains_key(k)))
+        .map(|(_, (_, r2))| (r2 - rc2).abs() / rc2)
+        .collect();
+    if !differ.is_empty() {
+        println!(
+            "check_gpu: RELAXED: {} pair(s) decided differently by f32, at most {:.2e} rc^2 \
+             from the cutoff (accepted up to 1e-4; every other pair matched)",
+            differ.len(),
+            differ.iter().fold(0.0f64, |a, &b| a.max(b))
+        );
     }
+    // Per-particle counts over the pairs both precisions decide alike.
+    let decided = |m: &PairMap<D>| -> PairMap<D> {
+        m.iter()
+            .filter(|(_, (_, r2))| !borderline(*r2))
+            .map(|(k, v)| (*k, *v))
+            .collect()
+    };
+    assert_eq!(
+        counts(p.len(), &decided(&got)),
+        counts(p.len(), &decided(reference))
+    );
 }
