@@ -22,6 +22,7 @@ mod progress;
 // TOUR-MODULES (keep this marker: crate work adds `mod <crate>;` lines below it)
 mod dem;
 mod lattice_gas;
+mod md;
 mod neighbor;
 mod pp_coulomb;
 mod rd;
@@ -62,6 +63,7 @@ fn scenes() -> Vec<(&'static str, Scene)> {
         ("lattice_gas", lattice_gas::run),
         ("rd", rd::run),
         ("pp_coulomb", pp_coulomb::run),
+        ("md", md::run),
     ]
 }
 
