@@ -5,7 +5,10 @@
 //! alike. Prints the median time of each and the cost of the check in percent.
 //!
 //! Run: `cargo bench --bench guard_cost` (`-- --rounds N` for more rounds; CPU backends on
-//! the current rayon pool).
+//! the current rayon pool). On a busy machine, count instructions instead of time:
+//! `-- --case K --every E --steps S` builds case `K` (0-based, in the order printed) once
+//! and steps it `S` steps, for `valgrind --tool=callgrind` with `RAYON_NUM_THREADS=1`
+//! (instructions of the step = total minus the total of the same command with `--steps 0`).
 
 use std::time::Instant;
 
@@ -88,11 +91,20 @@ fn time(case: &Case, every: u32) -> Result<f64> {
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().collect();
-    let rounds: usize = args
-        .iter()
-        .position(|a| a == "--rounds")
-        .and_then(|i| args.get(i + 1)?.parse().ok())
-        .unwrap_or(5);
+    let value = |name: &str| -> Option<u32> {
+        let i = args.iter().position(|a| a == name)?;
+        args.get(i + 1)?.parse().ok()
+    };
+    if let Some(k) = value("--case") {
+        let cases = cases();
+        let case = cases.get(k as usize).ok_or_else(|| {
+            simkit::backend::Error::invalid("--case", k, format!("use 0..{}", cases.len()))
+        })?;
+        let every = value("--every").unwrap_or(simkit::backend::guard::DEFAULT_CHECK_EVERY);
+        let mut run = (case.build)(every)?;
+        return run(value("--steps").unwrap_or(case.steps));
+    }
+    let rounds = value("--rounds").unwrap_or(5) as usize;
     println!(
         "blow-up check cost, {rounds} alternating rounds, {} rayon threads",
         rayon::current_num_threads()
