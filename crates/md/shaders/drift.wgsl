@@ -8,24 +8,14 @@
 @group(0) @binding(2) var<storage, read_write> vel: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read> acc: array<vec4<f32>>;
 
-@compute @workgroup_size(64)
-fn md_drift(
-    @builtin(workgroup_id) wid: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-    @builtin(local_invocation_index) lid: u32,
-) {
-    let i = linear_workgroup(wid, nwg) * 64u + lid;
-    if (i >= prm.n) {
-        return;
-    }
-    var v = vel[i].xyz;
-    if (prm.leapfrog == 0u) {
-        v = v + acc[i].xyz * prm.half_dt;
-    }
+// Moves particle i by `disp`, applies the boundary rule to the position and the new
+// velocity `v`, and stores both.
+fn md_place(i: u32, disp: vec3<f32>, v_in: vec3<f32>) {
+    var v = v_in;
     let p = pos[i];
     var x = p.xyz;
     for (var d = 0u; d < prm.dim; d++) {
-        var c = x[d] + v[d] * prm.dt;
+        var c = x[d] + disp[d];
         let lo = prm.lo[d];
         let hi = prm.hi[d];
         var inside: bool;
@@ -56,4 +46,28 @@ fn md_drift(
     }
     pos[i] = vec4<f32>(x, p.w);
     vel[i] = vec4<f32>(v, 0.0);
+}
+
+// The opening half kick of velocity Verlet (none for leapfrog, whose stored velocities are
+// already at the half step).
+fn md_open_kick(i: u32) -> vec3<f32> {
+    var v = vel[i].xyz;
+    if (prm.leapfrog == 0u) {
+        v = v + acc[i].xyz * prm.half_dt;
+    }
+    return v;
+}
+
+@compute @workgroup_size(64)
+fn md_drift(
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+) {
+    let i = linear_workgroup(wid, nwg) * 64u + lid;
+    if (i >= prm.n) {
+        return;
+    }
+    let v = md_open_kick(i);
+    md_place(i, v * prm.dt, v);
 }

@@ -13,6 +13,7 @@ struct MdParams {
     // 1: leapfrog (half-step velocities), 0: velocity Verlet.
     leapfrog: u32,
     dim: u32,
-    _pad0: u32,
+    // Seed of the Langevin thermostat's random numbers.
+    seed: u32,
     _pad1: u32,
 }

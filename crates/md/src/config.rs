@@ -3,7 +3,7 @@
 use serde::{Deserialize, Serialize};
 use simkit_backend::{Error, Precision, Result};
 
-use crate::System;
+use crate::{Langevin, System};
 
 /// Time integration scheme (both second order, symplectic and time reversible; one force
 /// evaluation per step).
@@ -54,6 +54,17 @@ pub struct Config {
     pub shift: bool,
     /// Accept a time step above the safe bound `T_min / 20` (for studies of instability).
     pub allow_unstable_dt: bool,
+    /// Langevin thermostat (BAOAB splitting), off (`None`) by default: an NVE run does no
+    /// thermostat work at all. Per-species targets: [`System::set_species_langevin`].
+    pub thermostat: Option<Langevin>,
+    /// CPU only: every this many steps (counted from step 0; `0`, the default, never) the
+    /// particles are reordered in the memory in the order of the cells of the neighbour
+    /// grid, for cache locality. The physics is unchanged but the force sums run in
+    /// another order, so the trajectory differs from an unordered run by rounding (it is
+    /// not bit-identical to it); reordered runs are reproducible, independent of the
+    /// Verlet-list skin, and restart bit for bit. The GPU ignores it (its cell list sorts
+    /// every step).
+    pub reorder_every: u32,
 }
 
 impl Default for Config {
@@ -66,6 +77,8 @@ impl Default for Config {
             check_every: simkit_backend::guard::DEFAULT_CHECK_EVERY,
             shift: false,
             allow_unstable_dt: false,
+            thermostat: None,
+            reorder_every: 0,
         }
     }
 }
@@ -82,9 +95,13 @@ impl Config {
     /// Checks the settings against `system` and returns the time step to use.
     ///
     /// Errors: a non-finite or non-positive `dt`, a negative or non-finite skin, a time
-    /// step over the safe bound without [`allow_unstable_dt`](Self::allow_unstable_dt), or
-    /// no `dt` for a system without interacting pairs (no guidance exists then).
+    /// step over the safe bound without [`allow_unstable_dt`](Self::allow_unstable_dt),
+    /// no `dt` for a system without interacting pairs (no guidance exists then), or a
+    /// thermostat with a negative or non-finite temperature or friction.
     pub fn resolve_dt(&self, system: &System) -> Result<f64> {
+        if let Some(l) = &self.thermostat {
+            crate::thermostat::check_target("thermostat", l.temperature, l.gamma)?;
+        }
         if !(self.skin.is_finite() && self.skin >= 0.0) {
             return Err(Error::invalid(
                 "skin",

@@ -20,6 +20,7 @@ use crate::config::Integrator;
 use crate::diagnostics::assemble;
 use crate::engine::{Engine, EngineState};
 use crate::table::{PairCoeff, pair_force_energy};
+use crate::thermostat::{gaussians, ou_coefficients};
 use crate::{Config, Diagnostics, State, System};
 
 const AXES: [&str; 3] = ["x", "y", "z"];
@@ -48,6 +49,7 @@ struct Snapshot<T, const D: usize> {
     vel: Vec<[T; D]>,
     acc: Vec<[T; D]>,
     out: Vec<Acc<T, D>>,
+    order: Vec<u32>,
     steps: u64,
 }
 
@@ -59,8 +61,16 @@ pub(crate) struct CpuEngine<const D: usize, T: Real> {
     check_every: u32,
     n_species: usize,
     coeff: Vec<PairCoeff<T>>,
+    /// `1 / m` per species, `0` for a frozen species (its forces are not integrated).
     inv_mass: Vec<T>,
+    /// The Langevin thermostat: seed and `(c1, amplitude)` per species.
+    langevin: Option<(u32, Vec<(T, T)>)>,
+    /// Species of the particle in each slot.
     species: Vec<u32>,
+    /// The system index of the particle in each slot (identity unless reordered).
+    order: Vec<u32>,
+    /// Reorder the slots in cell order every this many steps (0: never).
+    reorder_every: u32,
     lo: [T; D],
     hi: [T; D],
     len: [T; D],
@@ -152,9 +162,21 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
             inv_mass: system
                 .masses()
                 .iter()
-                .map(|&m| T::from_f64(1.0 / m))
+                .zip(system.frozen())
+                .map(|(&m, &f)| if f { T::ZERO } else { T::from_f64(1.0 / m) })
                 .collect(),
+            langevin: config.thermostat.map(|l| {
+                let c = ou_coefficients(system, &l, dt);
+                (
+                    l.seed,
+                    c.iter()
+                        .map(|&(a, b)| (T::from_f64(a), T::from_f64(b)))
+                        .collect(),
+                )
+            }),
             species: system.species().to_vec(),
+            order: (0..n as u32).collect(),
+            reorder_every: config.reorder_every,
             lo: lo.map(T::from_f64),
             hi: std::array::from_fn(|d| T::from_f64(lo[d] + len[d])),
             len: len.map(T::from_f64),
@@ -171,9 +193,22 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
                 vel: Vec::new(),
                 acc: Vec::new(),
                 out: Vec::new(),
+                order: Vec::new(),
                 steps: 0,
             },
         };
+        if let Some(s) = saved
+            && !s.order.is_empty()
+        {
+            e.permute(&s.order)?;
+        }
+        // Frozen particles stand still.
+        let frozen = system.frozen();
+        for (v, &sp) in e.vel.iter_mut().zip(&e.species) {
+            if frozen[sp as usize] {
+                *v = [T::ZERO; D];
+            }
+        }
         if saved.is_none() {
             // A position just below the upper face may round up onto it in f32.
             for x in &mut e.pos {
@@ -205,6 +240,71 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
             ));
         }
         Ok(e)
+    }
+
+    /// Puts the particle of system index `order[k]` into slot `k`, from the system order
+    /// (a checkpoint's `order`).
+    fn permute(&mut self, order: &[u32]) -> Result<()> {
+        let n = self.pos.len();
+        let mut seen = vec![false; n];
+        let valid = order.len() == n
+            && order.iter().all(|&i| {
+                let fresh = (i as usize) < n && !seen[i as usize];
+                if fresh {
+                    seen[i as usize] = true;
+                }
+                fresh
+            });
+        if !valid {
+            return Err(Error::Checkpoint {
+                source_name: "<bytes>".into(),
+                reason: format!("the stored particle order is not a permutation of 0..{n}"),
+            });
+        }
+        let take = |v: &[[T; D]]| -> Vec<[T; D]> { order.iter().map(|&i| v[i as usize]).collect() };
+        self.pos = take(&self.pos);
+        self.vel = take(&self.vel);
+        self.species = order.iter().map(|&i| self.species[i as usize]).collect();
+        self.order = order.to_vec();
+        Ok(())
+    }
+
+    /// Sorts the slots by cell of the neighbour grid (stable, so the order within a cell
+    /// is the current one) for cache locality, and rebuilds the list for the new slots.
+    fn reorder(&mut self) -> Result<()> {
+        let grid = self.list.grid();
+        let cell: Vec<usize> = self
+            .pos
+            .iter()
+            .map(|p| grid.cell_of(p.map(T::to_f64)))
+            .collect();
+        let mut slots: Vec<u32> = (0..self.pos.len() as u32).collect();
+        slots.sort_by_key(|&k| cell[k as usize]);
+        let take = |v: &[[T; D]]| -> Vec<[T; D]> { slots.iter().map(|&k| v[k as usize]).collect() };
+        self.pos = take(&self.pos);
+        self.vel = take(&self.vel);
+        self.acc = take(&self.acc);
+        self.out = slots.iter().map(|&k| self.out[k as usize]).collect();
+        self.species = slots.iter().map(|&k| self.species[k as usize]).collect();
+        self.order = slots.iter().map(|&k| self.order[k as usize]).collect();
+        self.rebuild_list()
+    }
+
+    /// Builds the Verlet list afresh (after the slots changed).
+    fn rebuild_list(&mut self) -> Result<()> {
+        for (w, p) in self.wide.iter_mut().zip(&self.pos) {
+            *w = p.map(T::to_f64);
+        }
+        self.list.build(&self.wide)
+    }
+
+    /// Puts the arrays back into the system order.
+    fn unslot<U: Copy + Default>(&self, v: &[U]) -> Vec<U> {
+        let mut out = vec![U::default(); v.len()];
+        for (x, &i) in v.iter().zip(&self.order) {
+            out[i as usize] = *x;
+        }
+        out
     }
 
     /// Forces, potential energy and virial at the current positions.
@@ -256,37 +356,64 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
             .for_each(|(x, v)| {
                 for d in 0..D {
                     x[d] += v[d] * dt;
-                    if per[d] {
-                        if x[d] < lo[d] {
-                            x[d] += len[d];
-                            if x[d] >= hi[d] {
-                                x[d] = lo[d];
-                            }
-                        } else if x[d] >= hi[d] {
-                            x[d] = x[d] - len[d];
-                        }
-                    } else if x[d] < lo[d] {
-                        x[d] = lo[d] + lo[d] - x[d];
-                        v[d] = -v[d];
-                    } else if x[d] > hi[d] {
-                        x[d] = hi[d] + hi[d] - x[d];
-                        v[d] = -v[d];
-                    }
+                    boundary(&mut x[d], &mut v[d], lo[d], hi[d], len[d], per[d]);
                 }
             });
     }
 
+    /// The thermostatted drift `A O A` of BAOAB: `v' = c1 v + amplitude R`,
+    /// `x += (v + v') dt / 2`, `v = v'`, then the boundary rule (the twin of
+    /// `md_drift_langevin` in `shaders/langevin.wgsl`). The normal numbers `R` are keyed by
+    /// `(seed, step, particle)`, the step being the one this drift starts (mod 2^32).
+    fn drift_langevin(&mut self) {
+        let Some((seed, ou)) = &self.langevin else {
+            return;
+        };
+        let (seed, h) = (*seed, T::from_f64(0.5 * self.dt));
+        let step = self.steps as u32;
+        let (lo, hi, len, per) = (self.lo, self.hi, self.len, self.periodic);
+        let (species, order) = (&self.species, &self.order);
+        self.pos
+            .par_iter_mut()
+            .zip(self.vel.par_iter_mut())
+            .enumerate()
+            .with_min_len(1024)
+            .for_each(|(k, (x, v))| {
+                let (c1, amp) = ou[species[k] as usize];
+                // Keyed by the system index, so the noise does not depend on the slots.
+                let g = gaussians::<D>(seed, step, order[k]);
+                for d in 0..D {
+                    let w = c1 * v[d] + amp * T::from_f64(g[d]);
+                    x[d] += (v[d] + w) * h;
+                    v[d] = w;
+                    boundary(&mut x[d], &mut v[d], lo[d], hi[d], len[d], per[d]);
+                }
+            });
+    }
+
+    /// The drift of a step: Newtonian, or thermostatted when a thermostat is on.
+    fn move_particles(&mut self) {
+        if self.langevin.is_some() {
+            self.drift_langevin();
+        } else {
+            self.drift();
+        }
+    }
+
     fn one_step(&mut self) -> Result<()> {
+        if self.reorder_every > 0 && self.steps.is_multiple_of(u64::from(self.reorder_every)) {
+            self.reorder()?;
+        }
         match self.integrator {
             Integrator::VelocityVerlet => {
                 let h = T::from_f64(0.5 * self.dt);
                 kick(&mut self.vel, &self.acc, h);
-                self.drift();
+                self.move_particles();
                 self.forces()?;
                 kick(&mut self.vel, &self.acc, h);
             }
             Integrator::Leapfrog => {
-                self.drift();
+                self.move_particles();
                 self.forces()?;
                 kick(&mut self.vel, &self.acc, T::from_f64(self.dt));
             }
@@ -307,7 +434,10 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
             if let Some(k) = first_non_finite(v.as_flattened()) {
                 let (i, d) = (k / D, k % D);
                 return Some((
-                    format!("particle {i}: {name} {} = {}", AXES[d], v[i][d]),
+                    format!(
+                        "particle {}: {name} {} = {}",
+                        self.order[i], AXES[d], v[i][d]
+                    ),
                     cause.to_string(),
                 ));
             }
@@ -320,7 +450,10 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
                     let u = v[d] - a[d] * h;
                     if !u.to_f64().is_finite() {
                         return Some((
-                            format!("particle {i}: velocity {} at the step = {u}", AXES[d]),
+                            format!(
+                                "particle {}: velocity {} at the step = {u}",
+                                self.order[i], AXES[d]
+                            ),
                             cause.to_string(),
                         ));
                     }
@@ -337,14 +470,46 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
                 if out {
                     return Some((
                         format!(
-                            "particle {i}: position {} = {} left the box [{}, {}] (it moved \
+                            "particle {}: position {} = {} left the box [{}, {}] (it moved \
                              more than a box length in one step)",
-                            AXES[d], x[d], self.lo[d], self.hi[d]
+                            self.order[i], AXES[d], x[d], self.lo[d], self.hi[d]
                         ),
                         cause.to_string(),
                     ));
                 }
             }
+        }
+        // The energies the diagnostics sum must be finite too: a finite velocity can still
+        // have an infinite kinetic energy in f64 (|v| > 1e154), and a particle's pair
+        // energy or virial can overflow while its force does not.
+        let masses = self.system.masses();
+        let mut total = 0.0f64;
+        for (i, ((v, o), &s)) in self
+            .vel
+            .iter()
+            .zip(&self.out)
+            .zip(&self.species)
+            .enumerate()
+        {
+            let v2: f64 = v.iter().map(|x| x.to_f64() * x.to_f64()).sum();
+            let ke = 0.5 * masses[s as usize] * v2;
+            total += ke;
+            let bad = [
+                ("kinetic energy", ke),
+                ("pair energy", o.e.to_f64()),
+                ("virial", o.w.to_f64()),
+            ]
+            .into_iter()
+            .find(|(_, x)| !x.is_finite());
+            if let Some((what, x)) = bad {
+                return Some((
+                    format!("particle {}: {what} = {x}", self.order[i]),
+                    cause.to_string(),
+                ));
+            }
+        }
+        if !total.is_finite() {
+            return Some((format!("total kinetic energy = {total}"), cause.to_string()));
         }
         None
     }
@@ -354,15 +519,30 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
         self.snap.vel.clone_from(&self.vel);
         self.snap.acc.clone_from(&self.acc);
         self.snap.out.clone_from(&self.out);
+        if self.reorder_every > 0 {
+            self.snap.order.clone_from(&self.order);
+        }
         self.snap.steps = self.steps;
     }
 
-    fn restore(&mut self) {
+    fn restore(&mut self) -> Result<()> {
         self.pos.clone_from(&self.snap.pos);
         self.vel.clone_from(&self.snap.vel);
         self.acc.clone_from(&self.snap.acc);
         self.out.clone_from(&self.snap.out);
         self.steps = self.snap.steps;
+        if self.reorder_every > 0 && self.order != self.snap.order {
+            // The slots changed since the snapshot: the list refers to the new ones.
+            self.order.clone_from(&self.snap.order);
+            let order = &self.order;
+            self.species = order
+                .iter()
+                .map(|&i| self.system.species()[i as usize])
+                .collect();
+            self.rebuild_list()
+        } else {
+            Ok(())
+        }
     }
 
     fn guarded(&mut self, steps: u32) -> Result<()> {
@@ -386,7 +566,7 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
                 None => self.check().map(|(w, c)| (self.steps, w, c)),
             };
             if let Some((step, what, cause)) = found {
-                self.restore();
+                self.restore()?;
                 return Err(blow_up(step, self.steps, what, cause));
             }
         }
@@ -406,6 +586,28 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
                     .collect()
             }
         }
+    }
+}
+
+/// The boundary rule of one axis after a move: a periodic axis wraps by one box length, a
+/// closed one mirrors the coordinate back into the box and flips the velocity component.
+#[inline(always)]
+fn boundary<T: Real>(x: &mut T, v: &mut T, lo: T, hi: T, len: T, periodic: bool) {
+    if periodic {
+        if *x < lo {
+            *x += len;
+            if *x >= hi {
+                *x = lo;
+            }
+        } else if *x >= hi {
+            *x = *x - len;
+        }
+    } else if *x < lo {
+        *x = lo + lo - *x;
+        *v = -*v;
+    } else if *x > hi {
+        *x = hi + hi - *x;
+        *v = -*v;
     }
 }
 
@@ -435,9 +637,9 @@ impl<const D: usize, T: Real> Engine for CpuEngine<D, T> {
     fn state(&mut self) -> Result<State> {
         Ok(State {
             time: self.steps as f64 * self.dt,
-            positions: widen(&self.pos),
-            velocities: widen(&self.synced_velocities()),
-            species: self.species.clone(),
+            positions: self.unslot(&widen(&self.pos)),
+            velocities: self.unslot(&widen(&self.synced_velocities())),
+            species: self.unslot(&self.species),
         })
     }
 
@@ -465,11 +667,24 @@ impl<const D: usize, T: Real> Engine for CpuEngine<D, T> {
     }
 
     fn forces(&mut self) -> Result<Vec<[f64; 3]>> {
-        Ok(self
+        // The forces on a frozen particle are not integrated and reported as 0, as on the
+        // GPU, which keeps only the accelerations.
+        let frozen = self.system.frozen();
+        let f: Vec<[f64; 3]> = self
             .out
             .iter()
-            .map(|o| std::array::from_fn(|d| if d < D { o.f[d].to_f64() } else { 0.0 }))
-            .collect())
+            .zip(&self.species)
+            .map(|(o, &s)| {
+                std::array::from_fn(|d| {
+                    if d < D && !frozen[s as usize] {
+                        o.f[d].to_f64()
+                    } else {
+                        0.0
+                    }
+                })
+            })
+            .collect();
+        Ok(self.unslot(&f))
     }
 
     fn name(&self) -> String {
@@ -489,10 +704,25 @@ impl<const D: usize, T: Real> Engine for CpuEngine<D, T> {
     }
 
     fn save(&mut self) -> Result<EngineState> {
+        let flat = |v: &[[T; D]]| -> Vec<f64> {
+            let mut out = vec![0.0; v.len() * D];
+            for (x, &i) in v.iter().zip(&self.order) {
+                for d in 0..D {
+                    out[i as usize * D + d] = x[d].to_f64();
+                }
+            }
+            out
+        };
+        let reordered = self.order.iter().enumerate().any(|(k, &i)| k != i as usize);
         Ok(EngineState {
             steps: self.steps,
-            pos: self.pos.as_flattened().iter().map(|x| x.to_f64()).collect(),
-            vel: self.vel.as_flattened().iter().map(|x| x.to_f64()).collect(),
+            pos: flat(&self.pos),
+            vel: flat(&self.vel),
+            order: if reordered {
+                self.order.clone()
+            } else {
+                Vec::new()
+            },
         })
     }
 }

@@ -40,4 +40,8 @@ pub(crate) struct EngineState {
     pub pos: Vec<f64>,
     /// Velocities as the integrator stores them (leapfrog: at the half step `t + dt/2`).
     pub vel: Vec<f64>,
+    /// The CPU's slot order when it reorders particles in cell order (the system index of
+    /// the particle in each slot; empty: the system order). The force sums run in slot
+    /// order, so a bit-exact resume needs it.
+    pub order: Vec<u32>,
 }

@@ -20,6 +20,7 @@ use simkit_neighbor::{CELLS_WGSL, CellGrid, GpuCellList, OutOfBox};
 
 use simkit_backend::gpu::{DISPATCH_WGSL, GpuGuard, Uniform, Watch};
 use simkit_backend::guard::{blow_up, chunks};
+use simkit_backend::rng::RNG_WGSL;
 use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Precision, Result};
 
 use crate::config::Integrator;
@@ -32,6 +33,10 @@ pub(crate) const PARAMS_WGSL: &str = simkit_backend::wgsl!("params.wgsl");
 pub(crate) const LAW_WGSL: &str = simkit_backend::wgsl!("law.wgsl");
 const DRIFT_WGSL: &str = simkit_backend::wgsl!("drift.wgsl");
 const FORCE_WGSL: &str = simkit_backend::wgsl!("force.wgsl");
+/// The Gaussian numbers of the thermostat (twin of `crate::thermostat::gaussians`).
+pub(crate) const NOISE_WGSL: &str = simkit_backend::wgsl!("noise.wgsl");
+const LANGEVIN_WGSL: &str = simkit_backend::wgsl!("langevin.wgsl");
+const TICK_WGSL: &str = simkit_backend::wgsl!("tick.wgsl");
 
 /// Steps recorded into one command buffer.
 const STEPS_PER_SUBMIT: u32 = 64;
@@ -52,7 +57,7 @@ pub(crate) struct GpuParams {
     pub n_species: u32,
     pub leapfrog: u32,
     pub dim: u32,
-    pub _pad0: u32,
+    pub seed: u32,
     pub _pad1: u32,
 }
 
@@ -126,6 +131,7 @@ impl Cells {
 struct BoundOnly {
     _table: GpuBuffer<[f32; 4]>,
     _params: Uniform<GpuParams>,
+    _tick: GpuBuffer<u32>,
 }
 
 pub(crate) struct GpuEngine {
@@ -143,6 +149,8 @@ pub(crate) struct GpuEngine {
     cells: Cells,
     drift: (Kernel, wgpu::BindGroup),
     force: (Kernel, wgpu::BindGroup),
+    /// With the thermostat: the kernel advancing the device step counter.
+    tick: Option<(Kernel, wgpu::BindGroup)>,
     guard: GpuGuard,
     steps: u64,
     _bound: BoundOnly,
@@ -222,7 +230,7 @@ impl GpuEngine {
             n_species: system.table().n_species() as u32,
             leapfrog: u32::from(config.integrator == Integrator::Leapfrog),
             dim: axes as u32,
-            _pad0: 0,
+            seed: config.thermostat.map_or(0, |l| l.seed),
             _pad1: 0,
         };
         for d in 0..axes {
@@ -231,7 +239,7 @@ impl GpuEngine {
             params.len[d] = len[d] as f32;
             params.periodic[d] = u32::from(system.periodic()[d]);
         }
-        let (mut pos_h, vel_h, steps): (Vec<[f32; 4]>, Vec<[f32; 4]>, u64) = match saved {
+        let (mut pos_h, mut vel_h, steps): (Vec<[f32; 4]>, Vec<[f32; 4]>, u64) = match saved {
             None => (
                 system
                     .positions()
@@ -280,6 +288,12 @@ impl GpuEngine {
                 }
             }
         }
+        // Frozen particles stand still.
+        for (v, &k) in vel_h.iter_mut().zip(species) {
+            if system.frozen()[k as usize] {
+                *v = [0.0; 4];
+            }
+        }
         // Buffers hold at least one element (an empty system is legal).
         let pad = |mut v: Vec<[f32; 4]>| {
             if v.is_empty() {
@@ -297,12 +311,20 @@ impl GpuEngine {
             .iter()
             .map(|c| [c.c12, c.c6, c.rc2, c.shift])
             .collect();
-        table.extend(
-            system
-                .masses()
-                .iter()
-                .map(|&m| [(1.0 / m) as f32, 0.0, 0.0, 0.0]),
-        );
+        // Per species: 1 / mass (0 for a frozen species, whose forces are not integrated)
+        // and the thermostat's (c1, amplitude).
+        let ou = config
+            .thermostat
+            .map(|l| crate::thermostat::ou_coefficients(system, &l, dt));
+        table.extend(system.masses().iter().enumerate().map(|(s, &m)| {
+            let im = if system.frozen()[s] {
+                0.0
+            } else {
+                (1.0 / m) as f32
+            };
+            let (c1, amp) = ou.as_ref().map_or((1.0, 0.0), |c| c[s]);
+            [im, c1 as f32, amp as f32, 0.0]
+        }));
         let table = GpuBuffer::from_slice(ctx, "md table", &table)?;
         let uniform = Uniform::new(ctx, "md params", &params);
         let cells = Cells::new(ctx, system, &pos, n)?;
@@ -313,17 +335,42 @@ impl GpuEngine {
             sorted_pos,
             wrapped,
         } = cells.buffers();
-        let k = kernel(ctx, &[DRIFT_WGSL], "md_drift", &[])?;
-        let b = k.bind(
-            ctx,
-            &[
-                uniform.binding(),
-                pos.binding(),
-                vel.binding(),
-                acc.binding(),
-            ],
-        )?;
-        let drift = (k, b);
+        // The device step counter keying the thermostat's random numbers (mod 2^32).
+        let tick_buf = GpuBuffer::from_slice(ctx, "md tick", &[steps as u32])?;
+        let (drift, tick) = if config.thermostat.is_some() {
+            let k = kernel(
+                ctx,
+                &[RNG_WGSL, NOISE_WGSL, DRIFT_WGSL, LANGEVIN_WGSL],
+                "md_drift_langevin",
+                &[],
+            )?;
+            let b = k.bind(
+                ctx,
+                &[
+                    uniform.binding(),
+                    pos.binding(),
+                    vel.binding(),
+                    acc.binding(),
+                    table.binding(),
+                    tick_buf.binding(),
+                ],
+            )?;
+            let t = kernel(ctx, &[TICK_WGSL], "md_tick", &[])?;
+            let tb = t.bind(ctx, &[tick_buf.binding()])?;
+            ((k, b), Some((t, tb)))
+        } else {
+            let k = kernel(ctx, &[DRIFT_WGSL], "md_drift", &[])?;
+            let b = k.bind(
+                ctx,
+                &[
+                    uniform.binding(),
+                    pos.binding(),
+                    vel.binding(),
+                    acc.binding(),
+                ],
+            )?;
+            ((k, b), None)
+        };
         let force_resources = [
             grid.binding(),
             uniform.binding(),
@@ -358,15 +405,17 @@ impl GpuEngine {
         })?;
         ctx.submit(encoder);
         cells.check(ctx)?;
-        let guard = GpuGuard::new(
-            ctx,
-            &[
-                Watch::checked(&pos, Precision::F32),
-                Watch::checked(&vel, Precision::F32),
-                Watch::checked(&acc, Precision::F32),
-                Watch::checked(&vir, Precision::F32),
-            ],
-        )?;
+        let mut watches = vec![
+            Watch::checked(&pos, Precision::F32),
+            Watch::checked(&vel, Precision::F32),
+            Watch::checked(&acc, Precision::F32),
+            Watch::checked(&vir, Precision::F32),
+        ];
+        if tick.is_some() {
+            // The step counter is state too: a rollback must rewind it.
+            watches.push(Watch::copied(&tick_buf));
+        }
+        let guard = GpuGuard::new(ctx, &watches)?;
         let engine = Self {
             ctx: ctx.clone(),
             system: system.clone(),
@@ -382,11 +431,13 @@ impl GpuEngine {
             cells,
             drift,
             force,
+            tick,
             guard,
             steps,
             _bound: BoundOnly {
                 _table: table,
                 _params: uniform,
+                _tick: tick_buf,
             },
         };
         // The initial state must be finite, as on the CPU.
@@ -424,7 +475,11 @@ impl GpuEngine {
         in_pass(encoder, "md step", |pass| {
             self.drift.0.dispatch_items(ctx, pass, &self.drift.1, n)?;
             self.cells.encode(ctx, pass)?;
-            self.force.0.dispatch_items(ctx, pass, &self.force.1, n)
+            self.force.0.dispatch_items(ctx, pass, &self.force.1, n)?;
+            if let Some((k, b)) = &self.tick {
+                k.dispatch_items(ctx, pass, b, 1)?;
+            }
+            Ok(())
         })
     }
 
@@ -588,6 +643,7 @@ impl Engine for GpuEngine {
             steps: self.steps,
             pos: flat(self.pos.download(&self.ctx)?, self.n, self.axes),
             vel: flat(self.vel.download(&self.ctx)?, self.n, self.axes),
+            order: Vec::new(),
         })
     }
 }
@@ -616,7 +672,7 @@ mod tests {
                 ("n_species", offset_of!(GpuParams, n_species)),
                 ("leapfrog", offset_of!(GpuParams, leapfrog)),
                 ("dim", offset_of!(GpuParams, dim)),
-                ("_pad0", offset_of!(GpuParams, _pad0)),
+                ("seed", offset_of!(GpuParams, seed)),
                 ("_pad1", offset_of!(GpuParams, _pad1)),
             ],
         );

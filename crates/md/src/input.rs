@@ -52,6 +52,8 @@ pub struct System {
     periodic: [bool; 3],
     masses: Vec<f64>,
     table: PairTable,
+    frozen: Vec<bool>,
+    species_langevin: Vec<Option<[f64; 2]>>,
     species: Vec<u32>,
     positions: Vec<[f64; 3]>,
     velocities: Vec<[f64; 3]>,
@@ -72,6 +74,7 @@ impl System {
         masses: Vec<f64>,
         table: PairTable,
     ) -> Result<Self> {
+        let n_species = masses.len();
         let mut s = Self {
             dim,
             lo,
@@ -79,6 +82,8 @@ impl System {
             periodic,
             masses,
             table,
+            frozen: vec![false; n_species],
+            species_langevin: vec![None; n_species],
             species: Vec::new(),
             positions: Vec::new(),
             velocities: Vec::new(),
@@ -142,7 +147,75 @@ impl System {
                 ));
             }
         }
+        if self.frozen.len() != self.masses.len()
+            || self.species_langevin.len() != self.masses.len()
+        {
+            return Err(Error::invalid(
+                "per-species settings",
+                format!(
+                    "{} frozen flags, {} thermostat targets",
+                    self.frozen.len(),
+                    self.species_langevin.len()
+                ),
+                format!("must be one per species ({})", self.masses.len()),
+            ));
+        }
+        for (s, t) in self.species_langevin.iter().enumerate() {
+            if let Some([t, g]) = *t {
+                crate::thermostat::check_target(&format!("species {s}"), t, g)?;
+            }
+        }
         Ok(())
+    }
+
+    fn check_species(&self, species: u32) -> Result<usize> {
+        let s = species as usize;
+        if s >= self.masses.len() {
+            return Err(Error::invalid(
+                "species",
+                species,
+                format!("must be below the species count {}", self.masses.len()),
+            ));
+        }
+        Ok(s)
+    }
+
+    /// Freezes (`true`) or releases a species: the particles of a frozen species do not
+    /// move (positions fixed bit for bit, velocities zero whatever the system holds, the
+    /// forces on them not integrated and no thermostat noise) but still exert forces on
+    /// the others, like a solid substrate.
+    ///
+    /// Errors: an unknown species.
+    pub fn set_frozen(&mut self, species: u32, frozen: bool) -> Result<()> {
+        let s = self.check_species(species)?;
+        self.frozen[s] = frozen;
+        Ok(())
+    }
+
+    /// Gives species `species` its own Langevin target temperature and friction (used when
+    /// [`crate::Config::thermostat`] is on, in place of its global target; `gamma = 0`
+    /// leaves the species Newtonian). `None` returns it to the global target.
+    ///
+    /// Errors: an unknown species, a negative or non-finite temperature or friction (or
+    /// above `1e30`).
+    pub fn set_species_langevin(&mut self, species: u32, target: Option<[f64; 2]>) -> Result<()> {
+        let s = self.check_species(species)?;
+        if let Some([t, g]) = target {
+            crate::thermostat::check_target(&format!("species {s}"), t, g)?;
+        }
+        self.species_langevin[s] = target;
+        Ok(())
+    }
+
+    /// Per-species frozen flags ([`set_frozen`](Self::set_frozen)).
+    pub fn frozen(&self) -> &[bool] {
+        &self.frozen
+    }
+
+    /// Per-species Langevin targets `[temperature, gamma]`
+    /// ([`set_species_langevin`](Self::set_species_langevin)).
+    pub fn species_langevin(&self) -> &[Option<[f64; 2]>] {
+        &self.species_langevin
     }
 
     fn check_particle(&self, i: usize, s: u32, x: [f64; 3], v: [f64; 3]) -> Result<()> {

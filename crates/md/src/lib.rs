@@ -8,6 +8,10 @@
 //! (`a = b = 1`: Lennard-Jones; `b = 0`: purely repulsive), optionally shifted by
 //! `phi(r_c)` ([`Config::shift`]), integrated at constant energy (NVE) with velocity
 //! Verlet or leapfrog ([`Integrator`]) in a 2D or 3D box with periodic or reflecting axes.
+//! Optional: a Langevin thermostat ([`Config::thermostat`], [`Langevin`]; BAOAB splitting
+//! of Leimkuhler & Matthews 2013, global or per-species targets, counter-based random
+//! numbers shared by the CPU and the GPU) and frozen species ([`System::set_frozen`]: a
+//! substrate that exerts forces but does not move).
 //!
 //! - [`System`]: box, species masses, pair table, particles (validated).
 //! - [`Md`]: the run, `Md::new(&system, &config, backend)`, implementing
@@ -18,6 +22,8 @@
 //! - [`pair_force_energy`]: the pair law, one function generic over
 //!   [`simkit_backend::Real`] (`f64` default, `f32` with [`Config::precision`]).
 //! - [`scenes`]: LAMMPS's `in.lj` melt and a gas/liquid/solid table.
+//! - [`reference`](mod@reference): NIST's truncated Lennard-Jones state point, reproduced by a
+//!   thermostatted run.
 //!
 //! The CPU backend keeps a Verlet list within `max r_c + skin` (rebuilt when a particle has
 //! moved more than half the skin) and gathers the forces per particle in parallel: results
@@ -68,9 +74,11 @@ mod engine;
 #[cfg(feature = "gpu")]
 mod gpu;
 mod input;
+pub mod reference;
 pub mod scenes;
 mod sim;
 mod table;
+mod thermostat;
 
 pub use config::{
     Config, DEFAULT_SKIN, DEFAULT_STEPS_PER_PERIOD, Integrator, MIN_STEPS_PER_PERIOD, StepGuide,
@@ -82,3 +90,4 @@ pub use sim::{Md, State};
 pub use table::{
     MAX_COEFFICIENT, MAX_SPECIES, PairCoeff, PairParams, PairTable, pair_force_energy,
 };
+pub use thermostat::Langevin;

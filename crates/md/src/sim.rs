@@ -5,7 +5,7 @@ use simkit_backend::{Backend, Error, Precision, Restart, Result, Simulation, che
 
 use crate::cpu::CpuEngine;
 use crate::engine::{Engine, EngineState};
-use crate::{Config, Diagnostics, Dim, Integrator, System};
+use crate::{Config, Diagnostics, Dim, Integrator, Langevin, System};
 
 /// The checkpoint model string of an engine: backend, precision, dimension.
 pub(crate) fn model_name(gpu: bool, precision: Precision, axes: usize) -> String {
@@ -26,6 +26,8 @@ struct ConfigRecord {
     check_every: u32,
     shift: bool,
     allow_unstable_dt: bool,
+    thermostat: Option<Langevin>,
+    reorder_every: u32,
 }
 
 impl From<&Config> for ConfigRecord {
@@ -38,6 +40,8 @@ impl From<&Config> for ConfigRecord {
             check_every: c.check_every,
             shift: c.shift,
             allow_unstable_dt: c.allow_unstable_dt,
+            thermostat: c.thermostat,
+            reorder_every: c.reorder_every,
         }
     }
 }
@@ -56,6 +60,8 @@ impl From<ConfigRecord> for Config {
             check_every: c.check_every,
             shift: c.shift,
             allow_unstable_dt: c.allow_unstable_dt,
+            thermostat: c.thermostat,
+            reorder_every: c.reorder_every,
         }
     }
 }
@@ -177,7 +183,8 @@ impl Md {
         self.engine.diagnostics()
     }
 
-    /// The force on every particle at the current positions (`[fx, fy, 0]` in 2D).
+    /// The force on every particle at the current positions (`[fx, fy, 0]` in 2D; 0 on the
+    /// particles of a frozen species, whose forces are not integrated).
     pub fn forces(&mut self) -> Result<Vec<[f64; 3]>> {
         self.engine.forces()
     }

@@ -160,3 +160,68 @@ fn both_backends_refuse_the_same_initial_states() -> Result<()> {
     }
     Ok(())
 }
+
+/// With the Langevin thermostat the random stream is keyed by the step, so a rollback must
+/// also rewind the step that keys it (on the GPU a device counter): after a blow-up, the
+/// run continued from the rolled-back state matches a fresh run stepped to the same step.
+#[test]
+fn a_thermostatted_blow_up_rolls_back_the_random_stream_too() -> Result<()> {
+    let sys = liquid()?;
+    let config = Config {
+        thermostat: Some(simkit_md::Langevin::new(1.44, 0.5, 17)),
+        ..unstable()
+    };
+    for backend in backends("a_thermostatted_blow_up_rolls_back_the_random_stream_too") {
+        let mut md = Md::new(&sys, &config, backend)?;
+        let Err(Error::BlowUp { rolled_back_to, .. }) = md.step(3000) else {
+            panic!("dt = 0.03 must blow up with the thermostat too")
+        };
+        assert!(rolled_back_to > 10);
+        // Continue 2 steps from the rolled-back state (the blow-up itself comes later).
+        let mut fresh = Md::new(&sys, &config, backend)?;
+        fresh.step(rolled_back_to as u32 - 10)?;
+        let mut again = Md::new(&sys, &config, backend)?;
+        again.step(rolled_back_to as u32)?;
+        assert_eq!(again.state()?, md.state()?, "{}", md.backend_name());
+        md.step(2)?;
+        again.step(2)?;
+        assert_eq!(again.state()?, md.state()?, "{}", md.backend_name());
+        fresh.step(12)?;
+        assert_eq!(fresh.state()?, md.state()?, "{}", md.backend_name());
+    }
+    Ok(())
+}
+
+/// Regression (found by the property tests): a finite velocity whose kinetic energy
+/// overflows f64 (a pair with no stiffness guidance, so no time-step bound, at dt = 1e300)
+/// is a blow-up, not a state with infinite diagnostics.
+#[test]
+fn an_overflowing_kinetic_energy_is_a_blow_up() -> Result<()> {
+    let p = PairParams::new(0.1, 0.3, 0.0, 1.289, 1.85);
+    let table = PairTable::uniform(2, p)?;
+    let mut sys = System::new(
+        Dim::Two,
+        [0.0; 3],
+        [8.0; 3],
+        [false; 3],
+        vec![1.0, 2.0],
+        table,
+    )?;
+    sys.add_particle(0, [0.0, 5.97, 0.0], [1e-300, 0.0, 0.0])?;
+    sys.add_particle(1, [5.99, 4.92, 0.0], [0.0; 3])?;
+    let config = Config {
+        dt: Some(1e300),
+        check_every: 1,
+        ..Config::default()
+    };
+    let mut md = Md::new(&sys, &config, Backend::Cpu)?;
+    let e = md
+        .step(10)
+        .expect_err("the kinetic energy overflows at step 5");
+    assert!(
+        matches!(&e, Error::BlowUp { rolled_back_to: 4, what, .. } if what.contains("kinetic energy")),
+        "{e}"
+    );
+    assert!(md.diagnostics()?.kinetic.is_finite());
+    Ok(())
+}

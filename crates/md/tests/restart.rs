@@ -2,10 +2,19 @@
 
 use simkit_backend::testing::{backends, check_restart};
 use simkit_backend::{Backend, Error, Precision, Restart, Result, Simulation, checkpoint};
-use simkit_md::{Config, Dim, Integrator, Md, PairParams, PairTable, System, scenes};
+use simkit_md::{Config, Dim, Integrator, Langevin, Md, PairParams, PairTable, System, scenes};
 
 fn mix() -> System {
     scenes::three_phase_mix([6; 3], 0.4, 1.0, 9).unwrap()
+}
+
+/// The mixture with the solid species frozen and the gas on its own thermostat target.
+fn mix_frozen() -> System {
+    let mut sys = mix();
+    sys.set_frozen(scenes::SOLID, true).unwrap();
+    sys.set_species_langevin(scenes::GAS, Some([2.0, 4.0]))
+        .unwrap();
+    sys
 }
 
 fn box_2d() -> System {
@@ -35,7 +44,7 @@ type Case = (&'static str, fn() -> System, Config);
 #[test]
 fn restart_is_bit_exact() {
     let name = "restart_is_bit_exact";
-    let cases: [Case; 3] = [
+    let cases: [Case; 6] = [
         (
             "3D mix, f64, velocity Verlet",
             mix,
@@ -60,6 +69,34 @@ fn restart_is_bit_exact() {
             Config {
                 integrator: Integrator::Leapfrog,
                 ..Config::with_dt(0.004)
+            },
+        ),
+        (
+            "3D mix, f64, Langevin, frozen solid",
+            mix_frozen,
+            Config {
+                check_every: 7,
+                thermostat: Some(Langevin::new(0.9, 1.0, 99)),
+                ..Config::default()
+            },
+        ),
+        (
+            "2D closed walls, f32, leapfrog, Langevin",
+            box_2d,
+            Config {
+                precision: Precision::F32,
+                integrator: Integrator::Leapfrog,
+                thermostat: Some(Langevin::new(0.5, 3.0, 5)),
+                ..Config::with_dt(0.004)
+            },
+        ),
+        (
+            "3D mix, f64, Langevin, reordered in cell order every 9 steps (CPU)",
+            mix,
+            Config {
+                reorder_every: 9,
+                thermostat: Some(Langevin::new(0.9, 1.0, 4)),
+                ..Config::default()
             },
         ),
     ];

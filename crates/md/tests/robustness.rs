@@ -10,7 +10,7 @@ use proptest::test_runner::{
     Config as RunnerConfig, RngAlgorithm, TestCaseError, TestRng, TestRunner,
 };
 use simkit_backend::{Backend, Error, Precision, Restart, Simulation};
-use simkit_md::{Config, Dim, Integrator, Md, PairParams, PairTable, System, scenes};
+use simkit_md::{Config, Dim, Integrator, Langevin, Md, PairParams, PairTable, System, scenes};
 
 const SEED: [u8; 32] = *b"simkit-md robustness seed 2026!!";
 
@@ -191,6 +191,12 @@ fn runs_step_to_a_finite_state_or_a_clear_error() {
             ),
             any::<[bool; 3]>(),
             0u32..40,
+            (
+                prop::option::of((pos_num(0.0, 3.0), pos_num(0.0, 10.0), any::<u32>())),
+                prop::option::of((pos_num(0.0, 3.0), pos_num(0.0, 10.0))),
+                any::<bool>(),
+                0u32..5,
+            ),
         ),
         |(
             dim,
@@ -199,6 +205,7 @@ fn runs_step_to_a_finite_state_or_a_clear_error() {
             (dt, skin, check_every, integrator, precision, shift, allow),
             periodic,
             steps,
+            (thermostat, species_target, frozen, reorder_every),
         )| {
             let table = match PairTable::uniform(2, p) {
                 Ok(t) => t,
@@ -218,6 +225,12 @@ fn runs_step_to_a_finite_state_or_a_clear_error() {
                     clear(&e)?;
                 }
             }
+            if let Err(e) = sys.set_frozen(1, frozen) {
+                clear(&e)?;
+            }
+            if let Err(e) = sys.set_species_langevin(0, species_target.map(|(t, g)| [t, g])) {
+                clear(&e)?;
+            }
             let config = Config {
                 dt,
                 integrator,
@@ -226,6 +239,8 @@ fn runs_step_to_a_finite_state_or_a_clear_error() {
                 check_every,
                 shift,
                 allow_unstable_dt: allow,
+                thermostat: thermostat.map(|(t, g, seed)| Langevin::new(t, g, seed)),
+                reorder_every,
             };
             let mut md = match Md::new(&sys, &config, Backend::Cpu) {
                 Ok(m) => m,
