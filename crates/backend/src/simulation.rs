@@ -43,6 +43,17 @@ pub enum Backend<'a> {
 }
 
 impl Backend<'_> {
+    /// Whether this is a GPU backend.
+    pub fn is_gpu(&self) -> bool {
+        match self {
+            Backend::Cpu => false,
+            #[cfg(feature = "gpu")]
+            Backend::Gpu(_) => true,
+            #[cfg(not(feature = "gpu"))]
+            Backend::NoGpu(never, _) => match *never {},
+        }
+    }
+
     /// `"cpu"` or `"gpu (<adapter name>)"`.
     pub fn name(&self) -> String {
         match self {

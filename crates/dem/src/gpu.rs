@@ -18,7 +18,10 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use simkit_neighbor::{CELLS_WGSL, CellGrid, GPU_LOOP_RESERVE, GpuCellList, MAX_CELLS, OutOfBox};
+use simkit_neighbor::{
+    AnyGpuCellList, CELLS_WGSL, CellGrid, GPU_LOOP_RESERVE, GpuCellBuffers, GpuCellList, MAX_CELLS,
+    OutOfBox,
+};
 
 use simkit_backend::gpu::{DISPATCH_WGSL, GUARD_WGSL, GpuGuard, Uniform, Watch};
 use simkit_backend::guard::{blow_up, chunks};
@@ -91,78 +94,30 @@ struct GpuWall {
     motion: [f32; 4],
 }
 
-/// The cell-list buffers the force kernel reads.
-struct CellBuffers<'a> {
-    grid: &'a Uniform<simkit_neighbor::GpuGridParams>,
-    cell_start: &'a GpuBuffer<u32>,
-    sorted_ids: &'a GpuBuffer<u32>,
-    sorted_pos: &'a GpuBuffer<[f32; 4]>,
-    wrapped: &'a GpuBuffer<[f32; 4]>,
-}
-
-enum Cells {
-    Two(GpuCellList<2>),
-    Three(GpuCellList<3>),
-}
-
-impl Cells {
-    fn new(ctx: &GpuContext, p: &Prepared, pos: &GpuBuffer<[f32; 4]>) -> Result<Self> {
-        fn grid<const D: usize>(p: &Prepared) -> Result<CellGrid<D>> {
-            let lo: [f64; D] = std::array::from_fn(|d| p.lo[d]);
-            let len: [f64; D] = std::array::from_fn(|d| p.len[d]);
-            let per: [bool; D] = std::array::from_fn(|d| p.periodic[d]);
-            // Cells at least a contact distance wide; a sparse box gets wider cells (at most
-            // about 8 n + 4096 of them), which only costs distance tests.
-            let limit = (8 * p.n + 4096).min(MAX_CELLS) as f64;
-            let mut width = p.cutoff;
-            while (0..D)
-                .map(|d| (len[d] / width).floor().max(1.0))
-                .product::<f64>()
-                > limit
-            {
-                width *= 1.25;
-            }
-            Ok(CellGrid::new(lo, len, per, width)?.with_out_of_box(OutOfBox::Clamp))
+/// The device cell list of the scene's dimension, cells at least a contact distance wide.
+fn cell_list(ctx: &GpuContext, p: &Prepared, pos: &GpuBuffer<[f32; 4]>) -> Result<AnyGpuCellList> {
+    fn grid<const D: usize>(p: &Prepared) -> Result<CellGrid<D>> {
+        let lo: [f64; D] = std::array::from_fn(|d| p.lo[d]);
+        let len: [f64; D] = std::array::from_fn(|d| p.len[d]);
+        let per: [bool; D] = std::array::from_fn(|d| p.periodic[d]);
+        // Cells at least a contact distance wide; a sparse box gets wider cells (at most
+        // about 8 n + 4096 of them), which only costs distance tests.
+        let limit = (8 * p.n + 4096).min(MAX_CELLS) as f64;
+        let mut width = p.cutoff;
+        while (0..D)
+            .map(|d| (len[d] / width).floor().max(1.0))
+            .product::<f64>()
+            > limit
+        {
+            width *= 1.25;
         }
-        Ok(if p.axes == 2 {
-            Cells::Two(GpuCellList::new(ctx, &grid::<2>(p)?, pos)?)
-        } else {
-            Cells::Three(GpuCellList::new(ctx, &grid::<3>(p)?, pos)?)
-        })
+        Ok(CellGrid::new(lo, len, per, width)?.with_out_of_box(OutOfBox::Clamp))
     }
-
-    fn encode(&self, ctx: &GpuContext, pass: &mut wgpu::ComputePass<'_>) -> Result<()> {
-        match self {
-            Cells::Two(c) => c.encode(ctx, pass),
-            Cells::Three(c) => c.encode(ctx, pass),
-        }
-    }
-
-    fn check(&self, ctx: &GpuContext) -> Result<()> {
-        match self {
-            Cells::Two(c) => c.check(ctx),
-            Cells::Three(c) => c.check(ctx),
-        }
-    }
-
-    fn buffers(&self) -> CellBuffers<'_> {
-        match self {
-            Cells::Two(c) => CellBuffers {
-                grid: c.params(),
-                cell_start: c.cell_start(),
-                sorted_ids: c.sorted_ids(),
-                sorted_pos: c.sorted_pos(),
-                wrapped: c.wrapped(),
-            },
-            Cells::Three(c) => CellBuffers {
-                grid: c.params(),
-                cell_start: c.cell_start(),
-                sorted_ids: c.sorted_ids(),
-                sorted_pos: c.sorted_pos(),
-                wrapped: c.wrapped(),
-            },
-        }
-    }
+    Ok(if p.axes == 2 {
+        AnyGpuCellList::Two(GpuCellList::new(ctx, &grid::<2>(p)?, pos)?)
+    } else {
+        AnyGpuCellList::Three(GpuCellList::new(ctx, &grid::<3>(p)?, pos)?)
+    })
 }
 
 pub(crate) struct GpuEngine {
@@ -170,7 +125,7 @@ pub(crate) struct GpuEngine {
     prep: Prepared,
     pos: GpuBuffer<[f32; 4]>,
     vel: GpuBuffer<[f32; 4]>,
-    cells: Cells,
+    cells: AnyGpuCellList,
     drift: (Kernel, wgpu::BindGroup),
     force: (Kernel, wgpu::BindGroup),
     tick: (Kernel, wgpu::BindGroup),
@@ -345,8 +300,8 @@ impl GpuEngine {
             _pad1: 0,
         };
         let params = Uniform::new(ctx, "dem params", &pv);
-        let cells = Cells::new(ctx, &prep, &pos)?;
-        let CellBuffers {
+        let cells = cell_list(ctx, &prep, &pos)?;
+        let GpuCellBuffers {
             grid,
             cell_start,
             sorted_ids,

@@ -128,7 +128,7 @@ impl Dem {
         backend: Backend<'_>,
         saved: Option<&EngineState>,
     ) -> Result<Self> {
-        let single = is_gpu(backend) || config.precision == Precision::F32;
+        let single = backend.is_gpu() || config.precision == Precision::F32;
         let prep = Prepared::new(scene, config, single)?;
         diagnostics::check_initial_overlaps(&prep)?;
         let engine: Box<dyn Engine> = match backend {
@@ -211,15 +211,6 @@ impl Simulation for Dem {
     }
 }
 
-/// Whether `backend` is a GPU.
-fn is_gpu(backend: Backend<'_>) -> bool {
-    match backend {
-        Backend::Cpu => false,
-        #[cfg(feature = "gpu")]
-        Backend::Gpu(_) => true,
-    }
-}
-
 /// Checkpoints hold the scene, the settings and the complete dynamic state (CPU: positions,
 /// velocities, accelerations, half-step velocities or last displacements, the particle
 /// order and the positions of the last neighbour-list build, the step count and the
@@ -256,7 +247,7 @@ impl Restart for Dem {
         let scene = Scene::from_record(payload.scene)
             .map_err(|e| fail(format!("the stored scene is not valid: {e}")))?;
         let config = Config::from(payload.config);
-        let want = model_name(is_gpu(backend), config.precision, scene.dim().axes());
+        let want = model_name(backend.is_gpu(), config.precision, scene.dim().axes());
         if header.model != want {
             return Err(fail(format!(
                 "holds a {} run, and {} on this backend would be a {want} run; resume it on \

@@ -16,7 +16,9 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use simkit_neighbor::{CELLS_WGSL, CellGrid, GpuCellList, OutOfBox};
+use simkit_neighbor::{
+    AnyGpuCellList, CELLS_WGSL, CellGrid, GpuCellBuffers, GpuCellList, OutOfBox,
+};
 
 use simkit_backend::gpu::{DISPATCH_WGSL, GpuGuard, Uniform, Watch};
 use simkit_backend::guard::{blow_up, chunks};
@@ -61,70 +63,29 @@ pub(crate) struct GpuParams {
     pub _pad1: u32,
 }
 
-enum Cells {
-    Two(GpuCellList<2>),
-    Three(GpuCellList<3>),
-}
-
-/// The cell-list buffers the force kernel binds.
-struct CellBuffers<'a> {
-    grid: &'a Uniform<simkit_neighbor::GpuGridParams>,
-    cell_start: &'a GpuBuffer<u32>,
-    sorted_ids: &'a GpuBuffer<u32>,
-    sorted_pos: &'a GpuBuffer<[f32; 4]>,
-    wrapped: &'a GpuBuffer<[f32; 4]>,
-}
-
-impl Cells {
-    fn new(ctx: &GpuContext, sys: &System, pos: &GpuBuffer<[f32; 4]>, n: usize) -> Result<Self> {
-        fn grid<const D: usize>(sys: &System) -> Result<CellGrid<D>> {
-            let (lo, len, per) = (sys.lo(), sys.lengths(), sys.periodic());
-            Ok(CellGrid::new(
-                std::array::from_fn(|d| lo[d]),
-                std::array::from_fn(|d| len[d]),
-                std::array::from_fn(|d| per[d]),
-                sys.table().max_cutoff(),
-            )?
-            .with_out_of_box(OutOfBox::Clamp))
-        }
-        Ok(match sys.dim() {
-            Dim::Two => Cells::Two(GpuCellList::with_count(ctx, &grid::<2>(sys)?, pos, n)?),
-            Dim::Three => Cells::Three(GpuCellList::with_count(ctx, &grid::<3>(sys)?, pos, n)?),
-        })
+/// The device cell list of the system's dimension, cells one largest cutoff wide.
+fn cell_list(
+    ctx: &GpuContext,
+    sys: &System,
+    pos: &GpuBuffer<[f32; 4]>,
+    n: usize,
+) -> Result<AnyGpuCellList> {
+    fn grid<const D: usize>(sys: &System) -> Result<CellGrid<D>> {
+        let (lo, len, per) = (sys.lo(), sys.lengths(), sys.periodic());
+        Ok(CellGrid::new(
+            std::array::from_fn(|d| lo[d]),
+            std::array::from_fn(|d| len[d]),
+            std::array::from_fn(|d| per[d]),
+            sys.table().max_cutoff(),
+        )?
+        .with_out_of_box(OutOfBox::Clamp))
     }
-
-    fn encode(&self, ctx: &GpuContext, pass: &mut wgpu::ComputePass<'_>) -> Result<()> {
-        match self {
-            Cells::Two(c) => c.encode(ctx, pass),
-            Cells::Three(c) => c.encode(ctx, pass),
+    Ok(match sys.dim() {
+        Dim::Two => AnyGpuCellList::Two(GpuCellList::with_count(ctx, &grid::<2>(sys)?, pos, n)?),
+        Dim::Three => {
+            AnyGpuCellList::Three(GpuCellList::with_count(ctx, &grid::<3>(sys)?, pos, n)?)
         }
-    }
-
-    fn check(&self, ctx: &GpuContext) -> Result<()> {
-        match self {
-            Cells::Two(c) => c.check(ctx),
-            Cells::Three(c) => c.check(ctx),
-        }
-    }
-
-    fn buffers(&self) -> CellBuffers<'_> {
-        match self {
-            Cells::Two(c) => CellBuffers {
-                grid: c.params(),
-                cell_start: c.cell_start(),
-                sorted_ids: c.sorted_ids(),
-                sorted_pos: c.sorted_pos(),
-                wrapped: c.wrapped(),
-            },
-            Cells::Three(c) => CellBuffers {
-                grid: c.params(),
-                cell_start: c.cell_start(),
-                sorted_ids: c.sorted_ids(),
-                sorted_pos: c.sorted_pos(),
-                wrapped: c.wrapped(),
-            },
-        }
-    }
+    })
 }
 
 /// Buffers only the kernels touch (held so they live as long as the bind groups).
@@ -146,7 +107,7 @@ pub(crate) struct GpuEngine {
     vel: GpuBuffer<[f32; 4]>,
     acc: GpuBuffer<[f32; 4]>,
     vir: GpuBuffer<f32>,
-    cells: Cells,
+    cells: AnyGpuCellList,
     drift: (Kernel, wgpu::BindGroup),
     force: (Kernel, wgpu::BindGroup),
     /// With the thermostat: the kernel advancing the device step counter.
@@ -327,8 +288,8 @@ impl GpuEngine {
         }));
         let table = GpuBuffer::from_slice(ctx, "md table", &table)?;
         let uniform = Uniform::new(ctx, "md params", &params);
-        let cells = Cells::new(ctx, system, &pos, n)?;
-        let CellBuffers {
+        let cells = cell_list(ctx, system, &pos, n)?;
+        let GpuCellBuffers {
             grid,
             cell_start,
             sorted_ids,

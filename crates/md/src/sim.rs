@@ -214,15 +214,6 @@ impl Simulation for Md {
     }
 }
 
-/// Whether `backend` is a GPU.
-fn is_gpu(backend: Backend<'_>) -> bool {
-    match backend {
-        Backend::Cpu => false,
-        #[cfg(feature = "gpu")]
-        Backend::Gpu(_) => true,
-    }
-}
-
 /// Checkpoints hold the system, the settings, the step count, the positions and the
 /// velocities as the integrator stores them; forces are recomputed on resume (bit for bit:
 /// they depend on the positions only; on the GPU from the same cell order, since the cell
@@ -261,7 +252,7 @@ impl Restart for Md {
             .map_err(|e| fail(format!("the stored system is not valid: {e}")))?;
         let config = Config::from(payload.config);
         let want = model_name(
-            is_gpu(backend),
+            backend.is_gpu(),
             config.precision,
             payload.system.dim().axes(),
         );

@@ -499,6 +499,69 @@ impl<const D: usize> GpuCellList<D> {
     pub fn status(&self) -> &GpuBuffer<u32> {
         &self.status
     }
+
+    /// The buffers a kernel binds to walk the cells.
+    pub fn buffers(&self) -> GpuCellBuffers<'_> {
+        GpuCellBuffers {
+            grid: &self.params,
+            cell_start: &self.cell_start,
+            sorted_ids: &self.sorted_ids,
+            sorted_pos: &self.sorted_pos,
+            wrapped: &self.wrapped,
+        }
+    }
+}
+
+/// The buffers of a [`GpuCellList`] that a kernel binds to walk the cells (see the table on
+/// [`GpuCellList`]).
+#[derive(Clone, Copy)]
+pub struct GpuCellBuffers<'a> {
+    /// The grid parameters (`NbGrid` in [`CELLS_WGSL`]).
+    pub grid: &'a Uniform<GpuGridParams>,
+    /// First sorted index of every cell, plus the total.
+    pub cell_start: &'a GpuBuffer<u32>,
+    /// Particle ids in cell order.
+    pub sorted_ids: &'a GpuBuffer<u32>,
+    /// Wrapped positions in cell order.
+    pub sorted_pos: &'a GpuBuffer<[f32; 4]>,
+    /// Wrapped positions in particle order.
+    pub wrapped: &'a GpuBuffer<[f32; 4]>,
+}
+
+/// A [`GpuCellList`] of a dimension chosen at run time (2 or 3), for simulations whose
+/// dimension is an input: builds and checks the list and hands its buffers to the kernels
+/// without a `match` on the dimension at every use.
+pub enum AnyGpuCellList {
+    /// A 2D cell list.
+    Two(GpuCellList<2>),
+    /// A 3D cell list.
+    Three(GpuCellList<3>),
+}
+
+impl AnyGpuCellList {
+    /// Records the build ([`GpuCellList::encode`]).
+    pub fn encode(&self, ctx: &GpuContext, pass: &mut wgpu::ComputePass<'_>) -> Result<()> {
+        match self {
+            Self::Two(c) => c.encode(ctx, pass),
+            Self::Three(c) => c.encode(ctx, pass),
+        }
+    }
+
+    /// Checks the last build ([`GpuCellList::check`]).
+    pub fn check(&self, ctx: &GpuContext) -> Result<()> {
+        match self {
+            Self::Two(c) => c.check(ctx),
+            Self::Three(c) => c.check(ctx),
+        }
+    }
+
+    /// The buffers a kernel binds.
+    pub fn buffers(&self) -> GpuCellBuffers<'_> {
+        match self {
+            Self::Two(c) => c.buffers(),
+            Self::Three(c) => c.buffers(),
+        }
+    }
 }
 
 /// A CSR neighbour list computed on the GPU from a [`GpuCellList`]: a count pass, a prefix

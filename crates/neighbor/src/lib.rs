@@ -74,8 +74,9 @@ pub use brute::BruteForce;
 pub use config::Config;
 #[cfg(feature = "gpu")]
 pub use gpu::{
-    CELLS_WGSL, GPU_LOOP_RESERVE, GPU_MAX_CELLS_PER_AXIS, GPU_MAX_PER_CELL, GpuCellList,
-    GpuGridParams, GpuNeighborList, GpuNeighborSearch, positions_to_f32,
+    AnyGpuCellList, CELLS_WGSL, GPU_LOOP_RESERVE, GPU_MAX_CELLS_PER_AXIS, GPU_MAX_PER_CELL,
+    GpuCellBuffers, GpuCellList, GpuGridParams, GpuNeighborList, GpuNeighborSearch,
+    positions_to_f32,
 };
 pub use grid::{CELL_MARGIN, CellGrid, MAX_CELLS, OutOfBox};
 pub use linked::{EMPTY, LinkedCells};
