@@ -102,10 +102,8 @@ pub fn encode<T: Serialize + ?Sized>(
     model: &str,
     payload: &T,
 ) -> Result<Vec<u8>> {
-    let body = postcard::to_stdvec(payload).map_err(|e| Error::Checkpoint {
-        source_name: IN_MEMORY.to_string(),
-        reason: format!("encoding the state of {model} failed: {e}"),
-    })?;
+    let body = postcard::to_stdvec(payload)
+        .map_err(|e| Error::checkpoint(format!("encoding the state of {model} failed: {e}")))?;
     let mut out = Vec::with_capacity(body.len() + 64);
     out.extend_from_slice(&MAGIC);
     out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());

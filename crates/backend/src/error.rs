@@ -112,6 +112,17 @@ impl Error {
     }
 }
 
+impl Error {
+    /// An [`Error::Checkpoint`] about checkpoint bytes (not a file): what is wrong and what
+    /// to do. [`crate::Restart::resume_file`] replaces the source with the file's path.
+    pub fn checkpoint(reason: impl Into<String>) -> Self {
+        Error::Checkpoint {
+            source_name: "<bytes>".into(),
+            reason: reason.into(),
+        }
+    }
+}
+
 /// Result alias used across simkit.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 

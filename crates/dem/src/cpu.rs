@@ -515,9 +515,8 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
     /// particles).
     fn load(&mut self, s: &EngineState) -> Result<()> {
         let n = self.prep.n;
-        let bad = |what: String| Error::Checkpoint {
-            source_name: "<bytes>".into(),
-            reason: format!("{what}; the file does not belong to this scene"),
+        let bad = |what: String| {
+            Error::checkpoint(format!("{what}; the file does not belong to this scene"))
         };
         if s.width as usize != D {
             return Err(bad(format!(

@@ -23,7 +23,7 @@ use simkit_neighbor::{
     OutOfBox,
 };
 
-use simkit_backend::gpu::{DISPATCH_WGSL, GUARD_WGSL, GpuGuard, Uniform, Watch};
+use simkit_backend::gpu::{DISPATCH_WGSL, GUARD_WGSL, GpuGuard, Uniform, Watch, record_pass};
 use simkit_backend::guard::{blow_up, chunks};
 use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Precision, Result};
 
@@ -169,19 +169,6 @@ fn kernel(
             constants: consts,
         },
     )
-}
-
-/// Records one compute pass into `encoder`.
-fn in_pass(
-    encoder: &mut wgpu::CommandEncoder,
-    label: &str,
-    record: impl FnOnce(&mut wgpu::ComputePass<'_>) -> Result<()>,
-) -> Result<()> {
-    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-        label: Some(label),
-        timestamp_writes: None,
-    });
-    record(&mut pass)
 }
 
 impl GpuEngine {
@@ -412,7 +399,7 @@ impl GpuEngine {
         if saved.is_none() {
             // Initial accelerations a(0) with the initial velocities.
             let mut encoder = ctx.encoder("dem init");
-            in_pass(&mut encoder, "dem init forces", |pass| {
+            record_pass(&mut encoder, "dem init forces", |pass| {
                 cells.encode(ctx, pass)?;
                 init.dispatch_items(ctx, pass, &init_bind, n as u64)
             })?;
@@ -453,10 +440,8 @@ type Loaded = (Vec<[f32; 4]>, Vec<[f32; 4]>, Vec<[f32; 4]>);
 
 /// The device arrays of a checkpoint, checked against the particle count.
 fn load(s: &EngineState, n: usize) -> Result<Loaded> {
-    let bad = |what: String| Error::Checkpoint {
-        source_name: "<bytes>".into(),
-        reason: format!("{what}; the file does not belong to this scene"),
-    };
+    let bad =
+        |what: String| Error::checkpoint(format!("{what}; the file does not belong to this scene"));
     if s.width != 4 || s.id.len() != n || s.id.iter().enumerate().any(|(k, &i)| i as usize != k) {
         return Err(bad(format!(
             "{} slots of {} values, expected {n} slots of 4 in scene order",
@@ -488,7 +473,7 @@ impl GpuEngine {
     fn record_step(&self, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
         let ctx = &self.ctx;
         let n = self.prep.n as u64;
-        in_pass(encoder, "dem step", |pass| {
+        record_pass(encoder, "dem step", |pass| {
             self.drift.0.dispatch_items(ctx, pass, &self.drift.1, n)?;
             self.cells.encode(ctx, pass)?;
             self.force.0.dispatch_items(ctx, pass, &self.force.1, n)?;
@@ -581,7 +566,7 @@ impl Engine for GpuEngine {
                     recorded = 0;
                 }
             }
-            in_pass(&mut encoder, "dem check", |pass| {
+            record_pass(&mut encoder, "dem check", |pass| {
                 self.check.0.dispatch_items(ctx, pass, &self.check.1, n)
             })?;
             self.guard.record(ctx, &mut encoder)?;

@@ -240,10 +240,7 @@ impl Restart for Dem {
             env!("CARGO_PKG_VERSION"),
             &header.model,
         )?;
-        let fail = |reason: String| Error::Checkpoint {
-            source_name: "<bytes>".into(),
-            reason,
-        };
+        let fail = |reason: String| Error::checkpoint(reason);
         let scene = Scene::from_record(payload.scene)
             .map_err(|e| fail(format!("the stored scene is not valid: {e}")))?;
         let config = Config::from(payload.config);

@@ -125,23 +125,19 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
             Some(s) => {
                 let unflat = |v: &[f64], what: &str| -> Result<Vec<[T; D]>> {
                     if Some(v.len()) != n.checked_mul(D) {
-                        return Err(Error::Checkpoint {
-                            source_name: "<bytes>".into(),
-                            reason: format!(
-                                "the stored {what} have {} values for {n} particles in {D}D",
-                                v.len()
-                            ),
-                        });
+                        return Err(Error::checkpoint(format!(
+                            "the stored {what} have {} values for {n} particles in {D}D",
+                            v.len()
+                        )));
                     }
                     let out: Vec<[T; D]> = v
                         .chunks_exact(D)
                         .map(|c| std::array::from_fn(|d| T::from_f64(c[d])))
                         .collect();
                     if out.iter().flatten().any(|x| !x.to_f64().is_finite()) {
-                        return Err(Error::Checkpoint {
-                            source_name: "<bytes>".into(),
-                            reason: format!("the stored {what} are not finite"),
-                        });
+                        return Err(Error::checkpoint(format!(
+                            "the stored {what} are not finite"
+                        )));
                     }
                     Ok(out)
                 };
@@ -221,10 +217,9 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
         } else {
             // A stored position must be one the run could have produced.
             if let Some((what, _)) = e.check() {
-                return Err(Error::Checkpoint {
-                    source_name: "<bytes>".into(),
-                    reason: format!("the stored state is not valid: {what}"),
-                });
+                return Err(Error::checkpoint(format!(
+                    "the stored state is not valid: {what}"
+                )));
             }
         }
         e.forces()?;
@@ -256,10 +251,9 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
                 fresh
             });
         if !valid {
-            return Err(Error::Checkpoint {
-                source_name: "<bytes>".into(),
-                reason: format!("the stored particle order is not a permutation of 0..{n}"),
-            });
+            return Err(Error::checkpoint(format!(
+                "the stored particle order is not a permutation of 0..{n}"
+            )));
         }
         let take = |v: &[[T; D]]| -> Vec<[T; D]> { order.iter().map(|&i| v[i as usize]).collect() };
         self.pos = take(&self.pos);

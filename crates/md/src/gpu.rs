@@ -20,7 +20,7 @@ use simkit_neighbor::{
     AnyGpuCellList, CELLS_WGSL, CellGrid, GpuCellBuffers, GpuCellList, OutOfBox,
 };
 
-use simkit_backend::gpu::{DISPATCH_WGSL, GpuGuard, Uniform, Watch};
+use simkit_backend::gpu::{DISPATCH_WGSL, GpuGuard, Uniform, Watch, record_pass};
 use simkit_backend::guard::{blow_up, chunks};
 use simkit_backend::rng::RNG_WGSL;
 use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Precision, Result};
@@ -132,26 +132,6 @@ fn kernel(ctx: &GpuContext, src: &[&str], entry: &str, consts: &[(&str, f64)]) -
     )
 }
 
-/// Records one compute pass into `encoder`.
-fn in_pass(
-    encoder: &mut wgpu::CommandEncoder,
-    label: &str,
-    record: impl FnOnce(&mut wgpu::ComputePass<'_>) -> Result<()>,
-) -> Result<()> {
-    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-        label: Some(label),
-        timestamp_writes: None,
-    });
-    record(&mut pass)
-}
-
-fn bad_checkpoint(reason: String) -> Error {
-    Error::Checkpoint {
-        source_name: "<bytes>".into(),
-        reason,
-    }
-}
-
 impl GpuEngine {
     /// The engine for a validated system at `dt`, at its initial state or, with `saved`,
     /// at a checkpointed one.
@@ -219,13 +199,15 @@ impl GpuEngine {
                     axes: usize,
                 ) -> Result<Vec<&'a [f64]>> {
                     if Some(v.len()) != n.checked_mul(axes) {
-                        return Err(bad_checkpoint(format!(
+                        return Err(Error::checkpoint(format!(
                             "the stored {what} have {} values for {n} particles in {axes}D",
                             v.len()
                         )));
                     }
                     if v.iter().any(|x| !x.is_finite()) {
-                        return Err(bad_checkpoint(format!("the stored {what} are not finite")));
+                        return Err(Error::checkpoint(format!(
+                            "the stored {what} are not finite"
+                        )));
                     }
                     Ok(v.chunks_exact(axes).collect())
                 }
@@ -360,7 +342,7 @@ impl GpuEngine {
         let init = kernel(ctx, &[FORCE_WGSL], "md_force", &[("KICK", start_kick)])?;
         let init_bind = init.bind(ctx, &force_resources)?;
         let mut encoder = ctx.encoder("md init");
-        in_pass(&mut encoder, "md init forces", |pass| {
+        record_pass(&mut encoder, "md init forces", |pass| {
             cells.encode(ctx, pass)?;
             init.dispatch_items(ctx, pass, &init_bind, n as u64)
         })?;
@@ -417,7 +399,7 @@ impl GpuEngine {
             };
             let msg = format!("particle {i}: {what} not finite");
             return Err(match saved {
-                Some(_) => bad_checkpoint(format!("the stored state is not valid: {msg}")),
+                Some(_) => Error::checkpoint(format!("the stored state is not valid: {msg}")),
                 None => Error::invalid(
                     "initial state",
                     msg,
@@ -433,7 +415,7 @@ impl GpuEngine {
     fn record_step(&self, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
         let ctx = &self.ctx;
         let n = self.n as u64;
-        in_pass(encoder, "md step", |pass| {
+        record_pass(encoder, "md step", |pass| {
             self.drift.0.dispatch_items(ctx, pass, &self.drift.1, n)?;
             self.cells.encode(ctx, pass)?;
             self.force.0.dispatch_items(ctx, pass, &self.force.1, n)?;

@@ -242,10 +242,7 @@ impl Restart for Md {
             env!("CARGO_PKG_VERSION"),
             &header.model,
         )?;
-        let fail = |reason: String| Error::Checkpoint {
-            source_name: "<bytes>".into(),
-            reason,
-        };
+        let fail = |reason: String| Error::checkpoint(reason);
         payload
             .system
             .validate()

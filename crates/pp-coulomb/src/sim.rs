@@ -85,13 +85,6 @@ fn model(precision: Precision) -> String {
     format!("PpCoulomb<{p}>")
 }
 
-fn bad_checkpoint(reason: String) -> Error {
-    Error::Checkpoint {
-        source_name: "<bytes>".into(),
-        reason,
-    }
-}
-
 impl std::fmt::Debug for PpCoulomb {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("PpCoulomb")
@@ -341,7 +334,7 @@ impl Restart for PpCoulomb {
             &model(precision),
         )?;
         if saved.config.precision != precision {
-            return Err(bad_checkpoint(format!(
+            return Err(Error::checkpoint(format!(
                 "the header says {} but the state is {}; the file is \
                      inconsistent",
                 model(precision),
@@ -352,7 +345,7 @@ impl Restart for PpCoulomb {
         if let Some(a) = &saved.accelerations
             && (a.len() != n || a.iter().flatten().any(|c| !c.is_finite()))
         {
-            return Err(bad_checkpoint(format!(
+            return Err(Error::checkpoint(format!(
                 "{} kept accelerations for {n} particles, or non-finite ones; the file is \
                  inconsistent",
                 a.len()
@@ -361,7 +354,7 @@ impl Restart for PpCoulomb {
         let (origin_step, origin_time) = saved.origin;
         let energy_ok = saved.energy_ref.is_none_or(|e| e.is_finite());
         if origin_step > saved.steps || !origin_time.is_finite() || !energy_ok {
-            return Err(bad_checkpoint(format!(
+            return Err(Error::checkpoint(format!(
                 "step {} with time origin ({origin_step}, {origin_time}) and energy reference                  {:?}; the file is \
                      inconsistent",
                 saved.steps, saved.energy_ref
@@ -377,7 +370,7 @@ impl Restart for PpCoulomb {
         sim.steps = saved.steps;
         sim.origin = saved.origin;
         if !sim.time().is_finite() {
-            return Err(bad_checkpoint(format!(
+            return Err(Error::checkpoint(format!(
                 "step {} at dt {:e} gives a non-finite time",
                 saved.steps, saved.config.dt
             )));

@@ -211,13 +211,6 @@ fn model_string<T: Real, M>() -> String {
     format!("Rd<{}, {}>", T::WGSL, std::any::type_name::<M>())
 }
 
-fn bad_checkpoint(reason: String) -> Error {
-    Error::Checkpoint {
-        source_name: "<bytes>".into(),
-        reason,
-    }
-}
-
 impl<T: Real, M: Model> Restart for Rd<T, M> {
     /// The complete state: grid, model, config, step counter and simulated time (a GPU run
     /// downloads its fields).
@@ -279,7 +272,7 @@ impl<T: Real, M: Model> Restart for Rd<T, M> {
                 .map(|f| f.into_iter().map(T::from_f64).collect())
                 .collect(),
             _ => {
-                return Err(bad_checkpoint(format!(
+                return Err(Error::checkpoint(format!(
                     "the fields are not in {}; resume it with the precision that wrote it",
                     T::WGSL
                 )));
@@ -287,11 +280,11 @@ impl<T: Real, M: Model> Restart for Rd<T, M> {
         };
         let size = |v: u64| {
             usize::try_from(v)
-                .map_err(|_| bad_checkpoint(format!("grid size {v} does not fit this machine")))
+                .map_err(|_| Error::checkpoint(format!("grid size {v} does not fit this machine")))
         };
         let grid = Grid::new(size(s.nx)?, size(s.ny)?, s.h, s.boundaries, fields)?;
         if !s.epoch_time.is_finite() || s.epoch_step > s.steps {
-            return Err(bad_checkpoint(format!(
+            return Err(Error::checkpoint(format!(
                 "simulated time {} at step {} of {} steps is not a valid clock",
                 s.epoch_time, s.epoch_step, s.steps
             )));

@@ -182,6 +182,20 @@ impl Kernel {
     }
 }
 
+/// Runs `record` inside one compute pass recorded into `encoder` (not submitted: several
+/// passes and copies can share one submission).
+pub fn record_pass(
+    encoder: &mut wgpu::CommandEncoder,
+    label: &str,
+    record: impl FnOnce(&mut wgpu::ComputePass<'_>) -> Result<()>,
+) -> Result<()> {
+    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some(label),
+        timestamp_writes: None,
+    });
+    record(&mut pass)
+}
+
 /// Runs `record` inside one compute pass of a fresh encoder and submits it.
 pub fn run_pass(
     ctx: &GpuContext,
@@ -189,13 +203,7 @@ pub fn run_pass(
     record: impl FnOnce(&mut wgpu::ComputePass<'_>) -> Result<()>,
 ) -> Result<()> {
     let mut encoder = ctx.encoder(label);
-    {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(label),
-            timestamp_writes: None,
-        });
-        record(&mut pass)?;
-    }
+    record_pass(&mut encoder, label, record)?;
     ctx.submit(encoder);
     Ok(())
 }
