@@ -236,11 +236,19 @@ pub fn decode<T: DeserializeOwned>(
     version: &str,
     model: &str,
 ) -> Result<T> {
+    decode_parts(bytes, package, version, Some(model)).map(|(_, payload)| payload)
+}
+
+/// [`decode`], with `model = None` accepting the model the header names.
+fn decode_parts<T: DeserializeOwned>(
+    bytes: &[u8],
+    package: &str,
+    version: &str,
+    model: Option<&str>,
+) -> Result<(String, T)> {
     let (h, payload) = split(bytes, IN_MEMORY)?;
-    let fail = |reason: String| Error::Checkpoint {
-        source_name: IN_MEMORY.to_string(),
-        reason,
-    };
+    let fail = Error::checkpoint;
+    let model = model.unwrap_or(&h.model);
     if h.package != package {
         return Err(fail(format!(
             "written by {} ({}), not {package}; resume it with that crate",
@@ -260,12 +268,25 @@ pub fn decode<T: DeserializeOwned>(
             h.model
         )));
     }
-    postcard::from_bytes(payload).map_err(|e| {
+    let payload = postcard::from_bytes(payload).map_err(|e| {
         fail(format!(
             "the payload does not decode as {model} ({e}) although its checksum matches; it \
              was written by an incompatible build"
         ))
-    })
+    })?;
+    Ok((h.model, payload))
+}
+
+/// Decodes checkpoint `bytes` of `package` and `version` whatever model the header names,
+/// returning that model with the payload: for a crate whose model (precision, dimension,
+/// backend) is read from the file and then checked against what the caller can resume.
+/// Errors as [`decode`] for everything but the model.
+pub fn decode_any_model<T: DeserializeOwned>(
+    bytes: &[u8],
+    package: &str,
+    version: &str,
+) -> Result<(String, T)> {
+    decode_parts(bytes, package, version, None)
 }
 
 /// Writes checkpoint `bytes` to `path` atomically, creating parent directories.

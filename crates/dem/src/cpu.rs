@@ -377,6 +377,22 @@ where
     }
 }
 
+impl<T: Real, const D: usize> Particles<T, D> {
+    /// Reorders every per-particle array but `reference` into `order` (slot `k` takes the
+    /// particle at `order[k]`).
+    fn permute(&mut self, order: &[u32], parallel: bool) {
+        permute(&mut self.pos, order, parallel);
+        permute(&mut self.vel, order, parallel);
+        permute(&mut self.acc, order, parallel);
+        permute(&mut self.aux, order, parallel);
+        permute(&mut self.radius, order, parallel);
+        permute(&mut self.mass, order, parallel);
+        permute(&mut self.inv_mass, order, parallel);
+        permute(&mut self.species, order, parallel);
+        permute(&mut self.id, order, parallel);
+    }
+}
+
 /// Reorders `v` so that slot `k` holds the element at `order[k]`.
 fn permute<X: Copy + Send + Sync>(v: &mut Vec<X>, order: &[u32], parallel: bool) {
     let sorted: Vec<X> = if parallel {
@@ -581,17 +597,8 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
         let order = self.list.sort(&p.reference)?;
         if order.iter().enumerate().any(|(k, &o)| o as usize != k) {
             // Not reached for a state this engine wrote; kept consistent all the same.
-            let par = self.parallel;
-            permute(&mut p.pos, &order, par);
-            permute(&mut p.vel, &order, par);
-            permute(&mut p.acc, &order, par);
-            permute(&mut p.aux, &order, par);
-            permute(&mut p.radius, &order, par);
-            permute(&mut p.mass, &order, par);
-            permute(&mut p.inv_mass, &order, par);
-            permute(&mut p.species, &order, par);
-            permute(&mut p.id, &order, par);
-            permute(&mut p.reference, &order, par);
+            p.permute(&order, self.parallel);
+            permute(&mut p.reference, &order, self.parallel);
         }
         self.list.build(&p.reference, self.parallel)?;
         std::mem::swap(&mut p.pos, &mut p.reference);
@@ -789,15 +796,7 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
         let order = self.list.sort(&self.p.pos)?;
         let p = &mut self.p;
         let par = self.parallel;
-        permute(&mut p.pos, &order, par);
-        permute(&mut p.vel, &order, par);
-        permute(&mut p.acc, &order, par);
-        permute(&mut p.aux, &order, par);
-        permute(&mut p.radius, &order, par);
-        permute(&mut p.mass, &order, par);
-        permute(&mut p.inv_mass, &order, par);
-        permute(&mut p.species, &order, par);
-        permute(&mut p.id, &order, par);
+        p.permute(&order, par);
         p.reference.clone_from(&p.pos);
         self.list.build(&p.pos, par)?;
         self.find_wall_candidates();

@@ -233,24 +233,19 @@ impl Restart for Dem {
     }
 
     fn resume(bytes: &[u8], backend: Backend<'_>) -> Result<Self> {
-        let header = checkpoint::header(bytes)?;
-        let payload: Payload = checkpoint::decode(
-            bytes,
-            env!("CARGO_PKG_NAME"),
-            env!("CARGO_PKG_VERSION"),
-            &header.model,
-        )?;
+        let (written, payload): (String, Payload) =
+            checkpoint::decode_any_model(bytes, env!("CARGO_PKG_NAME"), env!("CARGO_PKG_VERSION"))?;
         let fail = |reason: String| Error::checkpoint(reason);
         let scene = Scene::from_record(payload.scene)
             .map_err(|e| fail(format!("the stored scene is not valid: {e}")))?;
         let config = Config::from(payload.config);
         let want = model_name(backend.is_gpu(), config.precision, scene.dim().axes());
-        if header.model != want {
+        if written != want {
             return Err(fail(format!(
                 "holds a {} run, and {} on this backend would be a {want} run; resume it on \
                  the backend that wrote it (or start a new run there from Dem::state with \
                  Scene::set_kinematics)",
-                header.model,
+                written,
                 backend.name()
             )));
         }

@@ -235,13 +235,8 @@ impl Restart for Md {
     }
 
     fn resume(bytes: &[u8], backend: Backend<'_>) -> Result<Self> {
-        let header = checkpoint::header(bytes)?;
-        let payload: Payload = checkpoint::decode(
-            bytes,
-            env!("CARGO_PKG_NAME"),
-            env!("CARGO_PKG_VERSION"),
-            &header.model,
-        )?;
+        let (written, payload): (String, Payload) =
+            checkpoint::decode_any_model(bytes, env!("CARGO_PKG_NAME"), env!("CARGO_PKG_VERSION"))?;
         let fail = |reason: String| Error::checkpoint(reason);
         payload
             .system
@@ -253,11 +248,11 @@ impl Restart for Md {
             config.precision,
             payload.system.dim().axes(),
         );
-        if header.model != want {
+        if written != want {
             return Err(fail(format!(
                 "holds a {} run, and {} on this backend would be a {want} run; resume it on \
                  the backend that wrote it",
-                header.model,
+                written,
                 backend.name()
             )));
         }
