@@ -6,16 +6,18 @@
 //! Every iteration starts a fresh run from the FCC lattice (construction, which builds the
 //! first Verlet list and forces, not timed) and runs the first 100 steps, the window of
 //! LAMMPS's `in.lj`. On the CPU backend in f64 and in f32, each with 1 and 2 rayon threads,
-//! and on the GPU backend (f32) when an adapter exists (the GPU rows time the first 20 steps
-//! only: on lavapipe, a CPU Vulkan driver, a step of 32 000 atoms is slow; GPU figures
-//! from lavapipe are lavapipe figures). Run: `cargo bench --bench md` (or `-- --quick`).
+//! and on the GPU backend (f32) when an adapter exists, with each of its force kernels
+//! (`GpuKernel::PerParticle` and `GpuKernel::CellBlock`: run this on a hardware GPU to
+//! decide which should be the default there). The GPU rows time the first 20 steps only: on
+//! lavapipe, a CPU Vulkan driver, a step of 32 000 atoms is slow; GPU figures from lavapipe
+//! are lavapipe figures. Run: `cargo bench --bench md` (or `-- --quick`).
 
 use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{BatchSize, BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use simkit::backend::{Backend, GpuContext, Precision, Simulation};
-use simkit::md::{Config, Md, System, scenes};
+use simkit::md::{Config, GpuKernel, Md, System, scenes};
 
 /// Steps per CPU iteration (`in.lj` runs 100).
 const STEPS: u32 = 100;
@@ -66,19 +68,27 @@ fn benches(c: &mut Criterion) {
         }
     }
     if let Some(ctx) = gpu.as_ref() {
-        let config = config(Precision::F32);
         g.throughput(Throughput::Elements(n * u64::from(GPU_STEPS)));
-        g.bench_function(BenchmarkId::new("gpu_f32", &ctx.adapter_info().name), |b| {
-            b.iter_batched(
-                || Md::new(&system, &config, Backend::Gpu(ctx)).expect("gpu run"),
-                |mut md| {
-                    md.step(GPU_STEPS).expect("step");
-                    ctx.wait().expect("gpu wait");
-                    black_box(md.steps_done())
-                },
-                BatchSize::PerIteration,
-            )
-        });
+        for (label, kernel) in [
+            ("gpu_f32_per_particle", GpuKernel::PerParticle),
+            ("gpu_f32_cell_block", GpuKernel::cell_block()),
+        ] {
+            let config = Config {
+                gpu_kernel: kernel,
+                ..config(Precision::F32)
+            };
+            g.bench_function(BenchmarkId::new(label, &ctx.adapter_info().name), |b| {
+                b.iter_batched(
+                    || Md::new(&system, &config, Backend::Gpu(ctx)).expect("gpu run"),
+                    |mut md| {
+                        md.step(GPU_STEPS).expect("step");
+                        ctx.wait().expect("gpu wait");
+                        black_box(md.steps_done())
+                    },
+                    BatchSize::PerIteration,
+                )
+            });
+        }
     }
     g.finish();
 }

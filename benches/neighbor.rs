@@ -18,8 +18,8 @@ use rand::{RngExt, SeedableRng};
 use rayon::prelude::*;
 use simkit::backend::{GpuBuffer, GpuContext};
 use simkit::neighbor::{
-    BruteForce, CellGrid, GpuCellList, GpuNeighborList, LinkedCells, ListKind, NeighborSearch,
-    SortedCells, TraversalKernel, VerletList, positions_to_f32,
+    BlockedHalfList, BruteForce, CellGrid, GpuCellList, GpuNeighborList, LinkedCells, ListKind,
+    NeighborSearch, SortedCells, TraversalKernel, VerletList, positions_to_f32,
 };
 
 const CUTOFF: f64 = 2.5;
@@ -150,6 +150,47 @@ fn cpu_methods(c: &mut Criterion) {
     }
 }
 
+/// `BlockedHalfList::build` (the half list of `dem` and `md`) on LAMMPS's `in.lj` system:
+/// 32,000 atoms on a `20^3`-cell FCC lattice at density 0.8442 with a small random
+/// displacement, periodic cube, range 2.5 + 0.3; serial and on the rayon pool. Throughput in
+/// atoms per second.
+fn blocked_half_list(c: &mut Criterion) {
+    let a = (4.0f64 / 0.8442).powf(1.0 / 3.0);
+    let (nc, side) = (20usize, 20.0 * a);
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(9);
+    let basis = [
+        [0.0, 0.0, 0.0],
+        [0.5, 0.5, 0.0],
+        [0.5, 0.0, 0.5],
+        [0.0, 0.5, 0.5],
+    ];
+    let mut pos = Vec::with_capacity(4 * nc * nc * nc);
+    for k in 0..nc * nc * nc {
+        let cell = [k % nc, (k / nc) % nc, k / (nc * nc)];
+        for b in basis {
+            pos.push(std::array::from_fn::<f64, 3, _>(|d| {
+                ((cell[d] as f64 + b[d]) * a + rng.random_range(-0.05..0.05)).rem_euclid(side)
+            }));
+        }
+    }
+    let mut list = BlockedHalfList::<f64, 3>::new([0.0; 3], [side; 3], [true; 3], 2.8, pos.len())
+        .expect("list");
+    let order = list.sort(&pos).expect("sort");
+    let sorted: Vec<[f64; 3]> = order.iter().map(|&k| pos[k as usize]).collect();
+    let mut g = configure(c, "blocked_half_list_build_in_lj_32000");
+    g.throughput(Throughput::Elements(pos.len() as u64));
+    for parallel in [false, true] {
+        let name = if parallel { "rayon" } else { "serial" };
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                list.build(&sorted, parallel).expect("build");
+                black_box(list.pair_count())
+            })
+        });
+    }
+    g.finish();
+}
+
 fn cpu_2d(c: &mut Criterion) {
     for &n in &SIZES {
         let (grid, p) = points::<2>(n);
@@ -255,5 +296,12 @@ fn summary(_: &mut Criterion) {
     );
 }
 
-criterion_group!(benches, summary, cpu_methods, cpu_2d, gpu);
+criterion_group!(
+    benches,
+    summary,
+    cpu_methods,
+    blocked_half_list,
+    cpu_2d,
+    gpu
+);
 criterion_main!(benches);

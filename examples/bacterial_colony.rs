@@ -138,11 +138,19 @@ fn run(args: &Args) -> Result<()> {
                 tn
             );
         });
-        let opts = HeatmapOptions::new().range(0.0, 1.5).title(format!(
-            "b at t = {:.1} (step {})",
-            sim.time(),
-            sim.steps_done()
-        ));
+        let side = N as f64 * 0.5;
+        let opts = HeatmapOptions::new()
+            .range(0.0, 1.5)
+            .title("bacterial colonies: bacteria density b")
+            .subtitle(format!(
+                "t = {:.1} time units (step {})",
+                sim.time(),
+                sim.steps_done()
+            ))
+            .extent(0.0, side, 0.0, side)
+            .x_label("x (length units)")
+            .y_label("y (length units)")
+            .quantity("b (density)");
         let (img, _) = render_heatmap(g.field(0), N, N, &opts)?;
         simkit::output::png::write_png(out.join(format!("b_{:06}.png", sim.steps_done())), &img)?;
         frames.push(img);
@@ -151,7 +159,7 @@ fn run(args: &Args) -> Result<()> {
     csv.finish()?;
     write_gif(out.join("colony.gif"), &frames, 300)?;
     Plot::new("gap between the colonies")
-        .x_label("time")
+        .x_label("t (time units)")
         .y_label("gap width (length units)")
         .series(Series::line("gap", &ts, &gaps))
         .write(out.join("gap.png"))?;

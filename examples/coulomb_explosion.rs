@@ -7,7 +7,9 @@
 //! cargo run --release --example coulomb_explosion -- --gpu --n 8192
 //! ```
 //! Writes `out/coulomb_explosion/radius.png` (measured xi(t) against the analytic curve),
-//! `radius.csv`, and VTK frames `frame_*.vtu` with `explosion.pvd` for ParaView. Options:
+//! `radius.csv`, and VTK frames `frame_*.vtp` with `explosion.pvd` for ParaView and OVITO
+//! (arrays `Velocity`, `distance_from_centre`, and `radius`: the point charges have no size,
+//! so it is half the mean spacing of the initial sphere, `(4 pi / 3 N)^(1/3) / 2`). Options:
 //! `--n N` (charges, 20,000), `--f64` (double precision; f32 by default), `--gpu`.
 
 use std::path::PathBuf;
@@ -93,9 +95,11 @@ fn run(args: &Args) -> Result<()> {
         "steps",
     );
     let mut frames: Vec<(f64, String)> = Vec::new();
+    // The drawn size of a point charge: half the mean spacing in the initial sphere.
+    let draw_radius = 0.5 * radius * (4.0 * std::f64::consts::PI / (3.0 * n as f64)).cbrt();
     let start = std::time::Instant::now();
     let mut write_frame = |p: &simkit::pp_coulomb::Particles, t: f64| -> Result<()> {
-        let name = format!("frame_{:04}.vtu", frames.len());
+        let name = format!("frame_{:04}.vtp", frames.len());
         let mut v = VtkParticles::from_xyz(&p.position)?;
         let vel: Vec<f64> = p.velocity.iter().flatten().copied().collect();
         let r: Vec<f64> = p
@@ -103,8 +107,9 @@ fn run(args: &Args) -> Result<()> {
             .iter()
             .map(|x| (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt())
             .collect();
-        v.add_vector("velocity", &vel, 3)?;
-        v.add_scalar("radius", &r)?;
+        v.add_scalar("radius", &vec![draw_radius; r.len()])?
+            .add_scalar("distance_from_centre", &r)?
+            .add_vector("Velocity", &vel, 3)?;
         v.write(out.join(&name))?;
         frames.push((t, name));
         Ok(())
@@ -150,8 +155,8 @@ fn run(args: &Args) -> Result<()> {
     let t_meas: Vec<f64> = samples.iter().map(|s| s.time).collect();
     let xi_meas: Vec<f64> = samples.iter().map(|s| s.xi).collect();
     Plot::new(format!("Coulomb explosion, N = {n}"))
-        .x_label("t omega")
-        .y_label("R(t) / R(0)")
+        .x_label("ω t (dimensionless; ω from the initial density)")
+        .y_label("R(t) / R(0) (dimensionless)")
         .series(Series::line("analytic", &t_line, &xi_line))
         .series(Series::points("simulation", &t_meas, &xi_meas).style(Style::Points))
         .write(out.join("radius.png"))?;

@@ -160,9 +160,9 @@ fn run(args: &Args) -> Result<()> {
             series.push(Series::line(format!("energy {tag}"), &xs, &ee).style(Style::LinePoints));
         }
     }
-    let mut plot = Plot::new("dem: relative error vs t_c / dt")
-        .x_label("t_c / dt")
-        .y_label("relative error")
+    let mut plot = Plot::new("dem: relative error vs t_c / Δt")
+        .x_label("t_c / Δt (steps per contact)")
+        .y_label("relative error (dimensionless)")
         .x_scale(Scale::Log10)
         .y_scale(Scale::Log10)
         .size(900, 560);

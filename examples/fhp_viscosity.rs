@@ -170,9 +170,9 @@ fn noise_sweep(out: &tradeoffs::TradeoffArgs) -> Result<()> {
         "{:>6} {:>7} {:>12} {:>14} {:>14}",
         "block", "window", "rms u_x", "rms * b sqrt(T)", "time/field ms"
     );
-    let mut plot = Plot::new("FHP-I noise at rest, 1024^2, d = 0.3")
+    let mut plot = Plot::new("FHP-I noise at rest, 1024², d = 0.3")
         .x_label("block side b (sites)")
-        .y_label("rms block velocity")
+        .y_label("rms block velocity (lattice units per step)")
         .x_scale(Scale::Log10)
         .y_scale(Scale::Log10);
     for &window in &windows {

@@ -74,17 +74,17 @@ fn run(args: &Args) -> Result<()> {
         let g = sim.state()?;
         let secs = t.elapsed().as_secs_f64();
         let path = out.join(format!("{name}.png"));
-        let title = format!(
-            "{name}: F = {}, k = {}, v after {steps} steps",
-            model.feed, model.kill
-        );
-        write_heatmap(
-            &path,
-            g.field(1),
-            n,
-            n,
-            &HeatmapOptions::new().upscale(2).title(title),
-        )?;
+        let title = format!("Gray–Scott {name}: F = {}, k = {}", model.feed, model.kill);
+        let side = n as f64 * GrayScott::PEARSON_H;
+        let opts = HeatmapOptions::new()
+            .upscale(2)
+            .title(title)
+            .subtitle(format!("t = {steps} (dt = 1, {n} x {n} cells)"))
+            .extent(0.0, side, 0.0, side)
+            .x_label("x (dimensionless length)")
+            .y_label("y (dimensionless length)")
+            .quantity("v (dimensionless concentration)");
+        write_heatmap(&path, g.field(1), n, n, &opts)?;
         bar.suspend(|| {
             println!(
             "{name:8} F = {:.4} k = {:.4}: var(v) = {:.3e}, regions with v > 0.2: {:4}, {:.3e} cell updates/s -> {}",

@@ -21,7 +21,8 @@
 //! Output under `out/lj_fluid/`:
 //! - `thermo.csv`: step, time, temperature, pair energy, kinetic and total energy per
 //!   atom, pressure, every `--thermo-every` steps;
-//! - `final.xyz` (extended XYZ, with velocities) and `final.vtu` (ParaView): the last state.
+//! - `final.xyz` (extended XYZ: argon, velocities, radii, box) and `final.vtp` (VTK poly data
+//!   for ParaView and OVITO): the last state; the radius is sigma / 2.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -237,24 +238,40 @@ fn run(args: &Args) -> Result<()> {
     );
     write_snapshot(&md.state()?, &md, &out)?;
     println!(
-        "wrote {0}/thermo.csv, {0}/final.xyz, {0}/final.vtu",
+        "wrote {0}/thermo.csv, {0}/final.xyz, {0}/final.vtp",
         out.display()
     );
     Ok(())
 }
 
-/// The last state as extended XYZ (species, positions, velocities, box) and VTK particles.
+/// The last state as extended XYZ (species, positions, velocities, radii, box) and VTK
+/// particles; each particle's radius is half its like-pair sigma (the contact distance).
 fn write_snapshot(state: &State, md: &Md, out: &std::path::Path) -> Result<()> {
     let len = md.system().lengths();
+    let table = md.system().table();
+    let radii: Vec<f64> = state
+        .species
+        .iter()
+        .map(|&s| {
+            table
+                .get(s as usize, s as usize)
+                .map_or(0.5, |p| 0.5 * p.sigma)
+        })
+        .collect();
     let mut frame = XyzFrame::from_xyz(&state.positions)?;
     frame
         .uniform_species("Ar")?
         .lattice([[len[0], 0.0, 0.0], [0.0, len[1], 0.0], [0.0, 0.0, len[2]]])?
         .pbc(md.system().periodic())
         .time(state.time)?;
-    frame.add_vector("vel", state.velocities.as_flattened(), 3)?;
+    frame
+        .velocities(state.velocities.as_flattened(), 3)?
+        .radii(&radii)?;
     write_xyz(out.join("final.xyz"), &[frame])?;
-    let mut vtu = Particles::from_xyz(&state.positions)?;
-    vtu.add_vector("velocity", state.velocities.as_flattened(), 3)?;
-    vtu.write(out.join("final.vtu"))
+    let ids: Vec<u32> = (0..state.positions.len() as u32).collect();
+    let mut vtp = Particles::from_xyz(&state.positions)?;
+    vtp.add_scalar("radius", &radii)?
+        .add_ints("id", &ids)?
+        .add_vector("Velocity", state.velocities.as_flattened(), 3)?;
+    vtp.write(out.join("final.vtp"))
 }

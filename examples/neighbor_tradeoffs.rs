@@ -188,8 +188,8 @@ fn sweep(args: &Args) -> Result<()> {
         "| delta / rc | skin / rc | rebuilds / {STEPS} steps | ms per step (median) | range | vs cells |"
     );
     let _ = writeln!(md, "|---|---|---|---|---|---|");
-    let mut plot = Plot::new("Verlet list vs cells (N = 20000, rc = 2.5)")
-        .x_label("skin / rc")
+    let mut plot = Plot::new("Verlet list vs cells (N = 20000, r_c = 2.5)")
+        .x_label("skin / r_c (dimensionless)")
         .y_label("ms per step (median)")
         .x_scale(Scale::Log10)
         .size(900, 600);
@@ -237,9 +237,9 @@ fn sweep(args: &Args) -> Result<()> {
                 }
             ));
         }
-        plot.push(Series::line(format!("delta = {d} rc"), &x, &y));
+        plot.push(Series::line(format!("δ = {d} r_c"), &x, &y));
         plot.push(Series::line(
-            format!("cells every step, delta = {d} rc"),
+            format!("cells every step, δ = {d} r_c"),
             &[SKINS[0], SKINS[SKINS.len() - 1]],
             &[tc * 1e3, tc * 1e3],
         ));

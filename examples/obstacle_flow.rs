@@ -21,8 +21,7 @@ use simkit::backend::{Backend, GpuContext, Result, Simulation};
 use simkit::lattice_gas::observables::{BlockField, TimeAverage};
 use simkit::lattice_gas::{Config, Lattice, LatticeGas, Obstacle, ROW_SPACING, RuleSet};
 use simkit::output::gif::GifWriter;
-use simkit::output::heatmap::HeatmapOptions;
-use simkit::output::vector_field::{VectorFieldOptions, render_vector_field};
+use simkit::output::vector_field::render_vector_field;
 
 #[path = "common/checkpoint.rs"]
 mod checkpoint;
@@ -126,12 +125,8 @@ fn run(args: &Args) -> Result<()> {
                 &title,
             )?;
             let (ux, uy, cols, rows) = field.velocity_square_cells();
-            let opts = VectorFieldOptions::new().background(
-                HeatmapOptions::new()
-                    .upscale(8)
-                    .range(0.0, 0.8)
-                    .title(&title),
-            );
+            let mut opts = simkit::files::block_velocity_options(field, &title);
+            opts.background = opts.background.upscale(8).range(0.0, 0.8);
             let (img, _) = render_vector_field(&ux, &uy, cols, rows, &opts)?;
             gif.push(&img)?;
             if done == steps {

@@ -26,9 +26,8 @@ use simkit::backend::{Backend, Error, GpuContext, Result, Simulation};
 use simkit::dem::scenes::{MonolayerParams, like_neighbor_fraction, segregation_monolayer};
 use simkit::dem::{Config, Dem, Scene, State};
 use simkit::output::csv::CsvWriter;
-use simkit::output::png::write_png;
-use simkit::output::raster::{fill_disc, fill_rect};
-use simkit::output::{RgbImage, plot};
+use simkit::output::particles::ParticleFrame;
+use simkit::output::plot;
 
 #[path = "common/progress.rs"]
 mod progress;
@@ -67,30 +66,26 @@ struct Args {
     gpu: bool,
 }
 
-/// Top view (x-y) of the cylinder: species 0 orange, species 1 blue.
-fn top_view(scene: &Scene, s: &State, radius: f64) -> RgbImage {
-    let px = 12.0;
-    let size = ((2.0 * radius + 2.0) * px).ceil() as u32;
-    let mut img = RgbImage::new(size, size);
-    fill_rect(&mut img, 0, 0, size as i64, size as i64, [255, 255, 255]);
-    let c = f64::from(size) / 2.0;
-    fill_disc(&mut img, c, c, radius * px + 1.0, [70, 70, 70]);
-    fill_disc(&mut img, c, c, radius * px - 1.0, [235, 235, 235]);
-    for (p, x) in scene.particles().iter().zip(&s.positions) {
-        let col = if p.species == 0 {
-            [230, 120, 20]
-        } else {
-            [30, 90, 200]
-        };
-        fill_disc(
-            &mut img,
-            c + x[0] * px,
-            c - x[1] * px,
-            p.radius * px - 0.5,
-            col,
-        );
-    }
-    img
+/// Top view (x-y) of the cylinder after `cycle` vibration cycles: species 0 orange,
+/// species 1 blue, with a legend; lengths in small-grain diameters d.
+fn top_view(scene: &Scene, s: &State, radius: f64, cycle: u32) -> ParticleFrame {
+    let pos: Vec<[f64; 2]> = s.positions.iter().map(|x| [x[0], x[1]]).collect();
+    let radii: Vec<f64> = scene.particles().iter().map(|p| p.radius).collect();
+    let ids: Vec<usize> = scene
+        .particles()
+        .iter()
+        .map(|p| usize::from(p.species != 0))
+        .collect();
+    let edge = radius + 1.0;
+    ParticleFrame::new(&pos, &radii)
+        .bounds(-edge, edge, -edge, edge)
+        .by_species(&ids, &["species 0", "species 1"])
+        .species_colors(&[[230, 120, 20], [30, 90, 200]])
+        .circle((0.0, 0.0), radius)
+        .title("vibrated monolayer, top view")
+        .subtitle(format!("after {cycle} vibration cycles"))
+        .x_label("x (d)")
+        .y_label("y (d)")
 }
 
 fn main() -> ExitCode {
@@ -137,10 +132,7 @@ fn run(args: &Args) -> Result<()> {
     let range = 1.2;
     let s0 = sim.state()?;
     let mixed = like_neighbor_fraction(&scene, &s0.positions, range);
-    write_png(
-        out.join("top_000.png"),
-        &top_view(&scene, &s0, params.radius),
-    )?;
+    top_view(&scene, &s0, params.radius, 0).write(out.join("top_000.png"))?;
     csv.row(&[0.0, mixed])?;
     println!("\ncycle  like-species neighbour fraction");
     println!(
@@ -168,10 +160,8 @@ fn run(args: &Args) -> Result<()> {
         csv.row(&[f64::from(cycle), f])?;
         curve.push((f64::from(cycle), f));
         bar.suspend(|| println!("{cycle:5}  {f:.4}"));
-        write_png(
-            out.join(format!("top_{frame:03}.png")),
-            &top_view(&scene, &s, params.radius),
-        )?;
+        top_view(&scene, &s, params.radius, cycle)
+            .write(out.join(format!("top_{frame:03}.png")))?;
         frame += 1;
     }
     let secs = t0.elapsed().as_secs_f64();
@@ -180,7 +170,7 @@ fn run(args: &Args) -> Result<()> {
     let (xs, ys): (Vec<f64>, Vec<f64>) = curve.iter().copied().unzip();
     plot::Plot::new("segregation: like-species neighbour fraction")
         .x_label("vibration cycles")
-        .y_label("like fraction")
+        .y_label("like-species neighbour fraction (1)")
         .series(plot::Series::line("like fraction", &xs, &ys).style(plot::Style::LinePoints))
         .write(out.join("order.png"))?;
     let last = curve.last().map_or(mixed, |c| c.1);

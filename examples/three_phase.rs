@@ -7,26 +7,26 @@
 //! 1.587): the bottom `--solid-cells` cells are solid (every site filled), the next
 //! `--liquid-cells` liquid (each site filled with probability 0.8: the 20 % vacancies make
 //! the slab melt at once), the rest gas (probability `--gas-fill`); velocities are
-//! Maxwell-Boltzmann at `--temperature` with zero total momentum. The run is at constant
-//! energy. The solid is not held in place: the library has no frozen species yet, so the
-//! substrate is a crystal of mobile atoms lying on the bottom wall, which stays a crystal
-//! because it is dense (density 1) and cools as the lattice start gives about half its
-//! kinetic energy to the potential. Since liquid and solid repel each other, the liquid
-//! does not wet the substrate: a gap of one to two sigma opens between them, and a few
+//! Maxwell-Boltzmann at `--temperature` with zero total momentum over the moving
+//! particles. The run is at constant energy. The solid is a frozen species
+//! (`System::set_frozen`): a fixed substrate whose atoms exert forces but never move
+//! (`--mobile-substrate` lets it move, as a crystal of mobile atoms on the bottom wall).
+//! Since liquid and solid only repel each other (their pair has no attractive term), the
+//! liquid does not wet the substrate: it floats on a gap of two to three sigma, and a few
 //! liquid particles evaporate into the gas. The species exchange energy only through
 //! repulsive contacts, so their temperatures approach each other slowly (after the default
-//! 4000 steps, t = 8: gas 1.65, liquid 0.87, solid 0.57; 53 s on 2 busy cores).
+//! 4000 steps, t = 8: gas 1.64, liquid 0.86, the frozen solid 0; 23 s on 2 busy cores).
 //!
 //! ```text
 //! cargo run --release --example three_phase [-- --steps N --frames N --temperature T
 //!     --cells XxY --solid-cells N --liquid-cells N --gas-cells N --gas-fill P --dt DT
-//!     --seed S --gpu] [--checkpoint-every N] [--resume out/three_phase/checkpoint.ckpt]
+//!     --seed S --mobile-substrate --gpu] [--checkpoint-every N] [--resume out/three_phase/checkpoint.ckpt]
 //! ```
 //! Defaults: 4000 steps, 10 frames, T = 1.4, 10 x 7 cells across (15.9 x 11.1), 3 solid,
 //! 6 liquid and 14 gas cells up (box height 36.5), gas fill 0.05 (2 391 particles), dt =
 //! 0.002 (`--dt 0` takes the library's default from the stiffest pair, the gas-gas core:
 //! 0.0007; gas-gas collisions are rare at this gas density, and 0.002 keeps the total
-//! energy to 4e-4 relative over the default run), the CPU backend (f64).
+//! energy to 2e-4 relative over the default run), the CPU backend (f64).
 //! `--gpu` runs on the GPU backend (f32). `--checkpoint-every N` saves the run every N
 //! steps; `--resume FILE` continues a saved run up to `--steps` in total (frames, the
 //! trajectory and the averages then cover the resumed part only).
@@ -36,8 +36,10 @@
 //!   first and paler), coloured by species, with a legend;
 //! - `density.png`, `density.csv`: number density of each species along z, averaged over
 //!   the second half of the run;
-//! - `frame_NNN.vtu` + `frames.pvd` (ParaView, with a `species` array) and `frames.xyz`
-//!   (extended XYZ trajectory, species names, OVITO);
+//! - `frame_NNN.vtp` + `frames.pvd` (VTK poly data for ParaView and OVITO, with `species`,
+//!   `radius` = sigma / 2 of the species and `Velocity` arrays) and `frames.xyz` (extended XYZ
+//!   trajectory: gas, liquid and solid are written as H, He and Li, with the names in the
+//!   `kind` column);
 //! - `thermo.csv`: total energy and the temperature of each species.
 
 use std::path::{Path, PathBuf};
@@ -50,12 +52,9 @@ use rand_pcg::Pcg64;
 use simkit::backend::{Backend, Error, GpuContext, Result, Simulation};
 use simkit::md::scenes::{GAS, LIQUID, SOLID, three_phase_table};
 use simkit::md::{Config, Dim, Md, State, System};
-use simkit::output::RgbImage;
 use simkit::output::csv::{CsvWriter, write_csv};
-use simkit::output::font::{draw_text, text_height};
+use simkit::output::particles::ParticleFrame;
 use simkit::output::plot::{Plot, Series};
-use simkit::output::png::write_png;
-use simkit::output::raster::{fill_disc, fill_rect, stroke_rect};
 use simkit::output::vtk::{Particles, write_pvd};
 use simkit::output::xyz::{XyzFrame, XyzWriter};
 
@@ -116,6 +115,9 @@ struct Args {
     /// Seed of the site filling and the velocities
     #[arg(long, default_value_t = 7)]
     seed: u64,
+    /// Let the solid move (by default it is a frozen species: a fixed substrate)
+    #[arg(long)]
+    mobile_substrate: bool,
     /// Run on the GPU backend (f32) instead of the CPU
     #[arg(long)]
     gpu: bool,
@@ -192,24 +194,40 @@ fn slab(args: &Args) -> Result<System> {
                         (j as f64 + b[1]) * LATTICE,
                         (k as f64 + b[2] + 0.25) * LATTICE,
                     ]);
-                    vel.push([0.0; 3].map(|_: f64| gaussian(&mut rng)));
+                    let frozen = species == SOLID && !args.mobile_substrate;
+                    vel.push([0.0; 3].map(|_: f64| {
+                        let g = gaussian(&mut rng);
+                        if frozen { 0.0 } else { g }
+                    }));
                 }
             }
         }
     }
-    let n = vel.len();
-    if n < 2 {
-        return Err(Error::invalid("particle count", n, "the slab is empty"));
+    // Maxwell-Boltzmann over the particles that move, with zero total momentum.
+    if !args.mobile_substrate {
+        sys.set_frozen(SOLID, true)?;
     }
-    let mean: [f64; 3] = std::array::from_fn(|d| vel.iter().map(|v| v[d]).sum::<f64>() / n as f64);
-    let twice_k: f64 = vel
+    let moving: Vec<usize> = (0..kinds.len())
+        .filter(|&i| kinds[i] != SOLID || args.mobile_substrate)
+        .collect();
+    let n = moving.len();
+    if n < 2 {
+        return Err(Error::invalid(
+            "moving particle count",
+            n,
+            "add liquid or gas",
+        ));
+    }
+    let mean: [f64; 3] =
+        std::array::from_fn(|d| moving.iter().map(|&i| vel[i][d]).sum::<f64>() / n as f64);
+    let twice_k: f64 = moving
         .iter()
-        .flat_map(|v| (0..3).map(move |d| (v[d] - mean[d]).powi(2)))
+        .map(|&i| (0..3).map(|d| (vel[i][d] - mean[d]).powi(2)).sum::<f64>())
         .sum();
     let scale = (args.temperature * (3 * n - 3) as f64 / twice_k).sqrt();
-    for v in &mut vel {
+    for &i in &moving {
         for d in 0..3 {
-            v[d] = (v[d] - mean[d]) * scale;
+            vel[i][d] = (vel[i][d] - mean[d]) * scale;
         }
     }
     sys.set_particles(&kinds, &pos, &vel)?;
@@ -354,7 +372,7 @@ fn run(args: &Args) -> Result<()> {
         write_profile(&mut profile, samples, len, &out)?;
     }
     println!(
-        "wrote {} frames (side_*.png, frame_*.vtu, frames.pvd, frames.xyz), density.png, \
+        "wrote {} frames (side_*.png, frame_*.vtp, frames.pvd, frames.xyz), density.png, \
          density.csv, thermo.csv",
         pvd.len()
     );
@@ -382,8 +400,8 @@ fn write_profile(profile: &mut [Vec<f64>], samples: u32, len: [f64; 3], out: &Pa
         .map(|b| (b as f64 + 0.5) * BIN)
         .collect();
     let mut plot = Plot::new(format!("density along z, mean of {samples} states"))
-        .x_label("z (sigma)")
-        .y_label("density (sigma^-3)")
+        .x_label("z (σ)")
+        .y_label("number density (σ⁻³)")
         .legend(true);
     for s in [SOLID, LIQUID, GAS] {
         let s = s as usize;
@@ -410,95 +428,58 @@ fn write_frame(
     xyz: &mut XyzWriter,
     pvd: &mut Vec<(f64, String)>,
 ) -> Result<()> {
-    write_png(
-        out.join(format!("side_{index:03}.png")),
-        &side_view(state, system, step),
-    )?;
-    let species: Vec<f64> = state.species.iter().map(|&s| f64::from(s)).collect();
-    let mut vtu = Particles::from_xyz(&state.positions)?;
-    vtu.add_scalar("species", &species)?.add_vector(
-        "velocity",
-        state.velocities.as_flattened(),
-        3,
-    )?;
-    let name = format!("frame_{index:03}.vtu");
-    vtu.write(out.join(&name))?;
+    side_view(state, system, step).write(out.join(format!("side_{index:03}.png")))?;
+    // Each particle's radius is half its like-pair sigma (the contact distance).
+    let radii: Vec<f64> = state
+        .species
+        .iter()
+        .map(|&s| {
+            let s = s as usize;
+            system.table().get(s, s).map_or(0.5, |p| 0.5 * p.sigma)
+        })
+        .collect();
+    let mut vtp = Particles::from_xyz(&state.positions)?;
+    vtp.add_ints("species", &state.species)?
+        .add_scalar("radius", &radii)?
+        .add_vector("Velocity", state.velocities.as_flattened(), 3)?;
+    let name = format!("frame_{index:03}.vtp");
+    vtp.write(out.join(&name))?;
     pvd.push((state.time, name));
     let len = system.lengths();
-    let names: Vec<&str> = state.species.iter().map(|&s| NAMES[s as usize]).collect();
     let mut frame = XyzFrame::from_xyz(&state.positions)?;
     frame
-        .species(&names)?
+        .kinds(&state.species, &NAMES)?
         .lattice([[len[0], 0.0, 0.0], [0.0, len[1], 0.0], [0.0, 0.0, len[2]]])?
         .pbc(system.periodic())
         .time(state.time)?;
-    frame.add_vector("vel", state.velocities.as_flattened(), 3)?;
+    frame
+        .velocities(state.velocities.as_flattened(), 3)?
+        .radii(&radii)?;
     xyz.push(&frame)
 }
 
-/// Side view: x across, z up, looking along +y; far particles first and paler.
-fn side_view(state: &State, system: &System, step: u32) -> RgbImage {
-    let px = 14.0;
+/// Side view: x across, z up, looking along +y; far particles first (hidden behind near
+/// ones), discs of half the like-pair contact distance, coloured by species with a legend.
+fn side_view(state: &State, system: &System, step: u32) -> ParticleFrame {
     let len = system.lengths();
-    let (top, legend_w) = (30u32, 110u32);
-    let (w, h) = ((len[0] * px).ceil() as u32, (len[2] * px).ceil() as u32);
-    let (width, height) = (w + legend_w, h + top + 8);
-    let mut img = RgbImage::new(width, height);
-    fill_rect(
-        &mut img,
-        0,
-        0,
-        i64::from(width),
-        i64::from(height),
-        [255; 3],
-    );
-    fill_rect(
-        &mut img,
-        0,
-        i64::from(top),
-        i64::from(w),
-        i64::from(h),
-        [250, 250, 246],
-    );
     let mut order: Vec<usize> = (0..state.positions.len()).collect();
     order.sort_by(|&a, &b| state.positions[b][1].total_cmp(&state.positions[a][1]));
-    for i in order {
-        let [x, y, z] = state.positions[i];
-        let s = state.species[i] as usize;
-        let fade = 0.6 * (y / len[1]).clamp(0.0, 1.0);
-        let color = COLORS[s].map(|c| (f64::from(c) * (1.0 - fade) + 255.0 * fade) as u8);
-        let radius = if s == GAS as usize { 0.3 } else { 0.5 };
-        fill_disc(
-            &mut img,
-            x * px,
-            f64::from(top) + (len[2] - z) * px,
-            radius * px,
-            color,
-        );
-    }
-    stroke_rect(
-        &mut img,
-        0,
-        i64::from(top),
-        i64::from(w),
-        i64::from(h),
-        [60; 3],
-    );
-    draw_text(
-        &mut img,
-        4,
-        8,
-        &format!("step {step}, t = {:.2}", state.time),
-        2,
-        [0; 3],
-    );
-    let line = i64::from(text_height(2)) + 10;
-    for (k, s) in [GAS, LIQUID, SOLID].iter().enumerate() {
-        let s = *s as usize;
-        let y = i64::from(top) + 10 + k as i64 * line;
-        let x = i64::from(w) + 12;
-        fill_rect(&mut img, x, y, 16, 16, COLORS[s]);
-        draw_text(&mut img, x + 24, y, NAMES[s], 2, [0; 3]);
-    }
-    img
+    let pos: Vec<[f64; 2]> = order
+        .iter()
+        .map(|&i| [state.positions[i][0], state.positions[i][2]])
+        .collect();
+    let ids: Vec<usize> = order.iter().map(|&i| state.species[i] as usize).collect();
+    let radii: Vec<f64> = ids
+        .iter()
+        .map(|&s| if s == GAS as usize { 0.3 } else { 0.5 })
+        .collect();
+    ParticleFrame::new(&pos, &radii)
+        .bounds(0.0, len[0], 0.0, len[2])
+        .by_species(&ids, &NAMES)
+        .species_colors(&COLORS)
+        .size_px(640)
+        .title("solid, liquid and gas in one box (side view along y)")
+        .subtitle(format!("step {step}, t = {:.2} τ", state.time))
+        .x_label("x (σ)")
+        .y_label("z (σ)")
 }

@@ -9,7 +9,7 @@
 //! cargo run --release --example vibrating_bed -- --cycles 10 --checkpoint-every 5000
 //! cargo run --release --example vibrating_bed -- --cycles 20 --resume out/vibrating_bed/checkpoint.ckpt
 //! ```
-//! Writes `out/vibrating_bed/frame_NNN.png`, `bed.gif`, `bed_NNN.vtu` + `bed.pvd`, and prints
+//! Writes `out/vibrating_bed/frame_NNN.png`, `bed.gif`, `bed_NNN.vtp` + `bed.pvd`, and prints
 //! the centre-of-mass height against the vibration phase over the last cycle.
 //! `--checkpoint-every N` saves the run every N steps to `out/vibrating_bed/checkpoint.ckpt`;
 //! `--resume FILE` continues it (with the same scene options) up to `--cycles` in total, bit
@@ -26,11 +26,11 @@ use clap::Parser;
 use simkit::backend::{Backend, GpuContext, Result, Simulation};
 use simkit::dem::scenes::{BedParams, vibrating_bed};
 use simkit::dem::{Config, Dem, Scene, State};
+use simkit::output::RgbImage;
 use simkit::output::gif::GifWriter;
+use simkit::output::particles::ParticleFrame;
 use simkit::output::png::write_png;
-use simkit::output::raster::{fill_disc, fill_rect};
 use simkit::output::vtk::{Particles, write_pvd};
-use simkit::output::{Colormap, RgbImage};
 
 #[path = "common/checkpoint.rs"]
 mod checkpoint;
@@ -77,34 +77,28 @@ struct Args {
 }
 
 /// Discs coloured by speed, the vibrating plates in grey; `zw` is the plate displacement.
-fn draw(scene: &Scene, s: &State, zw: f64, vmax: f64) -> RgbImage {
-    let px = 8.0;
+/// Lengths in grain diameters d, time in 1/ω.
+fn draw(scene: &Scene, s: &State, zw: f64, vmax: f64, gamma: f64) -> Result<RgbImage> {
     let (lo, hi) = (scene.lo(), scene.hi());
     let a = scene.vibration().map_or(0.0, |v| v.amplitude);
-    let w = ((hi[0] - lo[0]) * px).ceil() as u32;
-    let h = ((hi[1] - lo[1] + 2.0 * a) * px).ceil() as u32 + 2;
-    let mut img = RgbImage::new(w, h);
-    fill_rect(&mut img, 0, 0, w as i64, h as i64, [255, 255, 255]);
-    let to_y = |y: f64| (hi[1] + a - y) * px;
-    let plate = [110, 110, 110];
-    fill_rect(&mut img, 0, to_y(lo[1] + zw) as i64, w as i64, 3, plate);
-    fill_rect(&mut img, 0, to_y(hi[1] + zw) as i64 - 2, w as i64, 3, plate);
-    for (p, (x, v)) in scene
-        .particles()
-        .iter()
-        .zip(s.positions.iter().zip(&s.velocities))
-    {
-        let speed = (v[0] * v[0] + v[1] * v[1]).sqrt();
-        let c = Colormap::Viridis.map_range(speed, 0.0, vmax);
-        fill_disc(
-            &mut img,
-            (x[0] - lo[0]) * px,
-            to_y(x[1]),
-            p.radius * px - 0.3,
-            c,
-        );
-    }
-    img
+    let pos: Vec<[f64; 2]> = s.positions.iter().map(|x| [x[0], x[1]]).collect();
+    let radii: Vec<f64> = scene.particles().iter().map(|p| p.radius).collect();
+    let speed: Vec<f64> = s.velocities.iter().map(|v| v[0].hypot(v[1])).collect();
+    ParticleFrame::new(&pos, &radii)
+        .bounds(lo[0], hi[0], lo[1] - a, hi[1] + a)
+        .by_value(&speed, "|v| (d ω)")
+        .range(0.0, vmax)
+        .line((lo[0], lo[1] + zw), (hi[0], lo[1] + zw))
+        .line((lo[0], hi[1] + zw), (hi[0], hi[1] + zw))
+        .title(format!("vibrated bed, Γ = {gamma}"))
+        .subtitle(format!(
+            "t = {:.2} / ω ({:.2} cycles)",
+            s.time,
+            s.time / (2.0 * std::f64::consts::PI)
+        ))
+        .x_label("x (grain diameters d)")
+        .y_label("z (d)")
+        .render()
 }
 
 fn main() -> ExitCode {
@@ -155,6 +149,7 @@ fn run(args: &Args) -> Result<()> {
     std::fs::create_dir_all(out).map_err(|e| simkit::output::atomic::io_error(out, &e))?;
     let mut gif = GifWriter::create(out.join("bed.gif"), 60)?;
     let mut pvd = Vec::new();
+    let radii: Vec<f64> = scene.particles().iter().map(|p| p.radius).collect();
     let vmax = 2.0 * units.amplitude(params.gamma);
     let mut last_cycle = Vec::new();
     let t0 = Instant::now();
@@ -174,13 +169,14 @@ fn run(args: &Args) -> Result<()> {
         let s = sim.state()?;
         let d = sim.diagnostics_of(&s)?;
         let zw = sim.wall_displacement(s.time);
-        let img = draw(&scene, &s, zw, vmax);
+        let img = draw(&scene, &s, zw, vmax, params.gamma)?;
         write_png(out.join(format!("frame_{frame:03}.png")), &img)?;
         gif.push(&img)?;
-        let name = format!("bed_{frame:03}.vtu");
-        let mut vtu = Particles::from_xyz(&s.positions)?;
-        vtu.add_vector("velocity", s.velocities.as_flattened(), 3)?;
-        vtu.write(out.join(&name))?;
+        let name = format!("bed_{frame:03}.vtp");
+        let mut vtp = Particles::from_xyz(&s.positions)?;
+        vtp.add_scalar("radius", &radii)?
+            .add_vector("Velocity", s.velocities.as_flattened(), 3)?;
+        vtp.write(out.join(&name))?;
         pvd.push((s.time, name));
         if frame >= (cycles - 1) * frames_per_cycle {
             last_cycle.push((s.time % period / period, d.com_height, zw, d.kinetic));

@@ -10,13 +10,31 @@ use crate::output::heatmap::HeatmapOptions;
 use crate::output::vector_field::{VectorFieldOptions, write_vector_field};
 use crate::output::vtk::ImageData;
 
-/// The velocity of a lattice-gas block field as a PNG: magnitude colour map with arrows, on
-/// physically square cells ([`BlockField::velocity_square_cells`]), about 768 pixels wide.
+/// How [`write_block_velocity_png`] draws a block field: magnitude colour map with arrows on
+/// physically square cells ([`BlockField::velocity_square_cells`]), about 768 pixels wide,
+/// axes in lattice units, the colour bar labelled with the speed. Use it for GIF frames
+/// too (`render_vector_field`).
+pub fn block_velocity_options(field: &BlockField, title: &str) -> VectorFieldOptions {
+    let (_, _, cols, rows) = field.velocity_square_cells();
+    let scale = (768 / cols.max(rows)).clamp(1, 32) as u32;
+    let (_, spacing) = field.block_geometry();
+    let (width, height) = (field.nx as f64 * spacing[0], field.ny as f64 * spacing[1]);
+    VectorFieldOptions::new().background(
+        HeatmapOptions::new()
+            .upscale(scale)
+            .title(title)
+            .extent(0.0, width, 0.0, height)
+            .x_label("x (lattice units)")
+            .y_label("y (lattice units)")
+            .quantity("|u| (lattice units per step)"),
+    )
+}
+
+/// The velocity of a lattice-gas block field as a figure ([`block_velocity_options`]): PNG
+/// for a `.png` path, SVG for `.svg`.
 pub fn write_block_velocity_png(field: &BlockField, path: &Path, title: &str) -> Result<()> {
     let (ux, uy, cols, rows) = field.velocity_square_cells();
-    let scale = (768 / cols.max(rows)).clamp(1, 32) as u32;
-    let opts =
-        VectorFieldOptions::new().background(HeatmapOptions::new().upscale(scale).title(title));
+    let opts = block_velocity_options(field, title);
     write_vector_field(path, &ux, &uy, cols, rows, &opts)?;
     Ok(())
 }

@@ -7,9 +7,7 @@ use std::time::Instant;
 use simkit::backend::{Backend, Error, Result, Simulation};
 use simkit::dem::scenes::{BedParams, vibrating_bed};
 use simkit::dem::{Config, Dem};
-use simkit::output::png::write_png;
-use simkit::output::raster::{fill_disc, fill_rect};
-use simkit::output::{Colormap, RgbImage};
+use simkit::output::particles::ParticleFrame;
 
 use crate::Row;
 
@@ -53,26 +51,19 @@ pub fn run(backend: Backend<'_>, out: &Path) -> Result<Row> {
         .positions
         .iter()
         .all(|p| p[0] > lo[0] && p[0] < hi[0] && p[1] > lo[1] - 1.0 && p[1] < hi[1] + 1.0);
-    let px = 12.0;
-    let (w, h) = ((hi[0] * px) as u32, (hi[1] * px) as u32);
-    let mut img = RgbImage::new(w, h);
-    fill_rect(&mut img, 0, 0, w as i64, h as i64, [255, 255, 255]);
-    for (p, (x, v)) in scene
-        .particles()
-        .iter()
-        .zip(s.positions.iter().zip(&s.velocities))
-    {
-        let c = Colormap::Viridis.map_range(v[0].hypot(v[1]), 0.0, 0.6);
-        fill_disc(
-            &mut img,
-            x[0] * px,
-            (hi[1] - x[1]) * px,
-            p.radius * px - 0.5,
-            c,
-        );
-    }
+    let pos: Vec<[f64; 2]> = s.positions.iter().map(|x| [x[0], x[1]]).collect();
+    let radii: Vec<f64> = scene.particles().iter().map(|p| p.radius).collect();
+    let speed: Vec<f64> = s.velocities.iter().map(|v| v[0].hypot(v[1])).collect();
     std::fs::create_dir_all(out).map_err(|e| simkit::output::atomic::io_error(out, &e))?;
-    write_png(out.join("bed.png"), &img)?;
+    ParticleFrame::new(&pos, &radii)
+        .bounds(lo[0], hi[0], lo[1], hi[1])
+        .by_value(&speed, "|v| (d ω)")
+        .range(0.0, 0.6)
+        .title("vibrated bed")
+        .subtitle(format!("t = {:.1} / ω", s.time))
+        .x_label("x (grain diameters d)")
+        .y_label("z (d)")
+        .write(out.join("bed.png"))?;
     let steps = sim.steps_done();
     Ok(Row {
         scene: "dem: vibrated bed, 128 discs".into(),

@@ -62,8 +62,8 @@ pub fn run(backend: Backend<'_>, out: &Path) -> Result<Row> {
         "LJ liquid, {} atoms: E(t) - E(0)",
         system.particle_count()
     ))
-    .x_label("t (reduced units)")
-    .y_label("energy per atom")
+    .x_label("t (τ, Lennard-Jones time)")
+    .y_label("E(t) − E(0) per atom (ε)")
     .series(Series::line("E - E(0)", &t, &dev))
     .write(out.join("energy_drift.png"))?;
     Ok(Row {

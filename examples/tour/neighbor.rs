@@ -60,8 +60,8 @@ pub fn run(backend: Backend<'_>, out: &Path) -> Result<Row> {
     }
     let x: Vec<f64> = (0..=max).map(|k| k as f64).collect();
     Plot::new(format!("neighbours within {rc} (N = {n}, density 1)"))
-        .x_label("neighbours")
-        .y_label("particles")
+        .x_label("neighbours within r_c (count)")
+        .y_label("particles (count)")
         .series(Series::line("count", &x, &hist))
         .write(out.join("neighbor_counts.png"))?;
     Ok(Row {

@@ -40,8 +40,8 @@ pub fn run(backend: Backend<'_>, out: &Path) -> Result<Row> {
     let t_line: Vec<f64> = (0..=100).map(|k| t_end * k as f64 / 100.0).collect();
     let xi_line: Vec<f64> = t_line.iter().map(|&t| explosion_xi(t, omega)).collect();
     Plot::new(format!("Coulomb explosion, N = {n}"))
-        .x_label("t omega")
-        .y_label("R(t) / R(0)")
+        .x_label("ω t (dimensionless; ω from the initial density)")
+        .y_label("R(t) / R(0) (dimensionless)")
         .series(Series::line("analytic", &t_line, &xi_line))
         .series(Series::points("simulation", &t, &xi).style(Style::Points))
         .write(out.join("explosion_radius.png"))?;

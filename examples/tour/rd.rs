@@ -36,7 +36,11 @@ pub fn run(backend: Backend<'_>, out: &Path) -> Result<Row> {
         n,
         &HeatmapOptions::new()
             .upscale(4)
-            .title(format!("colony b at t = {:.0}", sim.time())),
+            .title("bacterial colony: bacteria density b")
+            .subtitle(format!("t = {:.0} time units", sim.time()))
+            .x_label("x (cells)")
+            .y_label("y (cells)")
+            .quantity("b (density)"),
     )?;
     let drift = (g.total(0) + g.total(1) - start).abs() / start;
     Ok(Row {

@@ -14,6 +14,9 @@
 //! - [`guard`]: the blow-up check every `step(n)` runs (finite state at an interval, rollback
 //!   to the last good state); [`checkpoint`]: the versioned, checksummed checkpoint format
 //!   and the [`Restart`] trait; [`atomic`]: atomic file writes.
+//! - [`comm`]: the communicator of a distributed run ([`comm::Comm`]: serial always, MPI with
+//!   the `mpi` feature), Cartesian block decomposition, halo exchange, gather and reductions.
+//! - [`vector`]: positions and velocities at the public API as `glam` vectors or arrays.
 //!
 //! The GPU half (everything wgpu) is the `gpu` cargo feature, on by default; without it the
 //! crate, and every simkit crate, builds its CPU side only. An example is in [`gpu`].
@@ -40,6 +43,7 @@ macro_rules! wgsl {
 
 pub mod atomic;
 pub mod checkpoint;
+pub mod comm;
 pub mod error;
 #[cfg(feature = "gpu")]
 pub mod gpu;
@@ -50,6 +54,7 @@ mod real;
 pub mod rng;
 mod simulation;
 pub mod testing;
+pub mod vector;
 
 pub use checkpoint::Restart;
 pub use error::{Error, Result, require_finite, require_non_negative, require_positive};

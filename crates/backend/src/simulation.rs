@@ -1,5 +1,7 @@
 //! The common trait every simulation backend implements, and the backend selector.
 
+use std::ops::ControlFlow;
+
 use crate::Error;
 #[cfg(feature = "gpu")]
 use crate::GpuContext;
@@ -24,6 +26,64 @@ pub trait Simulation {
     fn steps_done(&self) -> u64;
     /// Short human-readable backend name, e.g. `"cpu"`, `"cpu-multispin"`, `"gpu (llvmpipe)"`.
     fn backend_name(&self) -> String;
+
+    /// Advances `steps` steps in chunks of `every` and calls `observe` after each chunk
+    /// (the last one may be shorter), for progress bars, live output or a stop criterion.
+    ///
+    /// Each chunk is one [`step`](Self::step) call, so a GPU backend still records a chunk's
+    /// steps without host round trips: pick `every` as large as the observation allows.
+    /// The result is bit-identical to one `step(steps)` (the crates' checks run on absolute
+    /// step numbers, so they do not depend on how a run is split into calls).
+    /// `observe` gets the simulation (read its state, diagnostics, [`steps_done`]) and
+    /// returns [`ControlFlow::Break`] to stop early; an error it returns is passed on.
+    ///
+    /// Errors: `every == 0`; any error of `step` or of `observe`.
+    ///
+    /// ```
+    /// use std::ops::ControlFlow;
+    /// # use simkit_backend::{Error, Simulation};
+    /// # struct Counter(u64);
+    /// # impl Simulation for Counter {
+    /// #     type State = u64;
+    /// #     fn step(&mut self, steps: u32) -> Result<(), Error> { self.0 += u64::from(steps); Ok(()) }
+    /// #     fn state(&mut self) -> Result<u64, Error> { Ok(self.0) }
+    /// #     fn steps_done(&self) -> u64 { self.0 }
+    /// #     fn backend_name(&self) -> String { "cpu".into() }
+    /// # }
+    /// # let mut sim = Counter(0);
+    /// let mut seen = Vec::new();
+    /// sim.step_observed(250, 100, |s| {
+    ///     seen.push(s.steps_done());
+    ///     Ok(ControlFlow::Continue(()))
+    /// })?;
+    /// assert_eq!(seen, [100, 200, 250]);
+    /// # Ok::<(), Error>(())
+    /// ```
+    ///
+    /// [`steps_done`]: Self::steps_done
+    fn step_observed<F>(&mut self, steps: u64, every: u32, mut observe: F) -> Result<(), Error>
+    where
+        Self: Sized,
+        F: FnMut(&mut Self) -> Result<ControlFlow<()>, Error>,
+    {
+        if every == 0 {
+            return Err(Error::invalid(
+                "observation interval `every`",
+                every,
+                "at least 1 step",
+            ));
+        }
+        let mut left = steps;
+        while left > 0 {
+            let chunk = left.min(u64::from(every)) as u32;
+            self.step(chunk)?;
+            left -= u64::from(chunk);
+            if observe(self)?.is_break() {
+                break;
+            }
+        }
+        Ok(())
+    }
 }
 
 /// Which backend to run a model on: a runtime value, never a compile-time fork.

@@ -1,6 +1,7 @@
 //! Scene description: particles, species-pair materials, walls, gravity, vibration, box.
 
 use serde::{Deserialize, Serialize};
+use simkit_backend::vector::IntoVec3;
 use simkit_backend::{Error, Result};
 
 /// Spatial dimension of a scene.
@@ -114,10 +115,11 @@ pub struct Particle {
 }
 
 impl Particle {
-    /// A particle at rest of species 0.
-    pub fn new(position: [f64; 3], radius: f64, mass: f64) -> Self {
+    /// A particle at rest of species 0. `position` is any [`IntoVec3`]: a `glam` vector
+    /// (`DVec3`, `Vec3`, `DVec2`, `Vec2`) or an array; 2D values get `z = 0`.
+    pub fn new(position: impl IntoVec3, radius: f64, mass: f64) -> Self {
         Self {
-            position,
+            position: position.into_vec3(),
             velocity: [0.0; 3],
             radius,
             mass,
@@ -125,9 +127,9 @@ impl Particle {
         }
     }
 
-    /// The same particle with a velocity.
-    pub fn with_velocity(mut self, velocity: [f64; 3]) -> Self {
-        self.velocity = velocity;
+    /// The same particle with a velocity (any [`IntoVec3`]).
+    pub fn with_velocity(mut self, velocity: impl IntoVec3) -> Self {
+        self.velocity = velocity.into_vec3();
         self
     }
 
@@ -279,8 +281,10 @@ impl Scene {
     /// An empty scene in the box `[lo, hi]` (z ignored in 2D) with one species whose
     /// particle–particle contacts use `material`. No axis is periodic, there are no walls
     /// (add them, or particles leaving the box are clamped into its edge cells for the
-    /// neighbour search only) and no gravity.
-    pub fn new(dim: Dim, lo: [f64; 3], hi: [f64; 3], material: Material) -> Result<Self> {
+    /// neighbour search only) and no gravity. The corners are any [`IntoVec3`] (`glam`
+    /// vectors or arrays).
+    pub fn new(dim: Dim, lo: impl IntoVec3, hi: impl IntoVec3, material: Material) -> Result<Self> {
+        let (lo, hi) = (lo.into_vec3(), hi.into_vec3());
         material.validate("particle material")?;
         for d in 0..dim.axes() {
             if !(lo[d].is_finite() && hi[d].is_finite() && hi[d] > lo[d]) {

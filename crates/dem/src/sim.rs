@@ -84,6 +84,18 @@ pub struct State {
     pub velocities: Vec<[f64; 3]>,
 }
 
+impl State {
+    /// The positions as `glam::DVec3` values (a view, no copy).
+    pub fn positions_dvec3(&self) -> &[glam::DVec3] {
+        simkit_backend::vector::as_dvec3(&self.positions)
+    }
+
+    /// The velocities as `glam::DVec3` values (a view, no copy).
+    pub fn velocities_dvec3(&self) -> &[glam::DVec3] {
+        simkit_backend::vector::as_dvec3(&self.velocities)
+    }
+}
+
 /// A granular DEM simulation of a [`Scene`] on a chosen backend.
 ///
 /// ```

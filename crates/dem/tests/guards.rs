@@ -4,6 +4,7 @@
 //! a stable run; diagnostics of a non-finite state are NaN; inputs are accepted and refused
 //! alike on every backend.
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use simkit_backend::testing::backends;
 use simkit_backend::{Backend, Error, Simulation};
 use simkit_dem::{Config, Dem, Dim, Material, Particle, Scene, State, safe_dt};
@@ -82,7 +83,11 @@ fn unstable_step_returns_blow_up_with_the_last_good_state() {
             finite(&state),
             "{name}: the rolled-back state is not finite"
         );
-        assert!((state.time - rolled_back_to as f64 * dt).abs() < 1e-9 * state.time.max(1.0));
+        assert_abs_diff_eq!(
+            state.time,
+            rolled_back_to as f64 * dt,
+            epsilon = 1e-9 * state.time.max(1.0)
+        );
         if matches!(backend, Backend::Cpu) {
             // Bit-identical to the same run stepped exactly to that step.
             let mut again = Dem::new(&scene, &cfg, backend).unwrap();
@@ -319,7 +324,10 @@ fn a_sparse_box_is_accepted_and_runs() {
         sim.step(100).unwrap();
         let x = sim.state().unwrap().positions[0][0];
         // Free flight at speed 1; the GPU adds 100 roundings of x ~ 300 in f32 (ulp 3e-5).
-        assert!((x - (300.0 + 100.0 * sim.dt())).abs() < 5e-3, "{x}");
+        assert!(
+            abs_diff_eq!(x, 300.0 + 100.0 * sim.dt(), epsilon = 5e-3),
+            "{x}"
+        );
         let e = Dem::new(&deep, &Config::default(), backend)
             .err()
             .expect("deep overlap");

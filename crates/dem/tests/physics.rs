@@ -1,5 +1,6 @@
 //! Conservation laws, a settled pile, coarse steps, thread-count independence, bad input.
 
+use approx::assert_abs_diff_eq;
 use simkit_backend::{Backend, Error, Simulation};
 use simkit_dem::{Config, Dem, Dim, Integrator, Material, Particle, Precision, Scene, Units};
 
@@ -365,7 +366,9 @@ fn coarse_step_stays_bounded_and_guard_refuses_larger() {
     assert!(deepest < 2.2e-2, "overlap of {deepest} R at dt = t_c/5");
     let err = Dem::new(&walls, &Config::default().with_dt(tc / 4.0), Backend::Cpu).err();
     match err {
-        Some(Error::Unstable { bound, .. }) => assert!((bound - tc / 5.0).abs() < 1e-15),
+        Some(Error::Unstable { bound, .. }) => {
+            assert_abs_diff_eq!(bound, tc / 5.0, epsilon = 1e-15)
+        }
         other => panic!("expected Error::Unstable, got {other:?}"),
     }
     assert!(
@@ -378,7 +381,7 @@ fn coarse_step_stays_bounded_and_guard_refuses_larger() {
     );
     // Default step is t_c / 30.
     let sim = Dem::new(&walls, &Config::default(), Backend::Cpu).unwrap();
-    assert!((sim.dt() - tc / 30.0).abs() < 1e-15);
+    assert_abs_diff_eq!(sim.dt(), tc / 30.0, epsilon = 1e-15);
 }
 
 #[test]
@@ -467,7 +470,7 @@ fn bad_input_is_refused_with_clear_errors() {
     let mut sim = Dem::new(&s, &Config::default(), Backend::Cpu).unwrap();
     let d = sim.diagnostics().unwrap();
     assert_eq!(d.contacts, 1);
-    assert!((d.max_overlap - 0.02).abs() < 1e-12);
+    assert_abs_diff_eq!(d.max_overlap, 0.02, epsilon = 1e-12);
     sim.step(100).unwrap();
     assert!(sim.diagnostics().unwrap().finite);
     // Cylinder walls only in 3D, bad dt.
@@ -512,15 +515,15 @@ fn units_follow_the_source_normalisation() {
     // Source: d0 = 0.6 cm, m0 = 0.2 g, g = 980 cm/s^2; take f = 30 Hz, Gamma = 3.
     let u = Units::new(0.6, 0.2, 30.0).unwrap();
     let omega = 2.0 * std::f64::consts::PI * 30.0;
-    assert!((u.omega() - omega).abs() < 1e-12);
+    assert_abs_diff_eq!(u.omega(), omega, epsilon = 1e-12);
     let g = 980.0 / (0.6 * omega * omega);
-    assert!((u.gravity() - g).abs() < 1e-15);
+    assert_abs_diff_eq!(u.gravity(), g, epsilon = 1e-15);
     // Gamma = A omega^2 / g: the physical amplitude is Gamma g / omega^2 (cm).
     let a_cm = 3.0 * 980.0 / (omega * omega);
-    assert!((u.amplitude(3.0) - a_cm / 0.6).abs() < 1e-12);
-    assert!((u.time(5e-5) - omega * 5e-5).abs() < 1e-15);
-    assert!((u.length_cm(u.length(1.7)) - 1.7).abs() < 1e-15);
-    assert!((u.velocity_cm_s(1.0) - 0.6 * omega).abs() < 1e-12);
+    assert_abs_diff_eq!(u.amplitude(3.0), a_cm / 0.6, epsilon = 1e-12);
+    assert_abs_diff_eq!(u.time(5e-5), omega * 5e-5, epsilon = 1e-15);
+    assert_abs_diff_eq!(u.length_cm(u.length(1.7)), 1.7, epsilon = 1e-15);
+    assert_abs_diff_eq!(u.velocity_cm_s(1.0), 0.6 * omega, epsilon = 1e-12);
     assert!(Units::new(0.0, 0.2, 30.0).is_err());
     assert!(Units::new(0.6, 0.2, f64::NAN).is_err());
 }
@@ -537,7 +540,11 @@ fn ready_made_scenes_build_and_run() {
         ..BedParams::default()
     })
     .unwrap();
-    assert!((u.gravity() - 980.0 / (0.6 * (40.0 * std::f64::consts::PI).powi(2))).abs() < 1e-12);
+    assert_abs_diff_eq!(
+        u.gravity(),
+        980.0 / (0.6 * (40.0 * std::f64::consts::PI).powi(2)),
+        epsilon = 1e-12
+    );
     let (mono, _) = segregation_monolayer(&MonolayerParams::default()).unwrap();
     let mixed = like_neighbor_fraction(
         &mono,

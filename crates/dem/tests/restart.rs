@@ -2,6 +2,7 @@
 //! process), and clear `Error::Checkpoint`s for files of another package or model, and for
 //! truncated or corrupted files.
 
+use approx::assert_abs_diff_eq;
 use simkit_backend::testing::{backends, check_restart};
 use simkit_backend::{Backend, Error, Restart, Simulation, checkpoint};
 use simkit_dem::{Config, Dem, Dim, Integrator, Material, Particle, Precision, Scene};
@@ -81,7 +82,11 @@ fn resume_restores_the_clock_and_the_wall_phase() {
     assert_eq!(back.steps_done(), 333);
     assert_eq!(back.state().unwrap(), sim.state().unwrap());
     // The clock accumulates t += dt, so it is 333 dt up to round-off.
-    assert!((back.state().unwrap().time - 333.0 * sim.dt()).abs() < 1e-12);
+    assert_abs_diff_eq!(
+        back.state().unwrap().time,
+        333.0 * sim.dt(),
+        epsilon = 1e-12
+    );
     sim.step(100).unwrap();
     back.step(100).unwrap();
     assert_eq!(back.state().unwrap(), sim.state().unwrap());

@@ -30,6 +30,37 @@ pub const MIN_STEPS_PER_PERIOD: f64 = 20.0;
 /// Default Verlet-list skin (absolute length; LAMMPS's `neighbor 0.3 bin` in LJ units).
 pub const DEFAULT_SKIN: f64 = 0.3;
 
+/// The GPU backend's force kernel (the CPU ignores this setting). Both give the same forces
+/// up to `f32` rounding and the same guarantees (blow-up guard, bit-exact restart); they
+/// differ in speed, which depends on the device: `benches/md.rs` times both.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum GpuKernel {
+    /// One invocation per particle gathering its pair terms over the full shell of
+    /// neighbour cells of a cell list sorted from scratch every step (default: the faster
+    /// of the two on lavapipe; no hardware GPU has been measured yet).
+    #[default]
+    PerParticle,
+    /// One workgroup per cell, one invocation per slot of the cell: the positions of each
+    /// neighbour cell are staged in workgroup memory, and the per-cell slot lists are
+    /// updated locally after every drift (each cell drops its leavers and picks up the
+    /// arrivals from its neighbours). `slots` is the fixed capacity of a cell; `None`
+    /// derives it from the density: the larger of twice the mean and 1.5 times the largest
+    /// initial cell population, rounded up to a multiple of 8. A cell that would overflow
+    /// is an error, never a dropped particle.
+    CellBlock {
+        /// Slots per cell (= invocations per workgroup, at most the device's
+        /// `max_compute_invocations_per_workgroup`); `None`: automatic.
+        slots: Option<u32>,
+    },
+}
+
+impl GpuKernel {
+    /// [`GpuKernel::CellBlock`] with the automatic capacity.
+    pub const fn cell_block() -> Self {
+        Self::CellBlock { slots: None }
+    }
+}
+
 /// Run settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Config {
@@ -39,6 +70,8 @@ pub struct Config {
     pub integrator: Integrator,
     /// CPU precision (`f64` default; the GPU backend computes in `f32` whatever this says).
     pub precision: Precision,
+    /// GPU only: the force kernel and cell-list scheme ([`GpuKernel`]).
+    pub gpu_kernel: GpuKernel,
     /// Verlet-list skin (absolute length, `>= 0`): the list holds pairs within
     /// `r_c + skin` and is rebuilt when a particle has moved more than `skin / 2` since the
     /// last build.
@@ -57,14 +90,6 @@ pub struct Config {
     /// Langevin thermostat (BAOAB splitting), off (`None`) by default: an NVE run does no
     /// thermostat work at all. Per-species targets: [`System::set_species_langevin`].
     pub thermostat: Option<Langevin>,
-    /// CPU only: every this many steps (counted from step 0; `0`, the default, never) the
-    /// particles are reordered in the memory in the order of the cells of the neighbour
-    /// grid, for cache locality. The physics is unchanged but the force sums run in
-    /// another order, so the trajectory differs from an unordered run by rounding (it is
-    /// not bit-identical to it); reordered runs are reproducible, independent of the
-    /// Verlet-list skin, and restart bit for bit. The GPU ignores it (its cell list sorts
-    /// every step).
-    pub reorder_every: u32,
 }
 
 impl Default for Config {
@@ -73,12 +98,12 @@ impl Default for Config {
             dt: None,
             integrator: Integrator::default(),
             precision: Precision::default(),
+            gpu_kernel: GpuKernel::PerParticle,
             skin: DEFAULT_SKIN,
             check_every: simkit_backend::guard::DEFAULT_CHECK_EVERY,
             shift: false,
             allow_unstable_dt: false,
             thermostat: None,
-            reorder_every: 0,
         }
     }
 }

@@ -26,6 +26,12 @@ pub(crate) trait Engine: Send {
     fn model(&self) -> String;
     /// The complete dynamic state.
     fn save(&mut self) -> Result<EngineState>;
+    /// The positions the neighbour list was last built from (flat, system order), which a
+    /// bit-exact resume needs along with [`save`](Self::save)'s state; empty for an
+    /// engine whose list is a function of the current positions.
+    fn list_positions(&self) -> Vec<f64> {
+        Vec::new()
+    }
 }
 
 /// The dynamic state of an engine as a checkpoint stores it. Vectors are flat, `D` values
@@ -36,12 +42,14 @@ pub(crate) trait Engine: Send {
 pub(crate) struct EngineState {
     /// Steps done.
     pub steps: u64,
-    /// Positions (periodic axes wrapped into the box).
+    /// Positions: on the GPU with periodic axes wrapped into the box; on the CPU as the
+    /// engine holds them, periodic coordinates unwrapped since its last list build (by at
+    /// most half the skin).
     pub pos: Vec<f64>,
     /// Velocities as the integrator stores them (leapfrog: at the half step `t + dt/2`).
     pub vel: Vec<f64>,
-    /// The CPU's slot order when it reorders particles in cell order (the system index of
-    /// the particle in each slot; empty: the system order). The force sums run in slot
+    /// The CPU's slot order (the system index of the particle in each slot, in cell order
+    /// as of the last list build; empty: the system order). The force sums run in slot
     /// order, so a bit-exact resume needs it.
     pub order: Vec<u32>,
 }

@@ -1,6 +1,7 @@
 //! The input: box, species, pair table and particles.
 
 use serde::{Deserialize, Serialize};
+use simkit_backend::vector::IntoVec3;
 use simkit_backend::{Error, Result};
 
 use crate::PairTable;
@@ -60,7 +61,8 @@ pub struct System {
 }
 
 impl System {
-    /// An empty system. In 2D only `x` and `y` of `lo`, `len` and `periodic` are used.
+    /// An empty system. In 2D only `x` and `y` of `lo`, `len` and `periodic` are used;
+    /// `lo` and `len` are any [`IntoVec3`] (`glam` vectors or arrays).
     ///
     /// Errors: non-finite `lo`, non-positive or non-finite lengths, a mass count other than
     /// the table's species count, a non-positive or non-finite mass, or a periodic length
@@ -68,12 +70,13 @@ impl System {
     /// images).
     pub fn new(
         dim: Dim,
-        lo: [f64; 3],
-        len: [f64; 3],
+        lo: impl IntoVec3,
+        len: impl IntoVec3,
         periodic: [bool; 3],
         masses: Vec<f64>,
         table: PairTable,
     ) -> Result<Self> {
+        let (lo, len) = (lo.into_vec3(), len.into_vec3());
         let n_species = masses.len();
         let mut s = Self {
             dim,
@@ -256,16 +259,19 @@ impl System {
         Ok(())
     }
 
-    /// Adds a particle of species `species` and returns its index.
+    /// Adds a particle of species `species` and returns its index. `position` and
+    /// `velocity` are any [`IntoVec3`]: `glam` vectors (`DVec3`, `Vec3`, `DVec2`, `Vec2`) or
+    /// arrays; 2D values get `z = 0`.
     ///
     /// Errors: an unknown species, a position outside the box (or non-finite), a
     /// non-finite velocity, non-zero `z` in 2D, more than [`MAX_PARTICLES`] particles.
     pub fn add_particle(
         &mut self,
         species: u32,
-        position: [f64; 3],
-        velocity: [f64; 3],
+        position: impl IntoVec3,
+        velocity: impl IntoVec3,
     ) -> Result<usize> {
+        let (position, velocity) = (position.into_vec3(), velocity.into_vec3());
         let i = self.species.len();
         if i >= MAX_PARTICLES {
             return Err(Error::invalid(

@@ -81,8 +81,8 @@ mod table;
 mod thermostat;
 
 pub use config::{
-    Config, DEFAULT_SKIN, DEFAULT_STEPS_PER_PERIOD, Integrator, MIN_STEPS_PER_PERIOD, StepGuide,
-    time_step_guide,
+    Config, DEFAULT_SKIN, DEFAULT_STEPS_PER_PERIOD, GpuKernel, Integrator, MIN_STEPS_PER_PERIOD,
+    StepGuide, time_step_guide,
 };
 pub use diagnostics::Diagnostics;
 pub use input::{Dim, MAX_PARTICLES, System};

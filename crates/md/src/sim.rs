@@ -5,7 +5,7 @@ use simkit_backend::{Backend, Error, Precision, Restart, Result, Simulation, che
 
 use crate::cpu::CpuEngine;
 use crate::engine::{Engine, EngineState};
-use crate::{Config, Diagnostics, Dim, Integrator, Langevin, System};
+use crate::{Config, Diagnostics, Dim, GpuKernel, Integrator, Langevin, System};
 
 /// The checkpoint model string of an engine: backend, precision, dimension.
 pub(crate) fn model_name(gpu: bool, precision: Precision, axes: usize) -> String {
@@ -21,13 +21,13 @@ pub(crate) fn model_name(gpu: bool, precision: Precision, axes: usize) -> String
 struct ConfigRecord {
     dt: Option<f64>,
     integrator: Integrator,
+    gpu_kernel: GpuKernel,
     single: bool,
     skin: f64,
     check_every: u32,
     shift: bool,
     allow_unstable_dt: bool,
     thermostat: Option<Langevin>,
-    reorder_every: u32,
 }
 
 impl From<&Config> for ConfigRecord {
@@ -35,13 +35,13 @@ impl From<&Config> for ConfigRecord {
         Self {
             dt: c.dt,
             integrator: c.integrator,
+            gpu_kernel: c.gpu_kernel,
             single: c.precision == Precision::F32,
             skin: c.skin,
             check_every: c.check_every,
             shift: c.shift,
             allow_unstable_dt: c.allow_unstable_dt,
             thermostat: c.thermostat,
-            reorder_every: c.reorder_every,
         }
     }
 }
@@ -51,6 +51,7 @@ impl From<ConfigRecord> for Config {
         Self {
             dt: c.dt,
             integrator: c.integrator,
+            gpu_kernel: c.gpu_kernel,
             precision: if c.single {
                 Precision::F32
             } else {
@@ -61,7 +62,6 @@ impl From<ConfigRecord> for Config {
             shift: c.shift,
             allow_unstable_dt: c.allow_unstable_dt,
             thermostat: c.thermostat,
-            reorder_every: c.reorder_every,
         }
     }
 }
@@ -73,6 +73,9 @@ struct Payload {
     system: System,
     config: ConfigRecord,
     engine: EngineState,
+    /// The positions of the CPU's last neighbour-list build (flat, system order; empty on
+    /// the GPU): the list, hence the order of the force sums, is rebuilt from them.
+    list: Vec<f64>,
 }
 
 /// Host-side snapshot: time, positions, velocities (`[x, y, 0]` in 2D) and species, in the
@@ -87,6 +90,18 @@ pub struct State {
     pub velocities: Vec<[f64; 3]>,
     /// Species of every particle.
     pub species: Vec<u32>,
+}
+
+impl State {
+    /// The positions as `glam::DVec3` values (a view, no copy).
+    pub fn positions_dvec3(&self) -> &[glam::DVec3] {
+        simkit_backend::vector::as_dvec3(&self.positions)
+    }
+
+    /// The velocities as `glam::DVec3` values (a view, no copy).
+    pub fn velocities_dvec3(&self) -> &[glam::DVec3] {
+        simkit_backend::vector::as_dvec3(&self.velocities)
+    }
 }
 
 /// A molecular-dynamics run of a [`System`] on a chosen backend.
@@ -132,7 +147,7 @@ impl Md {
         system: &System,
         config: &Config,
         backend: Backend<'_>,
-        saved: Option<&EngineState>,
+        saved: Option<(&EngineState, &[f64])>,
     ) -> Result<Self> {
         let dt = config.resolve_dt(system)?;
         let engine: Box<dyn Engine> = match backend {
@@ -151,9 +166,13 @@ impl Md {
                 }
             },
             #[cfg(feature = "gpu")]
-            Backend::Gpu(ctx) => {
-                Box::new(crate::gpu::GpuEngine::new(ctx, system, config, dt, saved)?)
-            }
+            Backend::Gpu(ctx) => Box::new(crate::gpu::GpuEngine::new(
+                ctx,
+                system,
+                config,
+                dt,
+                saved.map(|s| s.0),
+            )?),
         };
         Ok(Self {
             engine,
@@ -215,16 +234,18 @@ impl Simulation for Md {
 }
 
 /// Checkpoints hold the system, the settings, the step count, the positions and the
-/// velocities as the integrator stores them; forces are recomputed on resume (bit for bit:
-/// they depend on the positions only; on the GPU from the same cell order, since the cell
-/// list is rebuilt from the same positions). A checkpoint resumes on the backend and
-/// precision that wrote it.
+/// velocities as the integrator stores them; forces are recomputed on resume, bit for bit:
+/// on the CPU from the same half list, rebuilt from the stored slot order and positions of
+/// the last list build; on the GPU from the same cell order, since the cell list is
+/// rebuilt from the same positions. A checkpoint resumes on the backend and precision that
+/// wrote it.
 impl Restart for Md {
     fn checkpoint(&mut self) -> Result<Vec<u8>> {
         let payload = Payload {
             system: self.system.clone(),
             config: ConfigRecord::from(&self.config),
             engine: self.engine.save()?,
+            list: self.engine.list_positions(),
         };
         checkpoint::encode(
             env!("CARGO_PKG_NAME"),
@@ -256,6 +277,11 @@ impl Restart for Md {
                 backend.name()
             )));
         }
-        Self::build(&payload.system, &config, backend, Some(&payload.engine))
+        Self::build(
+            &payload.system,
+            &config,
+            backend,
+            Some((&payload.engine, &payload.list)),
+        )
     }
 }

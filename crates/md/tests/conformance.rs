@@ -1,6 +1,6 @@
 //! Every backend against the CPU in f32 (the GPU computes in f32): forces, energies and a
 //! short trajectory, in 3D periodic (velocity Verlet, three species) and 2D with reflecting
-//! walls (leapfrog).
+//! walls (leapfrog). The GPU runs each case with both force kernels (`GpuKernel`).
 //!
 //! Tolerances: forces within 1e-5 of the largest force (the sums run in another order,
 //! each pair term carries a few f32 ulps, and the steep core amplifies the rounding of the
@@ -11,7 +11,9 @@
 
 use simkit_backend::testing::{backends, max_rel_diff};
 use simkit_backend::{Backend, Precision, Result, Simulation};
-use simkit_md::{Config, Dim, Integrator, Langevin, Md, PairParams, PairTable, System, scenes};
+use simkit_md::{
+    Config, Dim, GpuKernel, Integrator, Langevin, Md, PairParams, PairTable, System, scenes,
+};
 
 fn cpu_f32(config: &Config) -> Config {
     Config {
@@ -56,9 +58,21 @@ fn compare(name: &str, sys: &System, config: &Config) -> Result<()> {
     reference.step(40)?;
     let s_ref = reference.state()?;
     let d_ref_end = reference.diagnostics()?;
-    for backend in backends(name) {
+    let runs = backends(name).into_iter().flat_map(|backend| {
+        let kernels = if backend.is_gpu() {
+            vec![GpuKernel::PerParticle, GpuKernel::cell_block()]
+        } else {
+            vec![config.gpu_kernel]
+        };
+        kernels.into_iter().map(move |k| (backend, k))
+    });
+    for (backend, gpu_kernel) in runs {
         // The GPU computes in f32 whatever the precision; the CPU is asked for f32 too.
-        let mut md = Md::new(sys, &cpu_f32(config), backend)?;
+        let config = Config {
+            gpu_kernel,
+            ..*config
+        };
+        let mut md = Md::new(sys, &cpu_f32(&config), backend)?;
         let f: Vec<f64> = md.forces()?.into_iter().flatten().collect();
         let d = md.diagnostics()?;
         let ef = max_rel_diff(&f, &f_ref, &f_ref);

@@ -1,5 +1,6 @@
 //! The blow-up guard, the time-step bound and the checks on the initial state.
 
+use approx::abs_diff_eq;
 use simkit_backend::testing::backends;
 use simkit_backend::{Backend, Error, Result, Simulation};
 use simkit_md::{Config, Dim, Md, PairParams, PairTable, System, scenes};
@@ -28,7 +29,7 @@ fn a_step_over_the_bound_is_refused_unless_allowed() -> Result<()> {
         Error::Unstable { dt, bound, .. } => {
             assert_eq!(dt, 0.08);
             // T / 20 of Lennard-Jones at m = 1 (reduced mass 1/2): 0.0294.
-            assert!((bound - 0.0294).abs() < 1e-3, "{bound}");
+            assert!(abs_diff_eq!(bound, 0.0294, epsilon = 1e-3), "{bound}");
         }
         other => panic!("{other}"),
     }

@@ -75,7 +75,7 @@ fn rel(a: f64, b: f64) -> f64 {
 /// Builds the system of `r` with `table`, evaluates it, and returns the worst relative
 /// errors (forces against the largest force, pe, ke, pressure, virial pressure).
 fn compare(r: &Reference, table: PairTable) -> Result<[f64; 5]> {
-    let len = std::array::from_fn(|d| r.hi[d] - r.lo[d]);
+    let len: [f64; 3] = std::array::from_fn(|d| r.hi[d] - r.lo[d]);
     let n_species = table.n_species();
     let mut sys = System::new(
         Dim::Three,
@@ -145,7 +145,7 @@ fn single_precision_forces_match_lammps_to_f32_rounding() -> Result<()> {
     // f32 positions round by up to 5e-8 relative to the box (4e-7 absolute here); the
     // steep core turns that into force errors of a few 1e-6 of the largest force.
     let r = read("lj_liquid");
-    let len = std::array::from_fn(|d| r.hi[d] - r.lo[d]);
+    let len: [f64; 3] = std::array::from_fn(|d| r.hi[d] - r.lo[d]);
     let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5))?;
     let mut sys = System::new(Dim::Three, r.lo, len, [true; 3], vec![1.0], table)?;
     sys.set_particles(&r.types, &r.pos, &r.vel)?;

@@ -1,7 +1,9 @@
 //! Physics checks: second-order energy conservation of both integrators, reflecting walls,
-//! the Verlet-list skin (results independent of it), 2D, the energy shift.
+//! the Verlet-list skin (results the same to rounding), the CPU's independence of the
+//! thread count, 2D, the energy shift.
 
-use simkit_backend::{Backend, Result, Simulation};
+use approx::{abs_diff_eq, assert_abs_diff_eq};
+use simkit_backend::{Backend, Precision, Result, Simulation};
 use simkit_md::{Config, Dim, Integrator, Md, PairParams, PairTable, System, scenes};
 
 /// A 32-atom Lennard-Jones cluster (2^3 FCC cells at density 1, T = 0.5) in the middle of
@@ -87,12 +89,12 @@ fn the_two_integrators_follow_the_same_trajectory() -> Result<()> {
     let (a, b) = (run(Integrator::VelocityVerlet)?, run(Integrator::Leapfrog)?);
     for (x, y) in a.positions.iter().zip(&b.positions) {
         for d in 0..3 {
-            assert!((x[d] - y[d]).abs() < 1e-9, "{x:?} {y:?}");
+            assert!(abs_diff_eq!(x[d], y[d], epsilon = 1e-9), "{x:?} {y:?}");
         }
     }
     for (x, y) in a.velocities.iter().zip(&b.velocities) {
         for d in 0..3 {
-            assert!((x[d] - y[d]).abs() < 1e-9, "{x:?} {y:?}");
+            assert!(abs_diff_eq!(x[d], y[d], epsilon = 1e-9), "{x:?} {y:?}");
         }
     }
     Ok(())
@@ -120,14 +122,15 @@ fn a_particle_reflects_off_a_closed_wall_with_its_speed() -> Result<()> {
     );
     assert_eq!(s.velocities[0], [-2.0, 0.5, 0.0]);
     // Periodic y: 5 + 0.5 * 1 = 5.5.
-    assert!((s.positions[0][1] - 5.5).abs() < 1e-12);
+    assert_abs_diff_eq!(s.positions[0][1], 5.5, epsilon = 1e-12);
     Ok(())
 }
 
 #[test]
-fn periodic_wrap_and_skin_do_not_change_the_trajectory() -> Result<()> {
-    // The list skin only decides how often the list is rebuilt: every skin gives the same
-    // bits (pairs are summed in index order, filtered by the cutoff).
+fn periodic_wrap_and_skin_change_the_trajectory_by_rounding_only() -> Result<()> {
+    // The list skin decides when the list is rebuilt, and a rebuild sorts the particles by
+    // cell, which changes the order of the force sums: every skin gives the same trajectory
+    // to rounding (1e-16 per step, grown by the chaotic dynamics over 200 steps).
     let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5))?;
     let sys = scenes::fcc_lattice([4; 3], 0.8442, 1.44, table, &[0], 11)?;
     let run = |skin| -> Result<simkit_md::State> {
@@ -140,8 +143,19 @@ fn periodic_wrap_and_skin_do_not_change_the_trajectory() -> Result<()> {
         md.state()
     };
     let a = run(0.0)?;
-    assert_eq!(a, run(0.3)?);
-    assert_eq!(a, run(1.0)?);
+    for skin in [0.3, 1.0] {
+        let b = run(skin)?;
+        let d = a
+            .positions
+            .iter()
+            .chain(&a.velocities)
+            .flatten()
+            .zip(b.positions.iter().chain(&b.velocities).flatten())
+            .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+        assert!(d < 1e-9, "skin {skin}: {d:e}");
+        assert_ne!(a, b, "skin {skin}: the sums ran in the same order");
+        assert_eq!(b, run(skin)?, "skin {skin}: not reproducible");
+    }
     // Atoms crossed the periodic faces and stayed in the box.
     let len = sys.lengths()[0];
     assert!(
@@ -150,6 +164,43 @@ fn periodic_wrap_and_skin_do_not_change_the_trajectory() -> Result<()> {
             .flatten()
             .all(|&x| (0.0..len).contains(&x))
     );
+    Ok(())
+}
+
+#[test]
+fn cpu_results_do_not_depend_on_the_thread_count() -> Result<()> {
+    // 864 atoms of two species: four blocks of the half list, whose reactions cross block
+    // boundaries; the same bits on 1, 2 and 3 threads, in both precisions.
+    let table = PairTable::uniform(2, PairParams::lj(1.0, 1.0, 2.5))?;
+    let sys = scenes::fcc_lattice([6; 3], 0.8442, 1.44, table, &[0, 1], 5)?;
+    for precision in [Precision::F64, Precision::F32] {
+        let config = Config {
+            precision,
+            ..Config::with_dt(0.005)
+        };
+        let run = |threads| -> Result<(simkit_md::State, Vec<[f64; 3]>, f64)> {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .map_err(|e| simkit_backend::Error::Unsupported(e.to_string()))?;
+            pool.install(|| {
+                let mut md = Md::new(&sys, &config, Backend::Cpu)?;
+                md.step(60)?;
+                Ok((md.state()?, md.forces()?, md.diagnostics()?.total))
+            })
+        };
+        let one = run(1)?;
+        for threads in [2, 3] {
+            let other = run(threads)?;
+            assert_eq!(one.0, other.0, "{precision:?}, {threads} threads");
+            assert_eq!(one.1, other.1, "{precision:?}, {threads} threads");
+            assert_eq!(
+                one.2.to_bits(),
+                other.2.to_bits(),
+                "{precision:?}, {threads} threads"
+            );
+        }
+    }
     Ok(())
 }
 
@@ -194,11 +245,11 @@ fn two_dimensional_runs_conserve_energy_and_momentum() -> Result<()> {
         "{d0:?} {d1:?}"
     );
     for d in 0..2 {
-        assert!((p1[d] - p0[d]).abs() < 1e-10, "{p0:?} {p1:?}");
+        assert!(abs_diff_eq!(p1[d], p0[d], epsilon = 1e-10), "{p0:?} {p1:?}");
     }
     // The 2D virial pressure uses D = 2.
     let want = (2.0 * d1.kinetic + d1.virial) / (2.0 * 144.0);
-    assert!((d1.pressure - want).abs() < 1e-12 * want.abs().max(1.0));
+    assert_abs_diff_eq!(d1.pressure, want, epsilon = 1e-12 * want.abs().max(1.0));
     Ok(())
 }
 
@@ -219,7 +270,7 @@ fn the_shift_moves_the_energy_by_phi_at_the_cutoff_per_pair() -> Result<()> {
     };
     let phi = PairParams::lj(1.0, 1.0, 2.5);
     let (plain, shifted) = (pe(false)?, pe(true)?);
-    assert!((plain - phi.phi(1.2)).abs() < 1e-14);
+    assert_abs_diff_eq!(plain, phi.phi(1.2), epsilon = 1e-14);
     assert!((plain - shifted - phi.phi(2.5)).abs() < 1e-14);
     Ok(())
 }
@@ -233,16 +284,20 @@ fn species_temperatures_and_default_dt() -> Result<()> {
     assert_eq!(g.pair, (0, 0));
     let k = PairParams::repulsive(1.0, 0.5, 2.0).curvature(0.5);
     let period = 2.0 * std::f64::consts::PI * (0.5 / k).sqrt();
-    assert!((g.period - period).abs() < 1e-15);
+    assert_abs_diff_eq!(g.period, period, epsilon = 1e-15);
     assert_eq!(md.dt(), period / simkit_md::DEFAULT_STEPS_PER_PERIOD);
     let mut md = md;
     let d = md.diagnostics()?;
     let mean: f64 = d.species_temperature.iter().sum::<f64>() / 3.0;
     // Drawn at T = 1 with 3N - 3 degrees of freedom; each species within sampling noise.
     for t in &d.species_temperature {
-        assert!((t - 1.0).abs() < 0.15, "{:?}", d.species_temperature);
+        assert!(
+            abs_diff_eq!(*t, 1.0, epsilon = 0.15),
+            "{:?}",
+            d.species_temperature
+        );
     }
-    assert!((mean - 1.0).abs() < 0.05);
+    assert_abs_diff_eq!(mean, 1.0, epsilon = 0.05);
     Ok(())
 }
 
@@ -252,15 +307,19 @@ fn the_lj_melt_scene_is_lammps_in_lj() -> Result<()> {
     assert_eq!(sys.particle_count(), 32_000);
     let len = sys.lengths();
     // 20 cells of (4 / 0.8442)^(1/3) = 1.6796: a box of 33.592.
-    assert!((len[0] - 20.0 * (4.0f64 / 0.8442).cbrt()).abs() < 1e-12);
-    assert!((sys.particle_count() as f64 / sys.volume() - 0.8442).abs() < 1e-12);
+    assert_abs_diff_eq!(len[0], 20.0 * (4.0f64 / 0.8442).cbrt(), epsilon = 1e-12);
+    assert_abs_diff_eq!(
+        sys.particle_count() as f64 / sys.volume(),
+        0.8442,
+        epsilon = 1e-12
+    );
     let mut md = Md::new(&sys, &Config::with_dt(0.005), Backend::Cpu)?;
     let d = md.diagnostics()?;
     // T = 2 K / (3N - 3) = 1.44 exactly as drawn. Step 0 of LAMMPS's bench/in.lj (29 Sep
     // 2021, `thermo_modify format float %.10g`, `run 0`): E_pair = -6.773368053,
     // Press = -5.019707259 (the pressure depends on the velocities only through T).
     let t = 2.0 * d.kinetic / (3.0 * 32_000.0 - 3.0);
-    assert!((t - 1.44).abs() < 1e-12, "{t}");
+    assert!(abs_diff_eq!(t, 1.44, epsilon = 1e-12), "{t}");
     eprintln!("U/N = {:.9}, P = {:.9}", d.potential / 32e3, d.pressure);
     assert!((d.potential / 32_000.0 + 6.773368053).abs() < 1e-9);
     assert!((d.pressure + 5.019707259).abs() < 1e-9);

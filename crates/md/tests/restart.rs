@@ -91,10 +91,9 @@ fn restart_is_bit_exact() {
             },
         ),
         (
-            "3D mix, f64, Langevin, reordered in cell order every 9 steps (CPU)",
+            "3D mix, f64, Langevin (second seed)",
             mix,
             Config {
-                reorder_every: 9,
                 thermostat: Some(Langevin::new(0.9, 1.0, 4)),
                 ..Config::default()
             },

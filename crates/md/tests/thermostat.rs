@@ -4,6 +4,7 @@
 //! three standard errors from block averaging (10 blocks of the samples), measured values
 //! in the comments and in `docs/md.md`.
 
+use approx::abs_diff_eq;
 use simkit_backend::testing::backends;
 use simkit_backend::{Backend, Result, Simulation};
 use simkit_md::{Config, Langevin, Md, PairParams, PairTable, System, scenes};
@@ -80,7 +81,10 @@ fn kinetic_temperature_relaxes_to_the_target_per_species_and_per_axis() -> Resul
             target[k],
             (m - target[k]) / se
         );
-        assert!((m - target[k]).abs() < 3.0 * se, "species {k}: {m} +- {se}");
+        assert!(
+            abs_diff_eq!(m, target[k], epsilon = 3.0 * se),
+            "species {k}: {m} +- {se}"
+        );
         for (d, axis) in samples[k].iter().enumerate() {
             let (m, se) = block_mean(axis, 10);
             eprintln!("  axis {d}: <m v^2> = {m:.4} +- {se:.4}");
@@ -148,7 +152,7 @@ fn configurational_temperature_matches_the_target() -> Result<()> {
         .collect();
     let (m, se) = block_mean(&ratios, blocks);
     eprintln!("T_conf = {m:.4} +- {se:.4}, z = {:.2}", (m - 1.0) / se);
-    assert!((m - 1.0).abs() < 3.0 * se, "{m} +- {se}");
+    assert!(abs_diff_eq!(m, 1.0, epsilon = 3.0 * se), "{m} +- {se}");
     Ok(())
 }
 

@@ -80,6 +80,8 @@ pub struct BlockedHalfList<T, const D: usize> {
     /// `start[c]..start[c + 1]`: the sorted slots of cell `c`.
     start: Vec<u32>,
     blocks: Vec<HalfListBlock<T, D>>,
+    /// The sorted positions in `f64`, one column per axis (scratch of `build`).
+    coords: [Vec<f64>; D],
 }
 
 /// One block of consecutive particles (in sorted order) of a [`BlockedHalfList`] with its
@@ -289,6 +291,7 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
             cell_of: Vec::new(),
             start: vec![0; total as usize + 1],
             blocks,
+            coords: std::array::from_fn(|_| Vec::new()),
         })
     }
 
@@ -419,12 +422,25 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
     /// closer than the range, with the minimum image it has now. Blocks are built on the
     /// rayon pool when `parallel`; the lists are the same either way.
     ///
+    /// The periodic image of a pair is taken from the cells it is found in (a neighbour
+    /// cell reached across a periodic face gives the shift of that face), which is its
+    /// minimum image for positions in the box; along a periodic axis of one or two cells,
+    /// where one neighbour cell is reached across both faces, it is the minimum image of
+    /// every pair. The partners of a particle are listed in an order that depends only on
+    /// the positions.
+    ///
     /// Errors: `pos.len()` differs from the particle count.
     pub fn build(&mut self, pos: &[[T; D]], parallel: bool) -> Result<()> {
         self.check_len("build:", pos.len())?;
         let mut blocks = std::mem::take(&mut self.blocks);
+        let mut coords = std::mem::replace(&mut self.coords, std::array::from_fn(|_| Vec::new()));
+        for (d, col) in coords.iter_mut().enumerate() {
+            col.clear();
+            col.extend(pos.iter().map(|x| x[d].to_f64()));
+            col.extend([f64::NAN; CHUNK]);
+        }
         let this = &*self;
-        let half: [f64; D] = std::array::from_fn(|d| 0.5 * this.len[d]);
+        let per_cell = (0..D).all(|d| !this.periodic[d] || this.cells[d] >= 3);
         let build = |b: &mut HalfListBlock<T, D>| {
             b.offsets.clear();
             b.partners.clear();
@@ -432,57 +448,10 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
             b.image_offsets.clear();
             b.image_partners.clear();
             b.image_offsets.push(0);
-            for (i, xi) in pos.iter().enumerate().take(b.end).skip(b.start) {
-                let c = this.cell_coords(xi);
-                let axes: [([usize; 3], usize); D] =
-                    std::array::from_fn(|d| this.axis_neighbors(d, c[d]));
-                let mut k = [0usize; D];
-                'cells: loop {
-                    let nc = this.linear(std::array::from_fn(|d| axes[d].0[k[d]]));
-                    let (s, e) = (this.start[nc] as usize, this.start[nc + 1] as usize);
-                    for (j, xj) in pos.iter().enumerate().take(e).skip(s.max(i + 1)) {
-                        let mut r2 = 0.0;
-                        let mut shift = [T::ZERO; D];
-                        let mut crosses = false;
-                        for d in 0..D {
-                            let mut s = xi[d].to_f64() - xj[d].to_f64();
-                            if this.periodic[d] {
-                                if s > half[d] {
-                                    s -= this.len[d];
-                                    shift[d] = T::from_f64(this.len[d]);
-                                    crosses = true;
-                                } else if s < -half[d] {
-                                    s += this.len[d];
-                                    shift[d] = T::from_f64(-this.len[d]);
-                                    crosses = true;
-                                }
-                            }
-                            r2 += s * s;
-                        }
-                        if r2 < this.range2 {
-                            if crosses {
-                                b.image_partners.push((j as u32, shift));
-                            } else {
-                                b.partners.push(j as u32);
-                            }
-                        }
-                    }
-                    // Next cell of the stencil (odometer over the axes).
-                    let mut d = 0;
-                    loop {
-                        if d == D {
-                            break 'cells;
-                        }
-                        k[d] += 1;
-                        if k[d] < axes[d].1 {
-                            break;
-                        }
-                        k[d] = 0;
-                        d += 1;
-                    }
-                }
-                b.offsets.push(b.partners.len() as u32);
-                b.image_offsets.push(b.image_partners.len() as u32);
+            if per_cell {
+                this.build_block_per_cell_dispatch(b, pos, &coords);
+            } else {
+                this.build_block_min_image(b, pos);
             }
         };
         if parallel {
@@ -491,6 +460,290 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
             blocks.iter_mut().for_each(build);
         }
         self.blocks = blocks;
+        self.coords = coords;
         Ok(())
     }
+
+    /// The slot ranges (with their image shifts) of the stencil of cell `c`: the rows of
+    /// neighbour cells along axis 0, each one contiguous range unless it wraps across a
+    /// periodic face of axis 0. Needs at least three cells along every periodic axis.
+    /// Returns the number of ranges written to `out`.
+    fn stencil_ranges(&self, c: [usize; D], out: &mut [SlotRange<D>; MAX_RANGES]) -> usize {
+        // Neighbour coordinates along each axis with the shift of the face crossed.
+        let axis = |d: usize| -> ([(usize, f64); 3], usize) {
+            let n = self.cells[d];
+            let mut o = [(0usize, 0.0f64); 3];
+            let mut k = 0;
+            for t in [c[d].wrapping_sub(1), c[d], c[d] + 1] {
+                if t < n {
+                    o[k] = (t, 0.0);
+                } else if self.periodic[d] {
+                    // t = -1: the last cell, whose image next to cell 0 is at x_j - len, so
+                    // the separation is (x_i - x_j) - (-len); t = n: the first cell, + len.
+                    o[k] = if t == n {
+                        (0, self.len[d])
+                    } else {
+                        (n - 1, -self.len[d])
+                    };
+                } else {
+                    continue;
+                }
+                k += 1;
+            }
+            (o, k)
+        };
+        let axes: [([(usize, f64); 3], usize); D] = std::array::from_fn(axis);
+        let mut count = 0;
+        // Odometer over the axes 1..D; axis 0 is merged into runs.
+        let mut k = [0usize; D];
+        loop {
+            let mut base = 0;
+            let mut shift = [0.0f64; D];
+            for d in (1..D).rev() {
+                let (t, s) = axes[d].0[k[d]];
+                base = base * self.cells[d] + t;
+                shift[d] = s;
+            }
+            base *= self.cells[0];
+            // Axis 0: consecutive unshifted cells form one slot range.
+            let (ax, na) = axes[0];
+            let mut m = 0;
+            while m < na {
+                let (t0, s0) = ax[m];
+                let mut t1 = t0;
+                if s0 == 0.0 {
+                    while m + 1 < na && ax[m + 1].1 == 0.0 && ax[m + 1].0 == t1 + 1 {
+                        m += 1;
+                        t1 += 1;
+                    }
+                }
+                let mut sh = shift;
+                sh[0] = s0;
+                out[count] = SlotRange {
+                    start: self.start[base + t0] as usize,
+                    end: self.start[base + t1 + 1] as usize,
+                    shift: sh,
+                };
+                count += 1;
+                m += 1;
+            }
+            let mut d = 1;
+            loop {
+                if d >= D {
+                    return count;
+                }
+                k[d] += 1;
+                if k[d] < axes[d].1 {
+                    break;
+                }
+                k[d] = 0;
+                d += 1;
+            }
+        }
+    }
+
+    /// [`build_block_per_cell`](Self::build_block_per_cell), compiled for AVX2 when the CPU
+    /// has it (AVX-512 measured no faster). The list is the same on every path: the
+    /// distances are rounded the same way (no fused multiply-add).
+    fn build_block_per_cell_dispatch(
+        &self,
+        b: &mut HalfListBlock<T, D>,
+        pos: &[[T; D]],
+        coords: &[Vec<f64>; D],
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU supports AVX2 (checked above).
+                unsafe { self.build_block_per_cell_avx2(b, pos, coords) };
+                return;
+            }
+        }
+        self.build_block_per_cell(b, pos, coords);
+    }
+
+    /// [`build_block_per_cell`](Self::build_block_per_cell) with AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn build_block_per_cell_avx2(
+        &self,
+        b: &mut HalfListBlock<T, D>,
+        pos: &[[T; D]],
+        coords: &[Vec<f64>; D],
+    ) {
+        self.build_block_per_cell(b, pos, coords);
+    }
+
+    /// Builds block `b` cell by cell: the stencil ranges and their image shifts are found
+    /// once per run of particles in the same cell, the distances of each particle to a
+    /// range are computed in chunks the compiler vectorises.
+    #[inline(always)]
+    fn build_block_per_cell(
+        &self,
+        b: &mut HalfListBlock<T, D>,
+        pos: &[[T; D]],
+        coords: &[Vec<f64>; D],
+    ) {
+        let mut ranges = [SlotRange {
+            start: 0,
+            end: 0,
+            shift: [0.0; D],
+        }; MAX_RANGES];
+        let mut i = b.start;
+        while i < b.end {
+            let c = self.cell_coords(&pos[i]);
+            let mut group_end = i + 1;
+            while group_end < b.end && self.cell_coords(&pos[group_end]) == c {
+                group_end += 1;
+            }
+            let nr = self.stencil_ranges(c, &mut ranges);
+            // Ranges wholly before the run of particles never hold a partner.
+            let mut live = 0;
+            for q in 0..nr {
+                if ranges[q].end > i + 1 {
+                    ranges[live] = ranges[q];
+                    live += 1;
+                }
+            }
+            for i in i..group_end {
+                let xi: [f64; D] = std::array::from_fn(|d| coords[d][i]);
+                for r in &ranges[..live] {
+                    let from = r.start.max(i + 1);
+                    if r.shift.iter().all(|&s| s == 0.0) {
+                        scan::<D, false>(coords, xi, r.shift, self.range2, from, r.end, |j| {
+                            b.partners.push(j)
+                        });
+                    } else {
+                        let shift: [T; D] = std::array::from_fn(|d| T::from_f64(r.shift[d]));
+                        scan::<D, true>(coords, xi, r.shift, self.range2, from, r.end, |j| {
+                            b.image_partners.push((j, shift))
+                        });
+                    }
+                }
+                b.offsets.push(b.partners.len() as u32);
+                b.image_offsets.push(b.image_partners.len() as u32);
+            }
+            i = group_end;
+        }
+    }
+
+    /// Builds block `b` pair by pair with the minimum image of each pair (any number of
+    /// cells per periodic axis).
+    fn build_block_min_image(&self, b: &mut HalfListBlock<T, D>, pos: &[[T; D]]) {
+        let half: [f64; D] = std::array::from_fn(|d| 0.5 * self.len[d]);
+        for (i, xi) in pos.iter().enumerate().take(b.end).skip(b.start) {
+            let c = self.cell_coords(xi);
+            let axes: [([usize; 3], usize); D] =
+                std::array::from_fn(|d| self.axis_neighbors(d, c[d]));
+            let mut k = [0usize; D];
+            'cells: loop {
+                let nc = self.linear(std::array::from_fn(|d| axes[d].0[k[d]]));
+                let (s, e) = (self.start[nc] as usize, self.start[nc + 1] as usize);
+                for (j, xj) in pos.iter().enumerate().take(e).skip(s.max(i + 1)) {
+                    let mut r2 = 0.0;
+                    let mut shift = [T::ZERO; D];
+                    let mut crosses = false;
+                    for d in 0..D {
+                        let mut s = xi[d].to_f64() - xj[d].to_f64();
+                        if self.periodic[d] {
+                            if s > half[d] {
+                                s -= self.len[d];
+                                shift[d] = T::from_f64(self.len[d]);
+                                crosses = true;
+                            } else if s < -half[d] {
+                                s += self.len[d];
+                                shift[d] = T::from_f64(-self.len[d]);
+                                crosses = true;
+                            }
+                        }
+                        r2 += s * s;
+                    }
+                    if r2 < self.range2 {
+                        if crosses {
+                            b.image_partners.push((j as u32, shift));
+                        } else {
+                            b.partners.push(j as u32);
+                        }
+                    }
+                }
+                // Next cell of the stencil (odometer over the axes).
+                let mut d = 0;
+                loop {
+                    if d == D {
+                        break 'cells;
+                    }
+                    k[d] += 1;
+                    if k[d] < axes[d].1 {
+                        break;
+                    }
+                    k[d] = 0;
+                    d += 1;
+                }
+            }
+            b.offsets.push(b.partners.len() as u32);
+            b.image_offsets.push(b.image_partners.len() as u32);
+        }
+    }
+}
+
+/// Calls `hit(j)` for every slot `j` in `from..to` with `|(x_i - x_j) - shift|^2 < range2`
+/// (the shift is left out when not `SHIFTED`: it is zero then), in increasing `j`; the
+/// distances are computed `CHUNK` candidates at a time in a loop the compiler vectorises.
+/// The columns of `coords` hold `CHUNK` padding entries past the last particle.
+#[inline(always)]
+fn scan<const D: usize, const SHIFTED: bool>(
+    coords: &[Vec<f64>; D],
+    xi: [f64; D],
+    shift: [f64; D],
+    range2: f64,
+    from: usize,
+    to: usize,
+    mut hit: impl FnMut(u32),
+) {
+    let mut j0 = from;
+    while j0 < to {
+        let m = (to - j0).min(CHUNK);
+        let cols: [&[f64]; D] = std::array::from_fn(|d| &coords[d][j0..j0 + CHUNK]);
+        let mut mask = 0 as Mask;
+        #[allow(
+            clippy::needless_range_loop,
+            reason = "k indexes the D columns and the mask bits"
+        )]
+        for k in 0..CHUNK {
+            let mut v = 0.0;
+            for d in 0..D {
+                // (x_i - x_j) - s, rounded as the minimum-image path rounds it.
+                let mut t = xi[d] - cols[d][k];
+                if SHIFTED {
+                    t -= shift[d];
+                }
+                v += t * t;
+            }
+            mask |= Mask::from(v < range2) << k;
+        }
+        mask &= Mask::MAX >> (CHUNK - m);
+        while mask != 0 {
+            hit((j0 + mask.trailing_zeros() as usize) as u32);
+            mask &= mask - 1;
+        }
+        j0 += m;
+    }
+}
+
+/// A bit per candidate of a chunk.
+type Mask = u64;
+
+/// Candidates whose distances are computed in one go by the per-cell build.
+const CHUNK: usize = Mask::BITS as usize;
+
+/// Most slot ranges in a stencil: two per row of neighbour cells along axis 0, 3^(D-1) rows.
+const MAX_RANGES: usize = 18;
+
+/// Sorted slots `start..end` of a run of neighbour cells along axis 0, all in the periodic
+/// image `shift` (separation `(x_i - x_j) - shift`).
+#[derive(Clone, Copy, Debug)]
+struct SlotRange<const D: usize> {
+    start: usize,
+    end: usize,
+    shift: [f64; D],
 }

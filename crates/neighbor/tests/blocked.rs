@@ -278,3 +278,55 @@ fn blocks_depend_only_on_the_particle_count() {
         assert_eq!(list.blocks().len(), count, "n = {n}");
     }
 }
+
+#[test]
+fn half_list_equals_brute_force_with_one_to_four_cells_per_axis() {
+    // Periodic axes with 1 or 2 cells (the same neighbour cell is reached through both
+    // faces) take the per-pair minimum image; 3 and more take the per-cell image shifts.
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(5);
+    let range = 1.0;
+    for case in 0..64usize {
+        let periodic = [case & 1 == 1, case & 2 == 2, case & 4 == 4];
+        // 2.0 -> 2 cells (1 cell only when closed and shorter), 1.5 -> 1 cell (closed only).
+        let len: [f64; 3] = std::array::from_fn(|d| {
+            let c = [2.0, 2.5, 3.0, 3.5, 4.2, 2.0, 3.0, 1.5][(case >> (3 + d)) & 7];
+            if periodic[d] { c.max(2.0) } else { c }
+        });
+        let lo = [0.5, -1.0, 2.0];
+        let pos = random_positions(&mut rng, lo, len, periodic, range, 300);
+        check(lo, len, periodic, range, &pos);
+        let p2: Vec<[f64; 2]> = pos.iter().map(|x| [x[0], x[1]]).collect();
+        check(
+            [lo[0], lo[1]],
+            [len[0], len[1]],
+            [periodic[0], periodic[1]],
+            range,
+            &p2,
+        );
+    }
+}
+
+#[test]
+fn non_finite_positions_are_in_range_of_nothing() {
+    // Both build paths (3 and 2 cells per periodic axis); no panic, the finite pairs kept.
+    for len in [12.0, 5.0] {
+        let mut pos = vec![[1.0, 1.0, 1.0], [1.5, 1.0, 1.0], [len - 0.2, 1.0, 1.0]];
+        pos.extend([
+            [f64::NAN, 1.0, 1.0],
+            [1.0, f64::INFINITY, 1.0],
+            [-f64::INFINITY; 3],
+        ]);
+        let mut list =
+            BlockedHalfList::<f64, 3>::new([0.0; 3], [len; 3], [true; 3], 1.5, pos.len()).unwrap();
+        let order = list.sort(&pos).unwrap();
+        let sorted: Vec<[f64; 3]> = order.iter().map(|&k| pos[k as usize]).collect();
+        for parallel in [false, true] {
+            list.build(&sorted, parallel).unwrap();
+            let pairs = listed(&list);
+            assert_eq!(pairs.len(), 2, "len {len}: {pairs:?}");
+            for &(i, j) in pairs.keys() {
+                assert!(sorted[i].iter().chain(&sorted[j]).all(|x| x.is_finite()));
+            }
+        }
+    }
+}

@@ -1,26 +1,48 @@
-//! PNG heat maps of 2D scalar fields, with a labelled colour bar and an optional title.
+//! Heat maps of 2D scalar fields, PNG or SVG (from the file extension): the field on
+//! spatial axes with units, a colour bar labelled with the quantity, a title and a subtitle
+//! (for example the time).
 //!
 //! Data is row-major: `data[row * width + col]`. By default row 0 is drawn at the bottom
 //! (physics convention, y up); [`HeatmapOptions::row0_at_top`] flips that for image-style
 //! data. NaN cells are drawn in [`NAN_COLOR`](crate::colormap::NAN_COLOR).
+//!
+//! ```
+//! use simkit_output::heatmap::{write_heatmap, HeatmapOptions};
+//! # fn main() -> simkit_backend::Result<()> {
+//! let (w, h) = (64, 32);
+//! let field: Vec<f64> = (0..w * h).map(|i| ((i % w) as f64 * 0.2).sin()).collect();
+//! let opts = HeatmapOptions::new()
+//!     .upscale(6)
+//!     .extent(0.0, 2.0, 0.0, 1.0)
+//!     .x_label("x (mm)")
+//!     .y_label("y (mm)")
+//!     .quantity("ρ (g/cm³)")
+//!     .title("density")
+//!     .subtitle("t = 0.5 s");
+//! let dir = std::env::temp_dir().join("simkit-doc-heatmap-mod");
+//! write_heatmap(dir.join("rho.png"), &field, w, h, &opts)?;
+//! write_heatmap(dir.join("rho.svg"), &field, w, h, &opts)?;
+//! # Ok(())
+//! # }
+//! ```
 
 use std::path::Path;
 
-use image::{Rgb, RgbImage};
+use image::RgbImage;
+use plotters::coord::Shift;
+use plotters::prelude::*;
 
 use crate::colormap::Colormap;
-use crate::{font, numfmt, png, raster};
+use crate::figure::{
+    Axis, COLORBAR_W, Figure, LABEL_PX, TICK_PX, draw_colorbar, draw_err, draw_header,
+    draw_y_title, font, header_height, render_rgb, rgb, spatial_axis, write_figure,
+};
+pub use crate::figure::{MAX_PIXELS, MAX_SIDE};
 use simkit_backend::{Error, Result};
 
-/// Largest image side in pixels this crate renders.
-pub const MAX_SIDE: usize = 32_768;
-
-/// Largest image area in pixels this crate renders (2^27: 384 MiB of RGB); a larger image
-/// is refused before it is allocated.
-pub const MAX_PIXELS: usize = 1 << 27;
-
-const WHITE: [u8; 3] = [255, 255, 255];
-const BLACK: [u8; 3] = [0, 0, 0];
+/// The field is enlarged (by a whole factor) until its longer side has at least this many
+/// pixels, so that axes and colour bar stay readable next to small grids.
+const MIN_FIELD_PX: usize = 320;
 
 /// How to draw a heat map. Build with [`HeatmapOptions::new`] and the chained setters.
 #[derive(Debug, Clone, PartialEq)]
@@ -34,14 +56,25 @@ pub struct HeatmapOptions {
     pub symmetric: bool,
     /// Draw row 0 at the top instead of the bottom (default false: row 0 at the bottom).
     pub row0_at_top: bool,
-    /// Each grid cell becomes an `upscale` x `upscale` pixel block (default 1).
+    /// Each grid cell becomes at least an `upscale` x `upscale` pixel block (default 1;
+    /// small grids are enlarged further so that the field is at least 320 pixels across).
     pub upscale: u32,
-    /// Draw a colour bar labelled with min and max on the right (default true).
+    /// Draw a colour bar with ticks and the [`quantity`](Self::quantity) (default true).
     pub colorbar: bool,
-    /// Title drawn above the field.
+    /// Title above the field.
     pub title: Option<String>,
-    /// Text scale factor; `None` (default) picks 1 or 2 from the image size.
-    pub text_scale: Option<u32>,
+    /// Second, smaller line under the title, for example `"t = 12.5 ps"`.
+    pub subtitle: Option<String>,
+    /// What the colours mean, with its unit, written along the colour bar
+    /// (e.g. `"u (concentration)"`).
+    pub quantity: Option<String>,
+    /// Spatial extent `(x0, x1, y0, y1)` covered by the grid; `None` (default) numbers the
+    /// cells: `(0, width, 0, height)`.
+    pub extent: Option<(f64, f64, f64, f64)>,
+    /// x-axis title with its unit, e.g. `"x (lattice units)"`.
+    pub x_label: Option<String>,
+    /// y-axis title with its unit.
+    pub y_label: Option<String>,
 }
 
 impl Default for HeatmapOptions {
@@ -54,14 +87,18 @@ impl Default for HeatmapOptions {
             upscale: 1,
             colorbar: true,
             title: None,
-            text_scale: None,
+            subtitle: None,
+            quantity: None,
+            extent: None,
+            x_label: None,
+            y_label: None,
         }
     }
 }
 
 impl HeatmapOptions {
     /// The defaults: viridis, automatic range, row 0 at the bottom, no upscaling, colour bar,
-    /// no title.
+    /// cell-numbered axes, no titles.
     pub fn new() -> Self {
         Self::default()
     }
@@ -100,34 +137,42 @@ impl HeatmapOptions {
         self.title = Some(title.into());
         self
     }
-    /// Sets the text scale factor (>= 1). Text, colour bar and margins grow with it, and
-    /// rendering refuses a scale that takes the image past [`MAX_SIDE`] pixels per side or
-    /// [`MAX_PIXELS`] in all.
-    pub fn text_scale(mut self, scale: u32) -> Self {
-        self.text_scale = Some(scale);
+    /// Sets the subtitle (a second line, e.g. the time).
+    pub fn subtitle(mut self, subtitle: impl Into<String>) -> Self {
+        self.subtitle = Some(subtitle.into());
+        self
+    }
+    /// Sets the quantity written along the colour bar, with its unit.
+    pub fn quantity(mut self, quantity: impl Into<String>) -> Self {
+        self.quantity = Some(quantity.into());
+        self
+    }
+    /// Sets the spatial extent of the grid (checked when rendering: finite, `x0 < x1`,
+    /// `y0 < y1`).
+    pub fn extent(mut self, x0: f64, x1: f64, y0: f64, y1: f64) -> Self {
+        self.extent = Some((x0, x1, y0, y1));
+        self
+    }
+    /// Sets the x-axis title (write the unit in it).
+    pub fn x_label(mut self, label: impl Into<String>) -> Self {
+        self.x_label = Some(label.into());
+        self
+    }
+    /// Sets the y-axis title (write the unit in it).
+    pub fn y_label(mut self, label: impl Into<String>) -> Self {
+        self.y_label = Some(label.into());
         self
     }
 }
 
-/// Where the field itself sits in a rendered image.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct FieldPlacement {
-    /// Left edge of the field in pixels.
-    pub x0: u32,
-    /// Top edge of the field in pixels.
-    pub y0: u32,
-    /// Pixels per grid cell.
-    pub scale: u32,
-}
-
-/// Renders `data` (`width` x `height`, row-major) to an image; returns it and the value range
-/// used. Use this to collect frames for [`crate::gif`].
+/// Renders `data` (`width` x `height`, row-major) to an RGB image; returns it and the value
+/// range used. Use this to collect frames for [`crate::gif`]: frames rendered with the same
+/// options and grid size have the same size.
 ///
-/// Errors on zero sizes, `data.len() != width * height`, a zero upscale or text scale, an
-/// image (field plus text, colour bar and margins) over [`MAX_SIDE`] per side or
-/// [`MAX_PIXELS`] in all (checked before it is allocated; the error names `text_scale` when
-/// one is set), a fixed range that is non-finite or has `min >= max`, or (automatic range)
-/// data with no finite value.
+/// Errors on zero sizes, `data.len() != width * height`, a zero upscale, an image over
+/// [`MAX_SIDE`] per side or [`MAX_PIXELS`] in all (checked before it is allocated), a fixed
+/// range or extent that is non-finite or empty, or (automatic range) data with no finite
+/// value.
 pub fn render_heatmap<T: Copy + Into<f64>>(
     data: &[T],
     width: usize,
@@ -135,12 +180,12 @@ pub fn render_heatmap<T: Copy + Into<f64>>(
     opts: &HeatmapOptions,
 ) -> Result<(RgbImage, (f64, f64))> {
     let values: Vec<f64> = data.iter().map(|&v| v.into()).collect();
-    let (img, range, _) = render_field(&values, width, height, opts)?;
-    Ok((img, range))
+    let fig = FieldFigure::new(&values, width, height, opts)?;
+    Ok((render_rgb("heat map", &fig)?, fig.range))
 }
 
-/// Renders like [`render_heatmap`] and writes the PNG atomically to `path`; returns the value
-/// range used.
+/// Renders like [`render_heatmap`] and writes the file atomically to `path`: PNG for a
+/// `.png` path, SVG for `.svg`. Returns the value range used.
 pub fn write_heatmap<T: Copy + Into<f64>>(
     path: impl AsRef<Path>,
     data: &[T],
@@ -148,9 +193,10 @@ pub fn write_heatmap<T: Copy + Into<f64>>(
     height: usize,
     opts: &HeatmapOptions,
 ) -> Result<(f64, f64)> {
-    let (img, range) = render_heatmap(data, width, height, opts)?;
-    png::write_png(path, &img)?;
-    Ok(range)
+    let values: Vec<f64> = data.iter().map(|&v| v.into()).collect();
+    let fig = FieldFigure::new(&values, width, height, opts)?;
+    write_figure("heat map", path.as_ref(), &fig)?;
+    Ok(fig.range)
 }
 
 /// Checks grid sizes against the data length.
@@ -228,182 +274,232 @@ pub(crate) fn resolve_range(values: &[f64], opts: &HeatmapOptions) -> Result<(f6
     Ok((lo, hi))
 }
 
-/// Renders the field, colour bar and title; also returns where the field was placed.
-pub(crate) fn render_field(
-    values: &[f64],
+/// A polyline drawn over a field (the arrows of a vector field), in axis coordinates.
+#[derive(Debug, Clone)]
+pub(crate) struct Stroke {
+    pub(crate) points: Vec<(f64, f64)>,
+    pub(crate) color: [u8; 3],
+    pub(crate) width: u32,
+}
+
+/// A validated field with its layout, ready to draw.
+pub(crate) struct FieldFigure<'a> {
+    values: &'a [f64],
     width: usize,
     height: usize,
-    opts: &HeatmapOptions,
-) -> Result<(RgbImage, (f64, f64), FieldPlacement)> {
-    check_grid("data", values.len(), width, height)?;
-    if opts.upscale == 0 {
-        return Err(Error::invalid(
-            "upscale",
-            0,
-            "must be >= 1 (1 = one pixel per cell)",
-        ));
-    }
-    if opts.text_scale == Some(0) {
-        return Err(Error::invalid("text_scale", 0, "must be >= 1"));
-    }
-    let s = opts.upscale as usize;
-    let (fw, fh) = (width.saturating_mul(s), height.saturating_mul(s));
-    if fw > MAX_SIDE || fh > MAX_SIDE {
-        return Err(Error::invalid(
-            "upscale",
-            opts.upscale,
-            format!(
-                "the field would be {fw} x {fh} pixels, over the limit of {MAX_SIDE}; use a \
-                 smaller upscale"
-            ),
-        ));
-    }
-    let range = resolve_range(values, opts)?;
-    let (fw, fh) = (fw as u32, fh as u32);
-    let ts = opts
-        .text_scale
-        .unwrap_or(if fh.max(fw) >= 300 { 2 } else { 1 });
-    // The layout in u64 (text widths saturate at u32::MAX), so that a huge text scale or
-    // title is measured without overflow and refused below before anything is allocated.
-    let t = u64::from(ts);
-    let decorated = opts.colorbar || opts.title.is_some();
-    let m = if decorated { 4 * t } else { 0 };
-    let th = font::text_height(ts);
-    let title_h = if opts.title.is_some() {
-        u64::from(th) + m
-    } else {
-        0
-    };
-    let content_h = if opts.colorbar {
-        u64::from(fh).max(2 * u64::from(th) + 4 * t)
-    } else {
-        u64::from(fh)
-    };
-    let (min_label, max_label) = (numfmt::short(range.0), numfmt::short(range.1));
-    let bar_w = 10 * t;
-    let bar_x = m + u64::from(fw) + 2 * m;
-    let label_x = bar_x + bar_w + m;
-    let label_w = font::text_width(&min_label, ts).max(font::text_width(&max_label, ts));
-    let mut canvas_w = if opts.colorbar {
-        label_x + u64::from(label_w) + m
-    } else {
-        u64::from(fw) + 2 * m
-    };
-    let title_w = opts
-        .title
-        .as_ref()
-        .map_or(0, |title| u64::from(font::text_width(title, ts)) + 2 * m);
-    canvas_w = canvas_w.max(title_w);
-    let canvas_h = m + title_h + content_h + m;
-    let limit = MAX_SIDE as u64;
-    let too_large =
-        |w: u64, h: u64| w > limit || h > limit || w.saturating_mul(h) > MAX_PIXELS as u64;
-    if too_large(canvas_w, canvas_h) {
-        let reason = format!(
-            "the image would be {canvas_w} x {canvas_h} pixels (the field, plus text, colour \
-             bar and margins that grow with the text scale), over the limit of {MAX_SIDE} \
-             pixels per side and {MAX_PIXELS} pixels in all"
-        );
-        return Err(if let Some(scale) = opts.text_scale {
-            Error::invalid(
-                "text_scale",
-                scale,
-                format!("{reason}; use a smaller text_scale"),
-            )
-        } else if title_w > limit {
-            Error::invalid(
-                "title",
-                format!(
-                    "{} characters",
-                    opts.title.as_deref().unwrap_or("").chars().count()
-                ),
-                format!("{reason}; use a shorter title"),
-            )
-        } else {
-            Error::invalid(
+    opts: &'a HeatmapOptions,
+    pub(crate) range: (f64, f64),
+    x: Axis,
+    y: Axis,
+    /// Pixels of the field: width, height.
+    field_px: (u32, u32),
+    pub(crate) strokes: Vec<Stroke>,
+}
+
+/// Left margin (tick labels and y title), bottom margin (tick labels and x title), gap
+/// above the field and right margin without a colour bar, in pixels.
+const LEFT: u32 = 92;
+const BOTTOM: u32 = 54;
+const GAP: u32 = 8;
+const RIGHT: u32 = 24;
+
+impl<'a> FieldFigure<'a> {
+    pub(crate) fn new(
+        values: &'a [f64],
+        width: usize,
+        height: usize,
+        opts: &'a HeatmapOptions,
+    ) -> Result<Self> {
+        check_grid("data", values.len(), width, height)?;
+        if opts.upscale == 0 {
+            return Err(Error::invalid(
+                "upscale",
+                0,
+                "must be >= 1 (1 = one pixel per cell)",
+            ));
+        }
+        let s = opts.upscale as usize;
+        let (mut fw, mut fh) = (width.saturating_mul(s), height.saturating_mul(s));
+        if fw > MAX_SIDE || fh > MAX_SIDE {
+            return Err(Error::invalid(
                 "upscale",
                 opts.upscale,
                 format!(
-                    "{reason}; use a smaller upscale, drop the colour bar and title, or \
-                     downsample the field"
+                    "the field would be {fw} x {fh} pixels, over the limit of {MAX_SIDE}; use \
+                     a smaller upscale"
                 ),
-            )
-        });
+            ));
+        }
+        let longer = fw.max(fh);
+        if longer < MIN_FIELD_PX {
+            let k = MIN_FIELD_PX.div_ceil(longer);
+            (fw, fh) = (fw * k, fh * k);
+        }
+        let range = resolve_range(values, opts)?;
+        let (x0, x1, y0, y1) = opts
+            .extent
+            .unwrap_or((0.0, width as f64, 0.0, height as f64));
+        let x = spatial_axis("extent x", (x0, x1))?;
+        let y = spatial_axis("extent y", (y0, y1))?;
+        let fig = Self {
+            values,
+            width,
+            height,
+            opts,
+            range,
+            x,
+            y,
+            field_px: (fw as u32, fh as u32),
+            strokes: Vec::new(),
+        };
+        let (cw, ch) = fig.canvas();
+        if cw as usize > MAX_SIDE
+            || ch as usize > MAX_SIDE
+            || cw as usize * ch as usize > MAX_PIXELS
+        {
+            return Err(Error::invalid(
+                "upscale",
+                opts.upscale,
+                format!(
+                    "the image would be {cw} x {ch} pixels (field plus axes and colour bar), \
+                     over the limit of {MAX_SIDE} pixels per side and {MAX_PIXELS} pixels in all; use \
+                     a smaller upscale or downsample the field"
+                ),
+            ));
+        }
+        Ok(fig)
     }
-    // Each of these is at most the canvas size, so it fits a u32.
-    let [
-        m,
-        title_h,
-        content_h,
-        bar_w,
-        bar_x,
-        label_x,
-        canvas_w,
-        canvas_h,
-    ] = [
-        m, title_h, content_h, bar_w, bar_x, label_x, canvas_w, canvas_h,
-    ]
-    .map(|v| v as u32);
-    let mut img = RgbImage::from_pixel(canvas_w, canvas_h, Rgb(WHITE));
-    let (x0, y0) = (m, m + title_h);
 
-    // Field: colour per cell, then blocks.
-    for r in 0..height {
-        let row = if opts.row0_at_top { r } else { height - 1 - r };
-        let py = y0 + (r * s) as u32;
-        for c in 0..width {
-            let color = opts
-                .colormap
-                .map_range(values[row * width + c], range.0, range.1);
-            let px = x0 + (c * s) as u32;
-            for dy in 0..s as u32 {
-                for dx in 0..s as u32 {
-                    img.put_pixel(px + dx, py + dy, Rgb(color));
+    fn header(&self) -> u32 {
+        header_height(
+            self.opts.title.as_deref().unwrap_or(""),
+            self.opts.subtitle.as_deref().unwrap_or(""),
+        )
+    }
+
+    fn canvas(&self) -> (u32, u32) {
+        let (fw, fh) = self.field_px;
+        let right = if self.opts.colorbar {
+            COLORBAR_W
+        } else {
+            RIGHT
+        };
+        (LEFT + fw + right, self.header() + GAP + fh + BOTTOM)
+    }
+
+    /// The axis coordinates of grid position `(row, col)`, in cells from the field's edge:
+    /// `(0, 0)` is the outer corner of the first cell, `(0.5, 0.5)` its centre.
+    pub(crate) fn grid_point(&self, row: f64, col: f64) -> (f64, f64) {
+        let (x0, x1, y0, y1) = (self.x.lo, self.x.hi, self.y.lo, self.y.hi);
+        let x = x0 + (col / self.width as f64) * (x1 - x0);
+        let fy = row / self.height as f64;
+        let y = if self.opts.row0_at_top {
+            y1 - fy * (y1 - y0)
+        } else {
+            y0 + fy * (y1 - y0)
+        };
+        (x, y)
+    }
+
+    /// Axis units per grid cell along x and y (y positive up the image).
+    pub(crate) fn cell_size(&self) -> (f64, f64) {
+        let dx = (self.x.hi - self.x.lo) / self.width as f64;
+        let dy = (self.y.hi - self.y.lo) / self.height as f64;
+        (dx, if self.opts.row0_at_top { -dy } else { dy })
+    }
+
+    /// Pixels per axis unit along x.
+    pub(crate) fn px_per_unit(&self) -> f64 {
+        f64::from(self.field_px.0) / (self.x.hi - self.x.lo)
+    }
+
+    /// The colour of the cell at `(row, col)`.
+    pub(crate) fn color_at(&self, row: usize, col: usize) -> [u8; 3] {
+        self.opts.colormap.map_range(
+            self.values[row * self.width + col],
+            self.range.0,
+            self.range.1,
+        )
+    }
+}
+
+impl Figure for FieldFigure<'_> {
+    fn size(&self) -> (u32, u32) {
+        self.canvas()
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
+        let o = self.opts;
+        root.fill(&WHITE).map_err(draw_err)?;
+        let body = draw_header(
+            root,
+            o.title.as_deref().unwrap_or(""),
+            o.subtitle.as_deref().unwrap_or(""),
+        )?;
+        let (main, bar) = body.split_horizontally(LEFT + self.field_px.0 + RIGHT);
+        let mut chart = ChartBuilder::on(&main)
+            .margin_top(GAP)
+            .margin_right(RIGHT)
+            .x_label_area_size(BOTTOM)
+            .y_label_area_size(LEFT)
+            .build_cartesian_2d(self.x.clone(), self.y.clone())
+            .map_err(draw_err)?;
+        // Cells, as horizontal runs of one colour (few elements in SVG files).
+        let (dx, dy) = self.cell_size();
+        for r in 0..self.height {
+            let mut c = 0;
+            while c < self.width {
+                let color = self.color_at(r, c);
+                let mut end = c + 1;
+                while end < self.width && self.color_at(r, end) == color {
+                    end += 1;
                 }
+                let (xa, ya) = self.grid_point(r as f64, c as f64);
+                let corner = (xa + (end - c) as f64 * dx, ya + dy);
+                chart
+                    .plotting_area()
+                    .draw(&Rectangle::new([(xa, ya), corner], rgb(color).filled()))
+                    .map_err(draw_err)?;
+                c = end;
             }
         }
-    }
-
-    if let Some(t) = &opts.title {
-        let tx = (canvas_w - font::text_width(t, ts)) / 2;
-        font::draw_text(&mut img, tx as i64, m as i64, t, ts, BLACK);
-    }
-
-    if opts.colorbar {
-        let denom = (content_h - 1).max(1) as f64;
-        for y in 0..content_h {
-            let t = 1.0 - y as f64 / denom;
-            let color = opts.colormap.map(t);
-            raster::fill_rect(
-                &mut img,
-                bar_x as i64,
-                (y0 + y) as i64,
-                bar_w as i64,
-                1,
-                color,
-            );
+        for s in &self.strokes {
+            chart
+                .plotting_area()
+                .draw(&PathElement::new(
+                    s.points.clone(),
+                    rgb(s.color).stroke_width(s.width),
+                ))
+                .map_err(draw_err)?;
         }
-        raster::stroke_rect(
-            &mut img,
-            bar_x as i64 - 1,
-            y0 as i64 - 1,
-            bar_w as i64 + 2,
-            content_h as i64 + 2,
-            BLACK,
-        );
-        font::draw_text(&mut img, label_x as i64, y0 as i64, &max_label, ts, BLACK);
-        let min_y = (y0 + content_h - th) as i64;
-        font::draw_text(&mut img, label_x as i64, min_y, &min_label, ts, BLACK);
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_desc(o.x_label.as_deref().unwrap_or(""))
+            .label_style(font(TICK_PX))
+            .axis_desc_style(font(LABEL_PX))
+            .x_labels(7)
+            .y_labels(7)
+            .draw()
+            .map_err(draw_err)?;
+        let (_, rows) = chart.plotting_area().get_pixel_range();
+        draw_y_title(
+            root,
+            o.y_label.as_deref().unwrap_or(""),
+            (30, (rows.start + rows.end) / 2),
+        )?;
+        if o.colorbar {
+            draw_colorbar(
+                &bar,
+                o.colormap,
+                self.range,
+                o.quantity.as_deref().unwrap_or(""),
+                GAP,
+                BOTTOM,
+            )?;
+        }
+        Ok(())
     }
-    Ok((
-        img,
-        range,
-        FieldPlacement {
-            x0,
-            y0,
-            scale: s as u32,
-        },
-    ))
 }
 
 #[cfg(test)]
@@ -436,12 +532,15 @@ mod tests {
     }
 
     #[test]
-    fn orientation() {
-        // 1 x 2 grid: row 0 = 0.0 (min), row 1 = 1.0 (max).
-        let o = HeatmapOptions::new().colorbar(false);
-        let (img, _) = render_heatmap(&[0.0, 1.0], 1, 2, &o).unwrap();
-        assert_eq!(img.get_pixel(0, 1).0, Colormap::Viridis.map(0.0));
-        let (img, _) = render_heatmap(&[0.0, 1.0], 1, 2, &o.row0_at_top(true)).unwrap();
-        assert_eq!(img.get_pixel(0, 0).0, Colormap::Viridis.map(0.0));
+    fn small_grids_are_enlarged_and_extent_checked() {
+        let o = HeatmapOptions::new();
+        let f = FieldFigure::new(&[0.0, 1.0], 1, 2, &o).unwrap();
+        assert_eq!(f.field_px, (160, 320));
+        let bad = o.clone().extent(1.0, 1.0, 0.0, 1.0);
+        let e = FieldFigure::new(&[0.0, 1.0], 1, 2, &bad)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("extent x"), "{e}");
     }
 }

@@ -1,5 +1,5 @@
-//! PNG of a 2D vector field: the magnitude as a heat map background with arrows on a coarser
-//! subgrid.
+//! 2D vector fields, PNG or SVG (from the file extension): the magnitude as a heat map
+//! (axes, colour bar, titles as in [`crate::heatmap`]) with arrows on a coarser subgrid.
 //!
 //! Components are row-major like [`crate::heatmap`]: `vx[row * width + col]`. `vx` points
 //! along increasing column (right) and `vy` along increasing row, which is up in the image
@@ -13,15 +13,15 @@ use std::path::Path;
 use image::RgbImage;
 
 use crate::colormap::luminance;
-use crate::heatmap::{HeatmapOptions, check_grid, render_field};
-use crate::{png, raster};
+use crate::figure::{render_rgb, write_figure};
+use crate::heatmap::{FieldFigure, HeatmapOptions, Stroke, check_grid};
 use simkit_backend::{Error, Result};
 
 /// How to draw a vector field.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct VectorFieldOptions {
     /// Background (magnitude) heat map options: colour map, range, orientation, upscale,
-    /// colour bar, title.
+    /// colour bar and its quantity, extent, axis titles, title and subtitle.
     pub background: HeatmapOptions,
     /// Grid cells per arrow along each axis; `0` (default) picks about 24 arrows across the
     /// longer side.
@@ -54,7 +54,8 @@ impl VectorFieldOptions {
 
 /// Renders the field; returns the image and the magnitude range used for the background.
 ///
-/// Errors like [`crate::heatmap::render_heatmap`], and when `vx` and `vy` differ in length.
+/// Errors like [`crate::heatmap::render_heatmap`], and when `vx` and `vy` differ in length
+/// or the arrow spacing exceeds the grid.
 pub fn render_vector_field<T: Copy + Into<f64>>(
     vx: &[T],
     vy: &[T],
@@ -62,13 +63,54 @@ pub fn render_vector_field<T: Copy + Into<f64>>(
     height: usize,
     opts: &VectorFieldOptions,
 ) -> Result<(RgbImage, (f64, f64))> {
+    let (vx, vy, mag) = components(vx, vy, width, height)?;
+    let fig = figure(&vx, &vy, &mag, width, height, opts)?;
+    Ok((render_rgb("vector field", &fig)?, fig.range))
+}
+
+/// Renders like [`render_vector_field`] and writes the file atomically: PNG for a `.png`
+/// path, SVG for `.svg`. Returns the magnitude range used.
+pub fn write_vector_field<T: Copy + Into<f64>>(
+    path: impl AsRef<Path>,
+    vx: &[T],
+    vy: &[T],
+    width: usize,
+    height: usize,
+    opts: &VectorFieldOptions,
+) -> Result<(f64, f64)> {
+    let (vx, vy, mag) = components(vx, vy, width, height)?;
+    let fig = figure(&vx, &vy, &mag, width, height, opts)?;
+    write_figure("vector field", path.as_ref(), &fig)?;
+    Ok(fig.range)
+}
+
+type Components = (Vec<f64>, Vec<f64>, Vec<f64>);
+
+/// Checks the grids; returns the components as `f64` and the magnitude.
+fn components<T: Copy + Into<f64>>(
+    vx: &[T],
+    vy: &[T],
+    width: usize,
+    height: usize,
+) -> Result<Components> {
     check_grid("vx", vx.len(), width, height)?;
     check_grid("vy", vy.len(), width, height)?;
     let vx: Vec<f64> = vx.iter().map(|&v| v.into()).collect();
     let vy: Vec<f64> = vy.iter().map(|&v| v.into()).collect();
-    let mag: Vec<f64> = vx.iter().zip(&vy).map(|(x, y)| x.hypot(*y)).collect();
-    let (mut img, range, place) = render_field(&mag, width, height, &opts.background)?;
+    let mag = vx.iter().zip(&vy).map(|(x, y)| x.hypot(*y)).collect();
+    Ok((vx, vy, mag))
+}
 
+/// The magnitude heat map with the arrows as strokes.
+fn figure<'a>(
+    vx: &[f64],
+    vy: &[f64],
+    mag: &'a [f64],
+    width: usize,
+    height: usize,
+    opts: &'a VectorFieldOptions,
+) -> Result<FieldFigure<'a>> {
+    let mut fig = FieldFigure::new(mag, width, height, &opts.background)?;
     let spacing = if opts.arrow_spacing == 0 {
         (width.max(height) / 24).max(1)
     } else {
@@ -114,78 +156,52 @@ pub fn render_vector_field<T: Copy + Into<f64>>(
         }
     }
     if longest <= 0.0 || !longest.is_finite() {
-        return Ok((img, range));
+        return Ok(fig);
     }
-    let s = place.scale as f64;
-    let cell_px = spacing as f64 * s;
-    let scale = 0.9 * cell_px / longest;
+    // Lengths in pixels: the longest arrow spans 90 % of a block.
+    let (dx, _) = fig.cell_size();
+    let px_per_cell = dx.abs() * fig.px_per_unit();
+    let cell_px = spacing as f64 * px_per_cell;
+    let scale = 0.9 * spacing as f64 / longest; // cells per unit of the field
     let pen = if cell_px >= 24.0 { 2 } else { 1 };
-    let (fw, fh) = (width as f64 * s, height as f64 * s);
-    let clip = [
-        place.x0 as i64,
-        place.y0 as i64,
-        (place.x0 as f64 + fw) as i64 - 1,
-        (place.y0 as f64 + fh) as i64 - 1,
-    ];
     for (cx, cy, ax, ay) in arrows {
-        let len = ax.hypot(ay) * scale;
-        if len < 1.5 {
+        let len_cells = ax.hypot(ay) * scale;
+        if len_cells * px_per_cell < 1.5 {
             continue;
         }
-        let px = place.x0 as f64 + cx * s - 0.5;
-        let (py, dy) = if opts.background.row0_at_top {
-            (place.y0 as f64 + cy * s - 0.5, ay * scale)
-        } else {
-            (place.y0 as f64 + fh - cy * s - 0.5, -ay * scale)
-        };
-        let dx = ax * scale;
         let color = opts.arrow_color.unwrap_or_else(|| {
-            let bg = img
-                .get_pixel(px.round().max(0.0) as u32, py.round().max(0.0) as u32)
-                .0;
-            if luminance(bg) > 140.0 {
+            let (r, c) = ((cy as usize).min(height - 1), (cx as usize).min(width - 1));
+            if luminance(fig.color_at(r, c)) > 140.0 {
                 [0, 0, 0]
             } else {
                 [255, 255, 255]
             }
         });
-        // Shaft centred on the block centre.
-        let (x0, y0) = (px - dx / 2.0, py - dy / 2.0);
-        let (x1, y1) = (px + dx / 2.0, py + dy / 2.0);
-        raster::line_clipped(&mut img, x0, y0, x1, y1, pen, color, clip);
-        // Head: two strokes at +-25 degrees back from the tip.
-        let head = (0.35 * len).max(2.0);
-        let (ux, uy) = (dx / len, dy / len);
+        // Shaft centred on the block centre, in cells; then to axis coordinates.
+        let (hx, hy) = (ax * scale / 2.0, ay * scale / 2.0);
+        let tail = (cx - hx, cy - hy);
+        let tip = (cx + hx, cy + hy);
+        let at = |(c, r): (f64, f64)| fig.grid_point(r, c);
+        // Head: two strokes at +-25 degrees back from the tip, 35 % of the length.
+        let head = (0.35 * len_cells).max(2.0 / px_per_cell);
+        let (ux, uy) = (ax / ax.hypot(ay), ay / ax.hypot(ay));
         let (c, sn) = (25f64.to_radians().cos(), 25f64.to_radians().sin());
-        for sign in [-1.0, 1.0] {
-            let hx = -(ux * c - sign * uy * sn);
-            let hy = -(sign * ux * sn + uy * c);
-            raster::line_clipped(
-                &mut img,
-                x1,
-                y1,
-                x1 + head * hx,
-                y1 + head * hy,
-                pen,
-                color,
-                clip,
-            );
-        }
+        let barb = |sign: f64| {
+            let bx = -(ux * c - sign * uy * sn);
+            let by = -(sign * ux * sn + uy * c);
+            at((tip.0 + head * bx, tip.1 + head * by))
+        };
+        let shaft = Stroke {
+            points: vec![at(tail), at(tip)],
+            color,
+            width: pen,
+        };
+        let head = Stroke {
+            points: vec![barb(-1.0), at(tip), barb(1.0)],
+            color,
+            width: pen,
+        };
+        fig.strokes.extend([shaft, head]);
     }
-    Ok((img, range))
-}
-
-/// Renders like [`render_vector_field`] and writes the PNG atomically; returns the magnitude
-/// range used.
-pub fn write_vector_field<T: Copy + Into<f64>>(
-    path: impl AsRef<Path>,
-    vx: &[T],
-    vy: &[T],
-    width: usize,
-    height: usize,
-    opts: &VectorFieldOptions,
-) -> Result<(f64, f64)> {
-    let (img, range) = render_vector_field(vx, vy, width, height, opts)?;
-    png::write_png(path, &img)?;
-    Ok(range)
+    Ok(fig)
 }

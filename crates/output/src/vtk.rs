@@ -1,15 +1,22 @@
-//! VTK XML files that ParaView opens: `.vti` image data (2D/3D grids with scalar and vector
-//! point fields), `.vtu` unstructured points (particles with named point arrays) and `.pvd`
-//! collections for time series.
+//! VTK XML files that ParaView, VTK and OVITO open: `.vti` image data (2D/3D grids with
+//! scalar and vector point fields), `.vtp` poly data (particles: one vertex per particle, with
+//! named point arrays) and `.pvd` collections for time series.
 //!
-//! Files follow the VTK XML format (`VTKFile` version 0.1, `byte_order="LittleEndian"`).
-//! Arrays are `Float64`; by default they are stored `format="binary"` (base64 of a `UInt32`
-//! byte count followed by the little-endian values), which keeps NaN exact and files small;
-//! [`Encoding::Ascii`] writes readable text instead, each value in the shortest form that
-//! parses back to the same `f64` ([`numfmt::exact`]), and then rejects
-//! non-finite values, which text readers cannot parse. Either way a value read back equals
-//! the value written bit for bit. Vectors with 2 components are padded to 3 with zeros,
-//! as ParaView's glyph and stream filters expect.
+//! Files follow the VTK XML format (`VTKFile` version 0.1, `byte_order="LittleEndian"`,
+//! `header_type="UInt64"`). Real arrays are `Float64` and integer arrays
+//! ([`Particles::add_ints`]) `Int64`; by default they are stored `format="binary"` (base64 of
+//! a `UInt64` byte count, as the root element declares, followed by the little-endian values),
+//! which keeps NaN exact and files small; [`Encoding::Ascii`] writes readable text instead,
+//! each value in the shortest form that parses back to the same `f64` ([`numfmt::exact`]),
+//! and then rejects non-finite values, which text readers cannot parse. Either way a value
+//! read back equals the value written bit for bit. Vectors with 2 components are padded to 3
+//! with zeros, as ParaView's glyph and stream filters expect.
+//!
+//! Viewers pick particle properties by array name. OVITO (checked with 3.17) maps `radius`
+//! to its `Radius` property (the drawn size), `id` to `Particle Identifier` and `Velocity`
+//! (its standard name; `velocity` is not mapped) to `Velocity`; other arrays, such as an
+//! integer `species`, become user properties to colour by. ParaView takes any name. So name
+//! the drawn size `radius` and keep other quantities under names that say what they are.
 //!
 //! ```
 //! use simkit_output::vtk::Particles;
@@ -17,9 +24,9 @@
 //! let xy = [[0.0, 0.0], [1.0, 0.5], [2.0, 1.0]];
 //! let mut p = Particles::from_xy(&xy)?;
 //! p.add_scalar("radius", &[0.5, 0.5, 0.25])?
-//!     .add_scalar("species", &[0u32, 1, 1])?
-//!     .add_vector("velocity", &[1.0, 0.0, 0.0, 1.0, -1.0, 0.0], 2)?;
-//! let path = std::env::temp_dir().join("simkit-doc-vtk").join("particles_0000.vtu");
+//!     .add_ints("species", &[0u32, 1, 1])?
+//!     .add_vector("Velocity", &[1.0, 0.0, 0.0, 1.0, -1.0, 0.0], 2)?;
+//! let path = std::env::temp_dir().join("simkit-doc-vtk").join("particles_0000.vtp");
 //! p.write(&path)?;
 //! # Ok(())
 //! # }
@@ -42,11 +49,18 @@ pub enum Encoding {
     Ascii,
 }
 
+/// The values of one array: `Float64` or `Int64`.
+#[derive(Debug, Clone, PartialEq)]
+enum Values {
+    F64(Vec<f64>),
+    I64(Vec<i64>),
+}
+
 #[derive(Debug, Clone, PartialEq)]
 struct Array {
     name: String,
     components: usize,
-    data: Vec<f64>,
+    data: Values,
 }
 
 /// Named point arrays shared by [`ImageData`] and [`Particles`].
@@ -87,24 +101,45 @@ impl PointArrays {
         Ok(())
     }
 
+    /// Checks a new one-component array: a unique name and one value per point.
+    fn check_scalar(&self, points: usize, name: &str, len: usize) -> Result<()> {
+        self.check_name(name)?;
+        if len != points {
+            return Err(Error::invalid(
+                format!("{name}.len()"),
+                len,
+                format!("expected one value per point ({points})"),
+            ));
+        }
+        Ok(())
+    }
+
     fn add_scalar<T: Copy + Into<f64>>(
         &mut self,
         points: usize,
         name: &str,
         data: &[T],
     ) -> Result<()> {
-        self.check_name(name)?;
-        if data.len() != points {
-            return Err(Error::invalid(
-                format!("{name}.len()"),
-                data.len(),
-                format!("expected one value per point ({points})"),
-            ));
-        }
+        self.check_scalar(points, name, data.len())?;
         self.scalars.push(Array {
             name: name.into(),
             components: 1,
-            data: data.iter().map(|&v| v.into()).collect(),
+            data: Values::F64(data.iter().map(|&v| v.into()).collect()),
+        });
+        Ok(())
+    }
+
+    fn add_ints<T: Copy + Into<i64>>(
+        &mut self,
+        points: usize,
+        name: &str,
+        data: &[T],
+    ) -> Result<()> {
+        self.check_scalar(points, name, data.len())?;
+        self.scalars.push(Array {
+            name: name.into(),
+            components: 1,
+            data: Values::I64(data.iter().map(|&v| v.into()).collect()),
         });
         Ok(())
     }
@@ -140,7 +175,7 @@ impl PointArrays {
         self.vectors.push(Array {
             name: name.into(),
             components: 3,
-            data: pad3(data, components),
+            data: Values::F64(pad3(data, components)),
         });
         Ok(())
     }
@@ -155,13 +190,20 @@ impl PointArrays {
         }
         let _ = writeln!(out, "{indent}<PointData{attrs}>");
         for a in self.scalars.iter().chain(&self.vectors) {
+            let kind = match a.data {
+                Values::F64(_) => "Float64",
+                Values::I64(_) => "Int64",
+            };
             let _ = write!(
                 out,
-                "{indent}  <DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"{}\" ",
+                "{indent}  <DataArray type=\"{kind}\" Name=\"{}\" NumberOfComponents=\"{}\" ",
                 escape(&a.name),
                 a.components
             );
-            write_f64s(out, &a.name, &a.data, enc)?;
+            match &a.data {
+                Values::F64(v) => write_f64s(out, &a.name, v, enc)?,
+                Values::I64(v) => write_raw(out, v, enc),
+            }
         }
         let _ = writeln!(out, "{indent}</PointData>");
         Ok(())
@@ -314,8 +356,10 @@ impl ImageData {
     }
 }
 
-/// Particles as unstructured points (`.vtu`): one `VTK_VERTEX` cell per point, with named
-/// scalar and vector point arrays (radius, species, velocity, ...).
+/// Particles as VTK poly data (`.vtp`): one vertex per particle (`<Verts>`), with named
+/// scalar, integer and vector point arrays (radius, species, id, velocity, ...). This is
+/// the file kind OVITO reads particles from, and ParaView draws it with its point
+/// Gaussian or glyph representations.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Particles {
     positions: Vec<f64>,
@@ -367,6 +411,13 @@ impl Particles {
         Ok(self)
     }
 
+    /// Adds an integer point array (`Int64`, one value per particle), for species indices
+    /// and identifiers. Names must be unique among all arrays of the file.
+    pub fn add_ints<T: Copy + Into<i64>>(&mut self, name: &str, data: &[T]) -> Result<&mut Self> {
+        self.arrays.add_ints(self.len(), name, data)?;
+        Ok(self)
+    }
+
     /// Adds a vector point array with `components` (2 or 3) interleaved values per particle.
     pub fn add_vector<T: Copy + Into<f64>>(
         &mut self,
@@ -383,11 +434,12 @@ impl Particles {
         let n = self.len();
         let enc = self.encoding;
         let mut out = String::new();
-        header(&mut out, "UnstructuredGrid");
-        let _ = writeln!(out, "  <UnstructuredGrid>");
+        header(&mut out, "PolyData");
+        let _ = writeln!(out, "  <PolyData>");
         let _ = writeln!(
             out,
-            "    <Piece NumberOfPoints=\"{n}\" NumberOfCells=\"{n}\">"
+            "    <Piece NumberOfPoints=\"{n}\" NumberOfVerts=\"{n}\" NumberOfLines=\"0\" \
+             NumberOfStrips=\"0\" NumberOfPolys=\"0\">"
         );
         self.arrays.write_xml(&mut out, enc, "      ")?;
         let _ = writeln!(out, "      <CellData>\n      </CellData>");
@@ -397,21 +449,19 @@ impl Particles {
         );
         write_f64s(&mut out, "positions", &self.positions, enc)?;
         let _ = writeln!(out, "      </Points>");
-        let _ = writeln!(out, "      <Cells>");
+        let _ = writeln!(out, "      <Verts>");
         let ids: Vec<i64> = (0..n as i64).collect();
         let offsets: Vec<i64> = (1..=n as i64).collect();
         out.push_str("        <DataArray type=\"Int64\" Name=\"connectivity\" ");
-        write_raw(&mut out, &ids, enc)?;
+        write_raw(&mut out, &ids, enc);
         out.push_str("        <DataArray type=\"Int64\" Name=\"offsets\" ");
-        write_raw(&mut out, &offsets, enc)?;
-        out.push_str("        <DataArray type=\"UInt8\" Name=\"types\" ");
-        write_raw(&mut out, &vec![1u8; n], enc)?; // VTK_VERTEX = 1
-        let _ = writeln!(out, "      </Cells>");
-        let _ = writeln!(out, "    </Piece>\n  </UnstructuredGrid>\n</VTKFile>");
+        write_raw(&mut out, &offsets, enc);
+        let _ = writeln!(out, "      </Verts>");
+        let _ = writeln!(out, "    </Piece>\n  </PolyData>\n</VTKFile>");
         Ok(out)
     }
 
-    /// Writes the `.vtu` file atomically.
+    /// Writes the `.vtp` file atomically.
     pub fn write(&self, path: impl AsRef<Path>) -> Result<()> {
         let xml = self.to_xml()?;
         write_atomic(path, |w| w.write_all(xml.as_bytes()))
@@ -419,7 +469,7 @@ impl Particles {
 }
 
 /// Writes a ParaView collection (`.pvd`) listing `(time, file)` pairs, so that a series of
-/// `.vti`/`.vtu` files opens as one time-dependent dataset. File paths are written as given
+/// `.vti`/`.vtp` files opens as one time-dependent dataset. File paths are written as given
 /// (relative paths are relative to the `.pvd` file's directory).
 ///
 /// Errors: a non-finite time, a file path with control characters, or an I/O failure.
@@ -458,7 +508,8 @@ fn header(out: &mut String, kind: &str) {
     let _ = writeln!(out, "<?xml version=\"1.0\"?>");
     let _ = writeln!(
         out,
-        "<VTKFile type=\"{kind}\" version=\"0.1\" byte_order=\"LittleEndian\">"
+        "<VTKFile type=\"{kind}\" version=\"0.1\" byte_order=\"LittleEndian\" \
+         header_type=\"UInt64\">"
     );
 }
 
@@ -482,7 +533,8 @@ fn write_f64s(out: &mut String, name: &str, data: &[f64], enc: Encoding) -> Resu
             "ASCII VTK cannot store non-finite values; use Encoding::Binary or clean the data",
         ));
     }
-    write_raw(out, data, enc)
+    write_raw(out, data, enc);
+    Ok(())
 }
 
 /// A value type of a VTK `DataArray`: its little-endian bytes (binary) and its text (ASCII).
@@ -512,16 +564,9 @@ impl VtkValue for i64 {
     }
 }
 
-impl VtkValue for u8 {
-    fn push_le(self, raw: &mut Vec<u8>) {
-        raw.push(self);
-    }
-    fn push_text(self, out: &mut String) {
-        let _ = write!(out, "{self}");
-    }
-}
-
-fn write_raw<T: VtkValue>(out: &mut String, data: &[T], enc: Encoding) -> Result<()> {
+/// Writes the rest of a `<DataArray ...` tag for values that are always finite.
+/// Binary data is the `UInt64` byte count (the root's `header_type`) and the values.
+fn write_raw<T: VtkValue>(out: &mut String, data: &[T], enc: Encoding) {
     match enc {
         Encoding::Ascii => {
             out.push_str("format=\"ascii\">\n");
@@ -536,25 +581,17 @@ fn write_raw<T: VtkValue>(out: &mut String, data: &[T], enc: Encoding) -> Result
         }
         Encoding::Binary => {
             out.push_str("format=\"binary\">\n          ");
-            let mut raw = Vec::with_capacity(4 + std::mem::size_of_val(data));
-            raw.extend_from_slice(&[0; 4]);
+            let bytes = std::mem::size_of_val(data);
+            let mut raw = Vec::with_capacity(8 + bytes);
+            raw.extend_from_slice(&(bytes as u64).to_le_bytes());
             for &v in data {
                 v.push_le(&mut raw);
             }
-            let n = u32::try_from(raw.len() - 4).map_err(|_| {
-                Error::invalid(
-                    "array size",
-                    format!("{} bytes", raw.len() - 4),
-                    "a VTK binary array is limited to 4 GiB; split the data into pieces",
-                )
-            })?;
-            raw[..4].copy_from_slice(&n.to_le_bytes());
             base64_into(out, &raw);
             out.push('\n');
         }
     }
     out.push_str("        </DataArray>\n");
-    Ok(())
 }
 
 fn base64_into(out: &mut String, data: &[u8]) {

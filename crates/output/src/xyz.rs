@@ -1,9 +1,22 @@
-//! Extended XYZ trajectories (read by OVITO, ASE and others).
+//! Extended XYZ trajectories that ASE (`ase.io.read`) and OVITO read.
 //!
 //! Each frame is a particle count line, a comment line such as
-//! `Lattice="10 0 0 0 10 0 0 0 1" Properties=species:S:1:pos:R:3:radius:R:1 Time=0.5 pbc="T T F"`
+//! `Lattice="10 0 0 0 10 0 0 0 1" Properties=species:S:1:pos:R:3:Radius:R:1 Time=0.5 pbc="T T F"`
 //! and one line per particle. 2D positions are written with `z = 0`. Non-finite values are
 //! rejected because readers cannot parse them.
+//!
+//! Species: ASE reads the `species` column as chemical symbols, so it holds element symbols
+//! only (or `X`, ASE's dummy atom, the default). Simulations whose species are not chemical
+//! elements use [`XyzFrame::kinds`]: species index `k` is written as the element with atomic
+//! number `k + 1` (`H`, `He`, `Li`, ...), and the simulation's own name of the species goes
+//! into a string column `kind` (ASE: `atoms.arrays["kind"]`; OVITO: a typed property).
+//!
+//! Property names: [`XyzFrame::velocities`] writes the extended XYZ name `velo` and
+//! [`XyzFrame::radii`] OVITO's standard name `Radius`; OVITO (checked with 3.17) maps them to
+//! its `Velocity` and `Radius` (drawn size) properties. A 3-column `Velocity` column is not a
+//! safe alternative: that OVITO version reads its three columns into the x component. ASE,
+//! which has no velocity column of its own (it stores momenta), keeps them as
+//! `atoms.arrays["velo"]` and `atoms.arrays["Radius"]`.
 //!
 //! ```
 //! use simkit_output::xyz::{XyzFrame, XyzWriter};
@@ -13,8 +26,9 @@
 //! for step in 0..3 {
 //!     let t = step as f64 * 0.1;
 //!     let mut f = XyzFrame::from_xy(&[[t, 0.0], [1.0, t]])?;
-//!     f.species(&["A", "B"])?.box_2d(4.0, 4.0)?.time(t)?;
-//!     f.add_scalar("radius", &[0.5, 0.25])?;
+//!     // Species 0 ("solid") is written as H, species 1 ("gas") as He.
+//!     f.kinds(&[0u32, 1], &["solid", "gas"])?.box_2d(4.0, 4.0)?.time(t)?;
+//!     f.radii(&[0.5, 0.25])?;
 //!     traj.push(&f)?;
 //! }
 //! traj.finish()?; // renamed into place here
@@ -34,6 +48,22 @@ use simkit_backend::{Error, Result};
 /// Comment-line keys that [`XyzFrame`] writes itself.
 const RESERVED_KEYS: [&str; 4] = ["Lattice", "Properties", "Time", "pbc"];
 
+/// Column names that [`XyzFrame`] writes itself.
+const RESERVED_COLUMNS: [&str; 3] = ["species", "pos", "kind"];
+
+/// The chemical elements by atomic number `Z` (index `Z - 1`): the symbols ASE accepts in the
+/// `species` column, and the symbols [`XyzFrame::kinds`] writes for species indices.
+pub const ELEMENTS: [&str; 118] = [
+    "H", "He", "Li", "Be", "B", "C", "N", "O", "F", "Ne", "Na", "Mg", "Al", "Si", "P", "S", "Cl",
+    "Ar", "K", "Ca", "Sc", "Ti", "V", "Cr", "Mn", "Fe", "Co", "Ni", "Cu", "Zn", "Ga", "Ge", "As",
+    "Se", "Br", "Kr", "Rb", "Sr", "Y", "Zr", "Nb", "Mo", "Tc", "Ru", "Rh", "Pd", "Ag", "Cd", "In",
+    "Sn", "Sb", "Te", "I", "Xe", "Cs", "Ba", "La", "Ce", "Pr", "Nd", "Pm", "Sm", "Eu", "Gd", "Tb",
+    "Dy", "Ho", "Er", "Tm", "Yb", "Lu", "Hf", "Ta", "W", "Re", "Os", "Ir", "Pt", "Au", "Hg", "Tl",
+    "Pb", "Bi", "Po", "At", "Rn", "Fr", "Ra", "Ac", "Th", "Pa", "U", "Np", "Pu", "Am", "Cm", "Bk",
+    "Cf", "Es", "Fm", "Md", "No", "Lr", "Rf", "Db", "Sg", "Bh", "Hs", "Mt", "Ds", "Rg", "Cn", "Nh",
+    "Fl", "Mc", "Lv", "Ts", "Og",
+];
+
 #[derive(Debug, Clone, PartialEq)]
 struct Column {
     name: String,
@@ -46,6 +76,7 @@ struct Column {
 pub struct XyzFrame {
     positions: Vec<f64>,
     species: Vec<String>,
+    kind_names: Option<Vec<String>>,
     columns: Vec<Column>,
     lattice: Option<[[f64; 3]; 3]>,
     pbc: Option<[bool; 3]>,
@@ -55,7 +86,7 @@ pub struct XyzFrame {
 
 impl XyzFrame {
     /// A frame from interleaved positions with `dim` (2 or 3) coordinates per particle.
-    /// Every particle starts with species `X`.
+    /// Every particle starts with species `X` (ASE's dummy atom).
     pub fn new<T: Copy + Into<f64>>(positions: &[T], dim: usize) -> Result<Self> {
         check_interleaved(positions.len(), dim)?;
         let n = positions.len() / dim;
@@ -73,6 +104,7 @@ impl XyzFrame {
         Ok(Self {
             positions: pos,
             species: vec!["X".into(); n],
+            kind_names: None,
             columns: Vec::new(),
             lattice: None,
             pbc: None,
@@ -101,8 +133,11 @@ impl XyzFrame {
         self.positions.is_empty()
     }
 
-    /// Sets one species name per particle (non-empty, no whitespace, control characters or
-    /// quotes).
+    /// Sets one element symbol per particle (`H`, `Ar`, ..., from [`ELEMENTS`], or `X`).
+    /// Removes any names set with [`kinds`](Self::kinds).
+    ///
+    /// Errors: a length other than the particle count, or a name that is not an element
+    /// symbol (use [`kinds`](Self::kinds) for species that are not chemical elements).
     pub fn species<S: AsRef<str>>(&mut self, names: &[S]) -> Result<&mut Self> {
         if names.len() != self.len() {
             return Err(Error::invalid(
@@ -112,16 +147,70 @@ impl XyzFrame {
             ));
         }
         for (i, s) in names.iter().enumerate() {
-            check_word(&format!("species[{i}]"), s.as_ref())?;
+            check_element(&format!("species[{i}]"), s.as_ref())?;
         }
         self.species = names.iter().map(|s| s.as_ref().to_string()).collect();
+        self.kind_names = None;
         Ok(self)
     }
 
-    /// Gives every particle the same species name.
+    /// Gives every particle the same element symbol (see [`species`](Self::species)).
     pub fn uniform_species(&mut self, name: &str) -> Result<&mut Self> {
-        check_word("species", name)?;
+        check_element("species", name)?;
         self.species = vec![name.to_string(); self.len()];
+        self.kind_names = None;
+        Ok(self)
+    }
+
+    /// Sets species that are not chemical elements: `kinds[i]` is particle `i`'s species
+    /// index into `names`. Index `k` is written in the `species` column as the element with
+    /// atomic number `k + 1` ([`ELEMENTS`]`[k]`: `H`, `He`, `Li`, ...), the same for every
+    /// frame, and `names[k]` in a string column `kind`.
+    ///
+    /// Errors: a length other than the particle count, more names than [`ELEMENTS`], a name
+    /// that is empty or holds whitespace, control characters or quotes, or an index out of
+    /// range.
+    pub fn kinds<K: Copy + Into<u32>, S: AsRef<str>>(
+        &mut self,
+        kinds: &[K],
+        names: &[S],
+    ) -> Result<&mut Self> {
+        if kinds.len() != self.len() {
+            return Err(Error::invalid(
+                "kinds.len()",
+                kinds.len(),
+                format!("expected one species index per particle ({})", self.len()),
+            ));
+        }
+        if names.len() > ELEMENTS.len() {
+            return Err(Error::invalid(
+                "names.len()",
+                names.len(),
+                format!(
+                    "at most {} species map to distinct element symbols",
+                    ELEMENTS.len()
+                ),
+            ));
+        }
+        for (k, s) in names.iter().enumerate() {
+            check_word(&format!("names[{k}]"), s.as_ref())?;
+        }
+        let mut species = Vec::with_capacity(kinds.len());
+        let mut kind_names = Vec::with_capacity(kinds.len());
+        for (i, &k) in kinds.iter().enumerate() {
+            let k: u32 = k.into();
+            let name = names.get(k as usize).ok_or_else(|| {
+                Error::invalid(
+                    format!("kinds[{i}]"),
+                    k,
+                    format!("must index the {} species names", names.len()),
+                )
+            })?;
+            species.push(ELEMENTS[k as usize].to_string());
+            kind_names.push(name.as_ref().to_string());
+        }
+        self.species = species;
+        self.kind_names = Some(kind_names);
         Ok(self)
     }
 
@@ -193,7 +282,23 @@ impl XyzFrame {
         Ok(self)
     }
 
-    /// Adds a real per-particle column (`name:R:1`).
+    /// Adds the particle radii as OVITO's standard `Radius` column (the drawn size).
+    pub fn radii<T: Copy + Into<f64>>(&mut self, radii: &[T]) -> Result<&mut Self> {
+        self.add_column("Radius", radii, 1)
+    }
+
+    /// Adds the velocities, `components` (2 or 3) interleaved values per particle, as the
+    /// `velo` column (OVITO's `Velocity`; see the [module docs](self)).
+    pub fn velocities<T: Copy + Into<f64>>(
+        &mut self,
+        velocities: &[T],
+        components: usize,
+    ) -> Result<&mut Self> {
+        self.add_vector("velo", velocities, components)
+    }
+
+    /// Adds a real per-particle column (`name:R:1`). The names `species`, `pos` and `kind`
+    /// are the writer's own.
     pub fn add_scalar<T: Copy + Into<f64>>(&mut self, name: &str, data: &[T]) -> Result<&mut Self> {
         self.add_column(name, data, 1)
     }
@@ -223,7 +328,7 @@ impl XyzFrame {
         components: usize,
     ) -> Result<&mut Self> {
         check_name(name)?;
-        if ["species", "pos"].contains(&name) || self.columns.iter().any(|c| c.name == name) {
+        if RESERVED_COLUMNS.contains(&name) || self.columns.iter().any(|c| c.name == name) {
             return Err(Error::invalid(
                 "property name",
                 name,
@@ -268,6 +373,9 @@ impl XyzFrame {
             let _ = write!(comment, "Lattice=\"{}\" ", vals.join(" "));
         }
         comment.push_str("Properties=species:S:1:pos:R:3");
+        if self.kind_names.is_some() {
+            comment.push_str(":kind:S:1");
+        }
         for c in &self.columns {
             let _ = write!(comment, ":{}:R:{}", c.name, c.components);
         }
@@ -288,6 +396,10 @@ impl XyzFrame {
             for v in &self.positions[3 * i..3 * i + 3] {
                 out.push(' ');
                 out.push_str(&numfmt::exact(*v));
+            }
+            if let Some(names) = &self.kind_names {
+                out.push(' ');
+                out.push_str(&names[i]);
             }
             for c in &self.columns {
                 for v in &c.data[c.components * i..c.components * (i + 1)] {
@@ -374,6 +486,18 @@ fn check_word(name: &str, s: &str) -> Result<()> {
         ));
     }
     Ok(())
+}
+
+fn check_element(name: &str, s: &str) -> Result<()> {
+    if s == "X" || ELEMENTS.contains(&s) {
+        return Ok(());
+    }
+    Err(Error::invalid(
+        name,
+        format!("{s:?}"),
+        "is not an element symbol (H, He, ..., Og, or X), which ASE requires in the species \
+         column; use XyzFrame::kinds to map species that are not elements",
+    ))
 }
 
 fn check_name(name: &str) -> Result<()> {

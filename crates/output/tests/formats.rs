@@ -161,12 +161,10 @@ fn b64_decode(s: &str) -> Vec<u8> {
     out
 }
 
-/// The type of the byte count before each binary array: the root's `header_type`, or
-/// `UInt32` where it declares none (the VTK XML default).
+/// The type of the byte count before each binary array: the root's `header_type`, which
+/// every file declares (readers disagree on the default when it is missing).
 fn header_type(root: &Elem) -> &str {
-    root.attrs
-        .get("header_type")
-        .map_or("UInt32", String::as_str)
+    root.attr("header_type")
 }
 
 /// Values of a DataArray (binary or ascii) as f64; `header` from [`header_type`].
@@ -200,7 +198,6 @@ fn values(a: &Elem, header: &str) -> Vec<f64> {
                     .chunks(8)
                     .map(|c| i64::from_le_bytes(c.try_into().unwrap()) as f64)
                     .collect(),
-                "UInt8" => data.iter().map(|&b| b as f64).collect(),
                 t => panic!("unexpected type {t}"),
             }
         }
@@ -213,6 +210,7 @@ fn check_header(root: &Elem, kind: &str) {
     assert_eq!(root.attr("type"), kind);
     assert_eq!(root.attr("version"), "0.1");
     assert_eq!(root.attr("byte_order"), "LittleEndian");
+    assert_eq!(root.attr("header_type"), "UInt64");
 }
 
 #[test]
@@ -260,79 +258,136 @@ fn vti_parses_back() {
 }
 
 #[test]
-fn vtu_parses_back() {
-    let dir = tmp("vtu");
+fn vtp_parses_back() {
+    let dir = tmp("vtp");
     for enc in [Encoding::Binary, Encoding::Ascii] {
         let n = 5;
         let pos: Vec<f32> = (0..2 * n).map(|i| i as f32 * 0.25).collect();
         let mut p = Particles::new(&pos, 2).unwrap().encoding(enc);
         let radius: Vec<f64> = (0..n).map(|i| 0.1 + i as f64 * 0.01).collect();
         let species: Vec<u32> = (0..n as u32).map(|i| i % 2).collect();
+        let ids: Vec<i64> = (0..n as i64).map(|i| 1000 - 7 * i).collect();
         let vel: Vec<f64> = (0..3 * n).map(|i| -(i as f64)).collect();
         p.add_scalar("radius", &radius)
             .unwrap()
-            .add_scalar("species", &species)
+            .add_ints("species", &species)
+            .unwrap()
+            .add_ints("id", &ids)
             .unwrap()
             .add_vector("velocity", &vel, 3)
             .unwrap();
         assert_eq!(p.len(), n);
-        let path = dir.join(format!("particles_{enc:?}.vtu"));
+        let path = dir.join(format!("particles_{enc:?}.vtp"));
         p.write(&path).unwrap();
         let root = parse_xml(&std::fs::read_to_string(&path).unwrap());
-        check_header(&root, "UnstructuredGrid");
-        let piece = root.child("UnstructuredGrid").child("Piece");
+        check_header(&root, "PolyData");
+        let hdr = header_type(&root);
+        let piece = root.child("PolyData").child("Piece");
         assert_eq!(piece.attr("NumberOfPoints"), "5");
-        assert_eq!(piece.attr("NumberOfCells"), "5");
+        assert_eq!(piece.attr("NumberOfVerts"), "5");
+        for other in ["NumberOfLines", "NumberOfStrips", "NumberOfPolys"] {
+            assert_eq!(piece.attr(other), "0", "{other}");
+        }
         let points = piece.child("Points").arrays();
         assert_eq!(points.len(), 1);
         assert_eq!(points[0].attr("NumberOfComponents"), "3");
-        let xyz = values(points[0], header_type(&root));
+        let xyz = values(points[0], hdr);
         assert_eq!(xyz.len(), 15);
         assert_eq!(&xyz[..6], &[0.0, 0.25, 0.0, 0.5, 0.75, 0.0]);
-        let cells = piece.child("Cells").arrays();
-        let by_name: HashMap<&str, Vec<f64>> = cells
+        let verts = piece.child("Verts").arrays();
+        let by_name: HashMap<&str, Vec<f64>> = verts
             .iter()
-            .map(|a| (a.attr("Name"), values(a, header_type(&root))))
+            .map(|a| (a.attr("Name"), values(a, hdr)))
             .collect();
+        assert_eq!(by_name.len(), 2);
         assert_eq!(by_name["connectivity"], [0.0, 1.0, 2.0, 3.0, 4.0]);
         assert_eq!(by_name["offsets"], [1.0, 2.0, 3.0, 4.0, 5.0]);
-        assert_eq!(by_name["types"], [1.0; 5]);
         let pd = piece.child("PointData");
+        assert_eq!(pd.attr("Scalars"), "radius");
+        assert_eq!(pd.attr("Vectors"), "velocity");
         let arrays = pd.arrays();
-        assert_eq!(arrays.len(), 3);
-        for a in arrays {
+        let names: Vec<&str> = arrays.iter().map(|a| a.attr("Name")).collect();
+        assert_eq!(names, ["radius", "species", "id", "velocity"]);
+        let types: Vec<&str> = arrays.iter().map(|a| a.attr("type")).collect();
+        assert_eq!(types, ["Float64", "Int64", "Int64", "Float64"]);
+        for a in &arrays {
             let comps: usize = a.attr("NumberOfComponents").parse().unwrap();
-            assert_eq!(
-                values(a, header_type(&root)).len(),
-                comps * n,
-                "{}",
-                a.attr("Name")
-            );
+            assert_eq!(values(a, hdr).len(), comps * n, "{}", a.attr("Name"));
         }
-        assert_eq!(
-            values(pd.arrays()[1], header_type(&root)),
-            [0.0, 1.0, 0.0, 1.0, 0.0]
-        );
+        assert_eq!(values(arrays[0], hdr), radius);
+        assert_eq!(values(arrays[1], hdr), [0.0, 1.0, 0.0, 1.0, 0.0]);
+        assert_eq!(values(arrays[2], hdr), [1000.0, 993.0, 986.0, 979.0, 972.0]);
+        assert_eq!(values(arrays[3], hdr), vel);
     }
+    // Integer arrays take part in the unique-name check and the length check.
+    let mut p = Particles::from_xy(&[[0.0, 0.0], [1.0, 1.0]]).unwrap();
+    p.add_scalar("radius", &[0.5, 0.5]).unwrap();
+    assert!(p.add_ints("radius", &[1u32, 2]).is_err());
+    assert!(p.add_ints("id", &[1u32]).is_err());
     // Empty particle sets are valid files.
     let p = Particles::from_xyz(&[]).unwrap();
     let root = parse_xml(&p.to_xml().unwrap());
     assert_eq!(
-        root.child("UnstructuredGrid")
-            .child("Piece")
-            .attr("NumberOfPoints"),
+        root.child("PolyData").child("Piece").attr("NumberOfPoints"),
         "0"
     );
     // Series file.
     write_pvd(
         dir.join("series.pvd"),
-        &[(0.0, "particles_Binary.vtu"), (0.5, "particles_Ascii.vtu")],
+        &[(0.0, "particles_Binary.vtp"), (0.5, "particles_Ascii.vtp")],
     )
     .unwrap();
     let root = parse_xml(&std::fs::read_to_string(dir.join("series.pvd")).unwrap());
     check_header(&root, "Collection");
-    assert_eq!(root.child("Collection").children.len(), 2);
+    let sets = &root.child("Collection").children;
+    assert_eq!(sets.len(), 2);
+    assert_eq!(sets[1].attr("file"), "particles_Ascii.vtp");
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Binary arrays are the 8-byte little-endian byte count the root declares
+/// (`header_type="UInt64"`), then exactly that many bytes of values, for every array of
+/// every file kind; the file's total base64 payload has no slack.
+#[test]
+fn binary_arrays_match_their_declared_header() {
+    let n = 7;
+    let mut p = Particles::new(&vec![0.5f64; 3 * n], 3).unwrap();
+    p.add_scalar("radius", &vec![1.0f64; n])
+        .unwrap()
+        .add_ints("id", &vec![3u32; n])
+        .unwrap();
+    let mut g = ImageData::new_2d(5, 3, [0.0; 2], [1.0; 2]).unwrap();
+    g.add_scalar("rho", &[2.0f64; 15])
+        .unwrap()
+        .add_vector("u", &[1.0f64; 30], 2)
+        .unwrap();
+    for (xml, want) in [
+        (
+            p.to_xml().unwrap(),
+            vec![3 * n * 8, n * 8, n * 8, n * 8, n * 8],
+        ),
+        (g.to_xml().unwrap(), vec![15 * 8, 45 * 8]),
+    ] {
+        let root = parse_xml(&xml);
+        assert_eq!(root.attr("header_type"), "UInt64");
+        let mut sizes = Vec::new();
+        let mut stack = vec![&root];
+        while let Some(e) = stack.pop() {
+            if e.name == "DataArray" {
+                assert_eq!(e.attr("format"), "binary");
+                let raw = b64_decode(&e.text);
+                let declared = u64::from_le_bytes(raw[..8].try_into().unwrap()) as usize;
+                assert_eq!(declared, raw.len() - 8, "{}", e.attr("Name"));
+                sizes.push((e.attr("Name").to_string(), declared));
+            }
+            stack.extend(e.children.iter().rev());
+        }
+        let mut got: Vec<usize> = sizes.iter().map(|s| s.1).collect();
+        got.sort_unstable();
+        let mut want = want;
+        want.sort_unstable();
+        assert_eq!(got, want, "{sizes:?}");
+    }
 }
 
 #[test]
@@ -344,15 +399,15 @@ fn xyz_parses_back() {
         let n = 3 + step;
         let pos: Vec<f64> = (0..2 * n).map(|i| i as f64 * 0.1 + step as f64).collect();
         let mut f = XyzFrame::new(&pos, 2).unwrap();
-        let names: Vec<&str> = (0..n).map(|i| if i % 2 == 0 { "A" } else { "B" }).collect();
-        f.species(&names)
+        let kinds: Vec<u32> = (0..n as u32).map(|i| i % 2).collect();
+        f.kinds(&kinds, &["A", "B"])
             .unwrap()
             .box_2d(10.0, 5.0)
             .unwrap()
             .time(step as f64 * 0.5)
             .unwrap();
-        f.add_scalar("radius", &vec![0.5f32; n]).unwrap();
-        f.add_vector("velocity", &vec![1.0; 2 * n], 2).unwrap();
+        f.radii(&vec![0.5f32; n]).unwrap();
+        f.velocities(&vec![1.0; 2 * n], 2).unwrap();
         w.push(&f).unwrap();
     }
     assert_eq!(w.frames(), 4);
@@ -371,7 +426,7 @@ fn xyz_parses_back() {
             "{comment}"
         );
         assert!(
-            comment.contains("Properties=species:S:1:pos:R:3:radius:R:1:velocity:R:3"),
+            comment.contains("Properties=species:S:1:pos:R:3:kind:S:1:Radius:R:1:velo:R:3"),
             "{comment}"
         );
         assert!(
@@ -381,10 +436,13 @@ fn xyz_parses_back() {
         assert!(comment.contains("pbc=\"T T F\""), "{comment}");
         for k in 0..n {
             let cols: Vec<&str> = lines.next().unwrap().split_whitespace().collect();
-            assert_eq!(cols.len(), 1 + 3 + 1 + 3);
-            assert_eq!(cols[0], if k % 2 == 0 { "A" } else { "B" });
+            assert_eq!(cols.len(), 1 + 3 + 1 + 1 + 3);
+            // Species index 0 is written as hydrogen, 1 as helium; the names follow.
+            assert_eq!(cols[0], if k % 2 == 0 { "H" } else { "He" });
+            assert_eq!(cols[4], if k % 2 == 0 { "A" } else { "B" });
             assert_eq!(cols[3], "0");
-            assert!(cols[1..].iter().all(|c| c.parse::<f64>().is_ok()));
+            assert_eq!(&cols[5..], ["0.5", "1", "1", "0"]);
+            assert!(cols[1..4].iter().all(|c| c.parse::<f64>().is_ok()));
         }
         frames += 1;
     }
@@ -401,8 +459,32 @@ fn xyz_parses_back() {
         6
     );
     let mut g = f.clone();
-    assert!(g.species(&["A", "B"]).is_err());
-    assert!(g.species(&["two words"]).is_err());
+    assert!(g.species(&["H", "He"]).is_err());
+    // ASE reads the species column as element symbols: other names go through `kinds`.
+    for bad in ["A", "two words", "h", "Xx", ""] {
+        assert!(g.species(&[bad]).is_err(), "{bad:?}");
+        assert!(g.uniform_species(bad).is_err(), "{bad:?}");
+    }
+    for good in ["H", "Og", "Ar", "X"] {
+        g.species(&[good]).unwrap();
+    }
+    assert!(g.kinds(&[1u32], &["solid"]).is_err(), "index out of range");
+    assert!(g.kinds(&[0u32, 0], &["solid"]).is_err(), "one per particle");
+    assert!(g.kinds(&[0u32], &["two words"]).is_err());
+    let many: Vec<String> = (0..119).map(|k| format!("s{k}")).collect();
+    assert!(g.kinds(&[0u32], &many).is_err(), "more kinds than elements");
+    g.kinds(&[117u32], &many[..118]).unwrap();
+    for reserved in ["kind", "species", "pos"] {
+        assert!(g.add_scalar(reserved, &[1.0]).is_err(), "{reserved}");
+    }
+    let mut text = String::new();
+    g.write_to(&mut text);
+    assert_eq!(text.lines().nth(2).unwrap(), "Og 0 1 2 s117");
+    // Element symbols set afterwards drop the kind column.
+    g.uniform_species("Ar").unwrap();
+    text.clear();
+    g.write_to(&mut text);
+    assert!(!text.contains("kind"), "{text}");
     assert!(g.add_scalar("bad name", &[1.0]).is_err());
     assert!(g.add_scalar("r", &[f64::NAN]).is_err());
     assert!(XyzFrame::from_xy(&[[f64::INFINITY, 0.0]]).is_err());
@@ -538,11 +620,11 @@ fn vtk_values_read_back_bit_for_bit() {
             .unwrap()
             .add_vector(names[3], &xyz, 3)
             .unwrap();
-        let path = dir.join(format!("exact_{enc:?}.vtu"));
+        let path = dir.join(format!("exact_{enc:?}.vtp"));
         p.write(&path).unwrap();
         let root = parse_xml(&std::fs::read_to_string(&path).unwrap());
         let hdr = header_type(&root);
-        let piece = root.child("UnstructuredGrid").child("Piece");
+        let piece = root.child("PolyData").child("Piece");
         assert_eq!(piece.attr("NumberOfPoints"), n.to_string());
         let points = piece.child("Points").arrays();
         assert_eq!(bits(&values(points[0], hdr)), bits(&xyz), "{enc:?} points");
@@ -598,19 +680,16 @@ fn vtk_values_read_back_bit_for_bit() {
     let mut p = Particles::new(&[0.0; 9], 3).unwrap();
     p.add_scalar("odd", &odd).unwrap();
     let root = parse_xml(&p.to_xml().unwrap());
-    let pd = root
-        .child("UnstructuredGrid")
-        .child("Piece")
-        .child("PointData");
+    let pd = root.child("PolyData").child("Piece").child("PointData");
     assert_eq!(
         bits(&values(pd.arrays()[0], header_type(&root))),
         bits(&odd)
     );
     // Series: awkward times and file names.
     let entries = [
-        (1.0 / 3.0, "a&b<c>.vtu"),
+        (1.0 / 3.0, "a&b<c>.vtp"),
         (1e-300, "d\"e'.vti"),
-        (-2.5e300, "µ.vtu"),
+        (-2.5e300, "µ.vtp"),
     ];
     write_pvd(dir.join("series.pvd"), &entries).unwrap();
     let root = parse_xml(&std::fs::read_to_string(dir.join("series.pvd")).unwrap());
@@ -707,7 +786,7 @@ fn xyz_values_read_back_bit_for_bit() {
         .flat_map(|(&a, &b)| [a, b])
         .collect();
     let species: Vec<&str> = (0..n)
-        .map(|i| ["H", "Ca2+", "Fe_3", "ü", "X"][i % 5])
+        .map(|i| ["H", "Ca", "Fe", "Og", "X"][i % 5])
         .collect();
     let lattice = [
         [1.0 / 3.0, 0.1, 1e-300],

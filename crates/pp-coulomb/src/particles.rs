@@ -3,6 +3,7 @@
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 use serde::{Deserialize, Serialize};
+use simkit_backend::vector::IntoVec3;
 use simkit_backend::{Error, Result, require_finite, require_positive};
 
 /// A particle species: normalised charge and mass.
@@ -91,6 +92,16 @@ pub struct Particles {
 }
 
 impl Particles {
+    /// The positions as `glam::DVec3` values (a view, no copy).
+    pub fn positions_dvec3(&self) -> &[glam::DVec3] {
+        simkit_backend::vector::as_dvec3(&self.position)
+    }
+
+    /// The velocities as `glam::DVec3` values (a view, no copy).
+    pub fn velocities_dvec3(&self) -> &[glam::DVec3] {
+        simkit_backend::vector::as_dvec3(&self.velocity)
+    }
+
     /// No particles, no species.
     pub fn new() -> Self {
         Self::default()
@@ -180,12 +191,19 @@ impl Particles {
         Ok(())
     }
 
-    /// Adds one particle of `species`.
+    /// Adds one particle of `species`. `position` and `velocity` are any [`IntoVec3`]:
+    /// `glam` vectors (`DVec3`, `Vec3`, ...) or arrays.
     ///
     /// # Errors
     ///
     /// An unknown species, a non-finite component, or a particle beyond [`MAX_PARTICLES`].
-    pub fn push(&mut self, species: u32, position: [f64; 3], velocity: [f64; 3]) -> Result<()> {
+    pub fn push(
+        &mut self,
+        species: u32,
+        position: impl IntoVec3,
+        velocity: impl IntoVec3,
+    ) -> Result<()> {
+        let (position, velocity) = (position.into_vec3(), velocity.into_vec3());
         let s = self.species_ref(species)?.clone();
         for (k, c) in position.iter().enumerate() {
             require_finite(&format!("position[{}][{k}]", self.len()), *c)?;

@@ -1,6 +1,7 @@
 //! Force kernels against the plain f64 reference, Newton's third law, bad input (the CPU vs
 //! GPU comparisons are in `conformance.rs`).
 
+use approx::abs_diff_eq;
 mod common;
 
 use common::{LAWS, l2_relative, max_error_over_rms, norm, plasma};
@@ -88,7 +89,7 @@ fn zero_and_one_particle_are_fine() {
         assert_eq!(one.accelerations().unwrap(), vec![[0.0; 3]]);
         one.step(10).unwrap();
         let x = one.state().unwrap().position[0];
-        assert!((x[0] - 1.5).abs() < 1e-6, "{x:?}");
+        assert!(abs_diff_eq!(x[0], 1.5, epsilon = 1e-6), "{x:?}");
     }
 }
 

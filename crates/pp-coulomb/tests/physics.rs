@@ -1,6 +1,7 @@
 //! Physics validation: Rutherford scattering, Coulomb explosion of a cold sphere, energy
 //! conservation of leapfrog with softening.
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 #[cfg(feature = "gpu")]
 use simkit_backend::testing::gpu_or_skip;
 use simkit_backend::{Backend, Simulation};
@@ -118,7 +119,10 @@ fn rutherford_deflection() {
     let rutherford = rutherford_angle(1.0, mu, 1.0, 2.0);
     println!("exact orbit at r = 1e12: {far:.15} vs Rutherford {rutherford:.15}");
     // Both closed forms in f64; the orbit's remaining deflection beyond r is ~ p / r = 1e-12.
-    assert!((far - rutherford).abs() < 1e-10, "{far} vs {rutherford}");
+    assert!(
+        abs_diff_eq!(far, rutherford, epsilon = 1e-10),
+        "{far} vs {rutherford}"
+    );
 
     let coarse = rutherford_encounter(0.04);
     let fine = rutherford_encounter(0.02);
@@ -150,7 +154,10 @@ fn rutherford_deflection() {
     );
     // Leapfrog is second order: measured 2.000 (angle) and 2.000 (peak energy error) from
     // dt = 0.04 -> 0.02 (this test, f64, 2 cores); bounds 2 +- 0.2.
-    assert!((angle_order - 2.0).abs() < 0.2, "angle order {angle_order}");
+    assert!(
+        abs_diff_eq!(angle_order, 2.0, epsilon = 0.2),
+        "angle order {angle_order}"
+    );
     assert!(
         (energy_order - 2.0).abs() < 0.2,
         "energy order {energy_order}"
@@ -194,7 +201,7 @@ fn explosion_times(n: usize, precision: Precision, backend: Backend<'_>) -> [f64
     let p = cold_sphere(n, radius, 2024).unwrap();
     let expansion = Expansion::new(&p.position, radius);
     let omega = explosion_omega(1.0 / n as f64, 1.0, 1.0 / n as f64, radius);
-    assert!((omega - 1.0).abs() < 1e-12);
+    assert_abs_diff_eq!(omega, 1.0, epsilon = 1e-12);
     let config = Config::new(0.05, ForceLaw::Exact).with_precision(precision);
     let mut sim = PpCoulomb::new(p, &config, backend).unwrap();
     let (mut t_prev, mut xi_prev) = (0.0, 1.0_f64);
@@ -330,7 +337,10 @@ fn energy_error_scales_as_dt_squared() {
     // Measured orders: leapfrog 2.000, 2.000; symplectic Euler 0.984, 0.992 (this test,
     // f64, dt 0.02 -> 0.01 -> 0.005); bounds 2 +- 0.2 and 1 +- 0.2.
     for o in lo {
-        assert!((o - 2.0).abs() < 0.2, "leapfrog order {o} (expected 2)");
+        assert!(
+            abs_diff_eq!(o, 2.0, epsilon = 0.2),
+            "leapfrog order {o} (expected 2)"
+        );
     }
     for o in so {
         assert!(

@@ -2,6 +2,7 @@
 //! (`simkit_backend::testing::check_restart`), the clock and step counter restored, and clear
 //! errors for checkpoints of another model, truncated or corrupted ones.
 
+use approx::assert_abs_diff_eq;
 use simkit_backend::checkpoint;
 use simkit_backend::testing::{backends, check_restart};
 use simkit_backend::{Backend, Error, Restart, Simulation};
@@ -102,7 +103,7 @@ fn resume_restores_clock_and_state() {
         let mut back = PpCoulomb::resume(&bytes, backend).unwrap();
         assert_eq!(back.steps_done(), 16);
         assert_eq!(back.time().to_bits(), sim.time().to_bits());
-        assert!((back.time() - (11.0 * 0.05 + 5.0 * 0.03)).abs() < 1e-12);
+        assert_abs_diff_eq!(back.time(), 11.0 * 0.05 + 5.0 * 0.03, epsilon = 1e-12);
         assert_eq!(back.config(), sim.config());
         assert_eq!(back.state().unwrap(), sim.state().unwrap());
         // The empty system too.

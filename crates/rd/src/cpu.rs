@@ -26,6 +26,85 @@ const BLOCK_COLS: usize = 8192;
 /// Rows per band in a fused sweep (each band recomputes `2 (k - 1)` halo rows per level).
 const FUSED_BAND_ROWS: usize = 64;
 
+/// One stencil pass of `model` over the interior of padded planes (`(nx + 2) x (ny + 2)`
+/// each, one ghost layer, species after species) from `src` into `dst`; the ghosts of `dst`
+/// are left to the caller. Bands of rows in parallel, columns in cache blocks, each row
+/// segment through the model's row kernel. Every per-cell value depends only on the cell's
+/// stencil in `src` and `coef`, so any caller that supplies the same stencil values (the
+/// single-process backend, or one block of a distributed run) gets the same bits.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn interior_pass<T: Real, M: Model>(
+    model: &M,
+    nx: usize,
+    ny: usize,
+    coef: &[T],
+    src: &[T],
+    dst: &mut [T],
+    dt: f64,
+    ih2: f64,
+    average: bool,
+) {
+    let w = nx + 2;
+    let plane = w * (ny + 2);
+    let mut per_plane: Vec<_> = dst
+        .chunks_mut(plane)
+        .map(|p| p[w..(ny + 1) * w].chunks_mut(BAND_ROWS * w))
+        .collect();
+    let bands: Vec<Vec<&mut [T]>> = (0..ny.div_ceil(BAND_ROWS))
+        .map(|_| per_plane.iter_mut().filter_map(|it| it.next()).collect())
+        .collect();
+    bands
+        .into_par_iter()
+        .enumerate()
+        .for_each(|(b, mut chunks)| {
+            let rows = (ny - b * BAND_ROWS).min(BAND_ROWS);
+            for i0 in (1..=nx).step_by(BLOCK_COLS) {
+                let i1 = (i0 + BLOCK_COLS).min(nx + 1);
+                for r in 0..rows {
+                    let row = 1 + b * BAND_ROWS + r;
+                    let input = RowIn {
+                        species: src,
+                        species_plane: plane,
+                        species_row: row,
+                        coefficients: coef,
+                        coefficient_plane: plane,
+                        row,
+                        width: w,
+                        i0,
+                        i1,
+                    };
+                    let mut outs: Vec<&mut [T]> = chunks
+                        .iter_mut()
+                        .map(|c| &mut c[r * w + i0..r * w + i1])
+                        .collect();
+                    model.update_row(&input, dt, ih2, &mut outs, average);
+                }
+            }
+        });
+}
+
+/// The model's largest effective diffusivity over the interior of padded planes `cur` (with
+/// coefficient planes `coef`), read in place, rows in parallel; NaN if any row's is NaN.
+pub(crate) fn padded_max_diffusivity<T: Real, M: Model>(
+    model: &M,
+    nx: usize,
+    ny: usize,
+    cur: &[T],
+    coef: &[T],
+) -> f64 {
+    let w = nx + 2;
+    let plane = w * (ny + 2);
+    (1..=ny)
+        .into_par_iter()
+        .map(|row| {
+            let at = row * w + 1;
+            let species: Vec<&[T]> = cur.chunks(plane).map(|p| &p[at..at + nx]).collect();
+            let coef: Vec<&[T]> = coef.chunks(plane).map(|p| &p[at..at + nx]).collect();
+            model.max_cell_diffusivity(&species, &coef)
+        })
+        .reduce(|| 0.0, max_or_nan)
+}
+
 /// Reaction–diffusion on the CPU (all cores of the current rayon pool).
 ///
 /// Fields live in padded storage (one ghost layer). Each stencil pass splits the interior
@@ -111,66 +190,20 @@ impl<T: Real, M: Model> CpuRd<T, M> {
     /// One stencil pass from `src` into `dst` (interior only), then `dst`'s ghosts.
     fn pass(&self, src: &[T], dst: &mut [T], average: bool) {
         let (nx, ny) = (self.grid.nx(), self.grid.ny());
-        let w = nx + 2;
-        let plane = w * (ny + 2);
-        let dt = self.stepping.dt;
         let ih2 = 1.0 / (self.grid.h() * self.grid.h());
-        let mut per_plane: Vec<_> = dst
-            .chunks_mut(plane)
-            .map(|p| p[w..(ny + 1) * w].chunks_mut(BAND_ROWS * w))
-            .collect();
-        let bands: Vec<Vec<&mut [T]>> = (0..ny.div_ceil(BAND_ROWS))
-            .map(|_| per_plane.iter_mut().filter_map(|it| it.next()).collect())
-            .collect();
-        let coef = &self.coef[..];
-        bands
-            .into_par_iter()
-            .enumerate()
-            .for_each(|(b, mut chunks)| {
-                let rows = (ny - b * BAND_ROWS).min(BAND_ROWS);
-                for i0 in (1..=nx).step_by(BLOCK_COLS) {
-                    let i1 = (i0 + BLOCK_COLS).min(nx + 1);
-                    for r in 0..rows {
-                        let row = 1 + b * BAND_ROWS + r;
-                        let input = RowIn {
-                            species: src,
-                            species_plane: plane,
-                            species_row: row,
-                            coefficients: coef,
-                            coefficient_plane: plane,
-                            row,
-                            width: w,
-                            i0,
-                            i1,
-                        };
-                        let mut outs: Vec<&mut [T]> = chunks
-                            .iter_mut()
-                            .map(|c| &mut c[r * w + i0..r * w + i1])
-                            .collect();
-                        self.model.update_row(&input, dt, ih2, &mut outs, average);
-                    }
-                }
-            });
+        let (model, coef, dt) = (&self.model, &self.coef[..], self.stepping.dt);
+        interior_pass(model, nx, ny, coef, src, dst, dt, ih2, average);
+        let plane = (nx + 2) * (ny + 2);
         for (s, f) in dst.chunks_mut(plane).enumerate() {
             fill_ghosts(f, nx, ny, s, self.grid.boundaries());
         }
     }
 
-    /// The model's largest effective diffusivity for the current fields, read in place from
-    /// the padded storage (rows in parallel); NaN if any row's is NaN.
+    /// The model's largest effective diffusivity for the current fields (see
+    /// [`padded_max_diffusivity`]).
     fn max_diffusivity(&self) -> f64 {
         let (nx, ny) = (self.grid.nx(), self.grid.ny());
-        let w = nx + 2;
-        let plane = w * (ny + 2);
-        (1..=ny)
-            .into_par_iter()
-            .map(|row| {
-                let at = row * w + 1;
-                let species: Vec<&[T]> = self.cur.chunks(plane).map(|p| &p[at..at + nx]).collect();
-                let coef: Vec<&[T]> = self.coef.chunks(plane).map(|p| &p[at..at + nx]).collect();
-                self.model.max_cell_diffusivity(&species, &coef)
-            })
-            .reduce(|| 0.0, max_or_nan)
+        padded_max_diffusivity(&self.model, nx, ny, &self.cur, &self.coef)
     }
 
     /// `k` Euler steps in one sweep from `cur` into `tmp`, then the ghosts; with `want_max`,

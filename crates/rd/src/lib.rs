@@ -17,6 +17,9 @@
 //!   feature dispatch, several Euler steps fused per sweep over the grid) or the GPU (WGSL;
 //!   tile + halo in workgroup memory, or a plain global-memory kernel; many steps per
 //!   submission).
+//! - [`DistributedRd`]: the same run block-decomposed over the ranks of a
+//!   [`simkit_backend::comm::Comm`] (serial, or MPI with the `mpi` feature), CPU only,
+//!   bit-identical to the single-process CPU run for any rank count.
 //!
 //! # Blow-up checks
 //!
@@ -78,6 +81,7 @@
 mod boundary;
 mod config;
 mod cpu;
+mod distributed;
 mod engine;
 #[cfg(feature = "gpu")]
 mod gpu;
@@ -91,6 +95,7 @@ mod sweep;
 
 pub use boundary::{Boundaries, Boundary};
 pub use config::{Config, DEFAULT_STEPS_PER_SWEEP, GpuKernel, GpuOptions};
+pub use distributed::DistributedRd;
 pub use grid::Grid;
 pub use model::{Model, RowIn, Stencil};
 pub use models::{Colony, Diffusion, GrayScott};

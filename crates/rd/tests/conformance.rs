@@ -5,6 +5,7 @@
 //! `temporal_blocking.rs`); other backends are compared with [`max_rel_diff`] per species
 //! (largest cell difference over the largest magnitude of the reference field).
 
+use approx::abs_diff_eq;
 use simkit_backend::testing::{backends, max_rel_diff};
 use simkit_backend::{Backend, Simulation, max_or_nan};
 use simkit_rd::scenes::colony_scene;
@@ -120,7 +121,11 @@ fn gpu_f64_matches_cpu_f64() {
                 let mut worst = 0.0f64;
                 for s in 0..2 {
                     for (x, y) in g.field(s).iter().zip(c.field(s)) {
-                        assert!((x - y).abs() < 7e-15, "{}: {x} vs {y}", sim.backend_name());
+                        assert!(
+                            abs_diff_eq!(x, y, epsilon = 7e-15),
+                            "{}: {x} vs {y}",
+                            sim.backend_name()
+                        );
                         worst = max_or_nan(worst, (x - y).abs());
                     }
                 }

@@ -1,6 +1,7 @@
 //! Physics validation: heat kernel convergence orders, conservation, stability guard,
 //! Dirichlet profile, colony reaction bookkeeping.
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use simkit_backend::Backend;
 use simkit_backend::rng::rng_uniform;
 use simkit_backend::testing::backends;
@@ -46,7 +47,7 @@ fn gaussian_run(n: usize, dt: f64, integrator: Integrator) -> Vec<f64> {
     let h = L / n as f64;
     let grid = Grid::new(n, n, h, Boundaries::periodic(), vec![heat_kernel(n, 1.0)]).unwrap();
     let steps = (1.0 / dt).round() as u32;
-    assert!((steps as f64 * dt - 1.0).abs() < 1e-12);
+    assert_abs_diff_eq!(steps as f64 * dt, 1.0, epsilon = 1e-12);
     let stepping = Stepping {
         dt,
         integrator,
@@ -79,7 +80,7 @@ fn gaussian_second_order_in_space() {
         sci(&errs)
     );
     for o in orders {
-        assert!((o - 2.0).abs() < 0.1, "spatial order {o}");
+        assert!(abs_diff_eq!(o, 2.0, epsilon = 0.1), "spatial order {o}");
     }
 }
 
@@ -102,7 +103,10 @@ fn gaussian_time_orders() {
             sci(&errs)
         );
         for o in orders {
-            assert!((o - want).abs() < 0.1, "{integrator:?} time order {o}");
+            assert!(
+                abs_diff_eq!(o, want, epsilon = 0.1),
+                "{integrator:?} time order {o}"
+            );
         }
     }
 }
@@ -203,7 +207,10 @@ fn stability_guard_is_tight() {
     let model = Diffusion::new(&[0.8]).unwrap();
     let grid = checker_noise_grid(32);
     let bound = stable_dt(&model, &grid);
-    assert!((bound - 1.0 / 3.2).abs() < 1e-15, "bound {bound}");
+    assert!(
+        abs_diff_eq!(bound, 1.0 / 3.2, epsilon = 1e-15),
+        "bound {bound}"
+    );
     for integrator in [Integrator::Euler, Integrator::Heun] {
         let s = |dt| Stepping {
             dt,
@@ -255,7 +262,11 @@ fn colony_guard_follows_fields() {
     assert_eq!(stable_dt(&model, &grid), 0.25 / 4.0);
     grid.field_mut(0)[5] = 4.0;
     let kappa = model.d()[5] * 4.0 * grid.field(1)[5];
-    assert!((stable_dt(&model, &grid) - 0.25 / (4.0 * kappa)).abs() < 1e-15);
+    assert_abs_diff_eq!(
+        stable_dt(&model, &grid),
+        0.25 / (4.0 * kappa),
+        epsilon = 1e-15
+    );
     let err = Rd::new(
         grid,
         model,
@@ -349,7 +360,11 @@ fn gpu_colony_step_rechecks_device_fields() {
     assert_eq!(cpu_call, gpu_call);
     // The GPU forms d b n in f32 (two roundings) where the CPU forms it in f64 from the same f32
     // values: derived bound 2 eps_f32 relative (measured: equal).
-    assert!((cpu_bound - gpu_bound).abs() <= 2.0 * f64::from(f32::EPSILON) * cpu_bound);
+    assert_abs_diff_eq!(
+        cpu_bound,
+        gpu_bound,
+        epsilon = 2.0 * f64::from(f32::EPSILON) * cpu_bound
+    );
 }
 
 /// Dirichlet 0 (west) and 1 (east) with no-flux north/south relax to the linear profile,
@@ -508,7 +523,10 @@ fn gpu_rejects_bad_tiles() {
 fn a_blown_up_colony_is_stopped_and_rolled_back() {
     let (grid, model) = colony_scene::<f32>(64, 64, 3).unwrap();
     let bound = stable_dt(&model, &grid);
-    assert!((bound - 0.0625).abs() < 1e-12, "bound {bound}");
+    assert!(
+        abs_diff_eq!(bound, 0.0625, epsilon = 1e-12),
+        "bound {bound}"
+    );
     for backend in backends("a_blown_up_colony_is_stopped_and_rolled_back") {
         let config = Config::new(Stepping::euler(16.0 * bound).unguarded());
         let mut sim = Rd::new(grid.clone(), model.clone(), &config, backend).unwrap();

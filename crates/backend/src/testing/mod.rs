@@ -6,8 +6,10 @@
 //! each result with the CPU's: bit for bit where a crate promises it, else with
 //! [`max_rel_diff`] against a tolerance the test states and justifies.
 
+mod mpirun;
 #[cfg(feature = "gpu")]
 mod wgsl;
+pub use mpirun::{MPI_CHILD_ENV, REQUIRE_MPI_ENV, is_mpi_child, mpirun_self};
 #[cfg(feature = "gpu")]
 pub use wgsl::{FieldOffset, WgslStruct, assert_mirrors, eval_wgsl, wgsl_struct};
 

@@ -2,17 +2,33 @@
 //!
 //! Per step, recorded into one command buffer (64 steps per submission) without host round
 //! trips: `md_drift` (velocity Verlet: opening half kick; drift; periodic wrap or
-//! reflection), `neighbor`'s [`GpuCellList`] build over cells at least `max r_c` wide, and
-//! `md_force` (one invocation per particle gathering the pair forces over the full shell of
-//! neighbour cells with the table entry of each pair, then the closing kick). Particle `i`
-//! only writes its own entries, so there are no write conflicts.
+//! reflection), then the forces and the closing kick with one of two schemes
+//! ([`crate::GpuKernel`]), both over cells at least `max r_c` wide and the full shell of
+//! `3^D` neighbour cells (periodic images by the minimum image of the wrapped positions):
+//!
+//! - **Per particle** (default): `neighbor`'s [`GpuCellList`] is rebuilt from scratch
+//!   (counting sort, ids ascending in each cell) and `md_force` runs one invocation per
+//!   particle, reading the neighbour cells' positions from global memory. Particle `i` only
+//!   writes its own entries, so there are no write conflicts.
+//! - **Cell block** (`cell_block`): every cell has a fixed number of slots; after the drift
+//!   `md_block_update` (one workgroup per cell) rebuilds each cell's slot list locally, from
+//!   its own and its neighbours' previous lists (leavers dropped, arrivals picked up, ids
+//!   kept ascending), and `md_block_force` (one workgroup per cell, one invocation per
+//!   slot) stages each neighbour cell's positions in workgroup memory and sums every
+//!   slot's pair terms from there in a fixed cell and slot order. A cell that would exceed
+//!   its slots, or a particle that moved more than one cell in a step, sets a health flag
+//!   that the guard checks: the run is rolled back and the call returns an error.
+//!
+//! Which is faster depends on the device (bandwidth saved by the staging against idle
+//! slots of the cell blocks): `benches/md.rs` times both. On lavapipe (a CPU driver) the
+//! per-particle kernel is the faster; no hardware GPU has been measured yet.
 //!
 //! Blow-up check: at every check step (`Config::check_every`, and at the end of a call) a
 //! [`GpuGuard`] checks positions, velocities, accelerations (with the energies) and
-//! virials for non-finite values and snapshots them while all is well; the drift kernel
-//! turns a coordinate that left the box into NaN, so that case is caught too. One small
-//! download per `step(n)` call reads the outcome; after a failure the snapshots are copied
-//! back.
+//! virials (and the cell-block health flags) for non-finite values and snapshots them
+//! while all is well; the drift kernel turns a coordinate that left the box into NaN, so
+//! that case is caught too. One small download per `step(n)` call reads the outcome; after
+//! a failure the snapshots are copied back (and cell-block slot lists rebuilt from scratch).
 
 use bytemuck::{Pod, Zeroable};
 
@@ -21,11 +37,14 @@ use simkit_neighbor::{
 };
 
 use simkit_backend::gpu::{DISPATCH_WGSL, GpuGuard, Uniform, Watch, record_pass};
+
+mod cell_block;
+use cell_block::{CellBlock, ForceInputs, HEALTH_LABEL};
 use simkit_backend::guard::{blow_up, chunks};
 use simkit_backend::rng::RNG_WGSL;
 use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Precision, Result};
 
-use crate::config::Integrator;
+use crate::config::{GpuKernel, Integrator};
 use crate::diagnostics::assemble;
 use crate::engine::{Engine, EngineState};
 use crate::{Config, Diagnostics, Dim, State, System};
@@ -95,6 +114,17 @@ struct BoundOnly {
     _tick: GpuBuffer<u32>,
 }
 
+/// The force scheme ([`GpuKernel`]).
+enum Forces {
+    /// The cell list sorted every step and the per-particle force kernel.
+    PerParticle {
+        cells: Box<AnyGpuCellList>,
+        force: (Kernel, wgpu::BindGroup),
+    },
+    /// Slot lists updated locally and the one-workgroup-per-cell force kernel.
+    CellBlock(Box<CellBlock>),
+}
+
 pub(crate) struct GpuEngine {
     ctx: GpuContext,
     system: System,
@@ -107,9 +137,8 @@ pub(crate) struct GpuEngine {
     vel: GpuBuffer<[f32; 4]>,
     acc: GpuBuffer<[f32; 4]>,
     vir: GpuBuffer<f32>,
-    cells: AnyGpuCellList,
     drift: (Kernel, wgpu::BindGroup),
-    force: (Kernel, wgpu::BindGroup),
+    forces: Forces,
     /// With the thermostat: the kernel advancing the device step counter.
     tick: Option<(Kernel, wgpu::BindGroup)>,
     guard: GpuGuard,
@@ -271,13 +300,6 @@ impl GpuEngine {
         let table = GpuBuffer::from_slice(ctx, "md table", &table)?;
         let uniform = Uniform::new(ctx, "md params", &params);
         let cells = cell_list(ctx, system, &pos, n)?;
-        let GpuCellBuffers {
-            grid,
-            cell_start,
-            sorted_ids,
-            sorted_pos,
-            wrapped,
-        } = cells.buffers();
         // The device step counter keying the thermostat's random numbers (mod 2^32).
         let tick_buf = GpuBuffer::from_slice(ctx, "md tick", &[steps as u32])?;
         let (drift, tick) = if config.thermostat.is_some() {
@@ -314,40 +336,73 @@ impl GpuEngine {
             )?;
             ((k, b), None)
         };
-        let force_resources = [
-            grid.binding(),
-            uniform.binding(),
-            cell_start.binding(),
-            sorted_ids.binding(),
-            sorted_pos.binding(),
-            wrapped.binding(),
-            table.binding(),
-            acc.binding(),
-            vel.binding(),
-            vir.binding(),
-        ];
         let kick = match config.integrator {
             Integrator::VelocityVerlet => 1.0,
             Integrator::Leapfrog => 2.0,
         };
-        let k = kernel(ctx, &[FORCE_WGSL], "md_force", &[("KICK", kick)])?;
-        let b = k.bind(ctx, &force_resources)?;
-        let force = (k, b);
         // Initial forces; a fresh leapfrog run also takes its half kick v(dt/2).
         let start_kick = if saved.is_none() && config.integrator == Integrator::Leapfrog {
             1.0
         } else {
             0.0
         };
-        let init = kernel(ctx, &[FORCE_WGSL], "md_force", &[("KICK", start_kick)])?;
-        let init_bind = init.bind(ctx, &force_resources)?;
-        let mut encoder = ctx.encoder("md init");
-        record_pass(&mut encoder, "md init forces", |pass| {
-            cells.encode(ctx, pass)?;
-            init.dispatch_items(ctx, pass, &init_bind, n as u64)
-        })?;
-        ctx.submit(encoder);
-        cells.check(ctx)?;
+        let forces = match config.gpu_kernel {
+            GpuKernel::PerParticle => {
+                let GpuCellBuffers {
+                    grid,
+                    cell_start,
+                    sorted_ids,
+                    sorted_pos,
+                    wrapped,
+                } = cells.buffers();
+                let force_resources = [
+                    grid.binding(),
+                    uniform.binding(),
+                    cell_start.binding(),
+                    sorted_ids.binding(),
+                    sorted_pos.binding(),
+                    wrapped.binding(),
+                    table.binding(),
+                    acc.binding(),
+                    vel.binding(),
+                    vir.binding(),
+                ];
+                let k = kernel(ctx, &[FORCE_WGSL], "md_force", &[("KICK", kick)])?;
+                let b = k.bind(ctx, &force_resources)?;
+                let init = kernel(ctx, &[FORCE_WGSL], "md_force", &[("KICK", start_kick)])?;
+                let init_bind = init.bind(ctx, &force_resources)?;
+                let mut encoder = ctx.encoder("md init");
+                record_pass(&mut encoder, "md init forces", |pass| {
+                    cells.encode(ctx, pass)?;
+                    init.dispatch_items(ctx, pass, &init_bind, n as u64)
+                })?;
+                ctx.submit(encoder);
+                cells.check(ctx)?;
+                Forces::PerParticle {
+                    cells: Box::new(cells),
+                    force: (k, b),
+                }
+            }
+            GpuKernel::CellBlock { slots } => {
+                let inputs = ForceInputs {
+                    params: &uniform,
+                    pos: &pos,
+                    table: &table,
+                    acc: &acc,
+                    vel: &vel,
+                    vir: &vir,
+                };
+                Forces::CellBlock(Box::new(CellBlock::new(
+                    ctx,
+                    cells,
+                    n,
+                    slots,
+                    &inputs,
+                    steps,
+                    [kick, start_kick],
+                )?))
+            }
+        };
         let mut watches = vec![
             Watch::checked(&pos, Precision::F32),
             Watch::checked(&vel, Precision::F32),
@@ -357,6 +412,10 @@ impl GpuEngine {
         if tick.is_some() {
             // The step counter is state too: a rollback must rewind it.
             watches.push(Watch::copied(&tick_buf));
+        }
+        if let Forces::CellBlock(b) = &forces {
+            // Last: a non-finite state is reported as such before a lost particle.
+            watches.push(Watch::checked(b.health(), Precision::F32));
         }
         let guard = GpuGuard::new(ctx, &watches)?;
         let engine = Self {
@@ -371,9 +430,8 @@ impl GpuEngine {
             vel,
             acc,
             vir,
-            cells,
             drift,
-            force,
+            forces,
             tick,
             guard,
             steps,
@@ -411,14 +469,19 @@ impl GpuEngine {
         Ok(engine)
     }
 
-    /// Records one step into `encoder`.
-    fn record_step(&self, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
+    /// Records one step, from the state at step `from`, into `encoder`.
+    fn record_step(&self, encoder: &mut wgpu::CommandEncoder, from: u64) -> Result<()> {
         let ctx = &self.ctx;
         let n = self.n as u64;
         record_pass(encoder, "md step", |pass| {
             self.drift.0.dispatch_items(ctx, pass, &self.drift.1, n)?;
-            self.cells.encode(ctx, pass)?;
-            self.force.0.dispatch_items(ctx, pass, &self.force.1, n)?;
+            match &self.forces {
+                Forces::PerParticle { cells, force } => {
+                    cells.encode(ctx, pass)?;
+                    force.0.dispatch_items(ctx, pass, &force.1, n)?;
+                }
+                Forces::CellBlock(b) => b.record_step(ctx, pass, from)?,
+            }
             if let Some((k, b)) = &self.tick {
                 k.dispatch_items(ctx, pass, b, 1)?;
             }
@@ -459,9 +522,11 @@ impl Engine for GpuEngine {
         let mut encoder = ctx.encoder("md steps");
         self.guard.record(ctx, &mut encoder)?;
         let mut recorded = 0;
+        let mut at = self.steps;
         for stretch in chunks(self.steps, steps, self.check_every) {
             for _ in 0..stretch {
-                self.record_step(&mut encoder)?;
+                self.record_step(&mut encoder, at)?;
+                at += 1;
                 recorded += 1;
                 if recorded == STEPS_PER_SUBMIT {
                     ctx.submit(std::mem::replace(&mut encoder, ctx.encoder("md steps")));
@@ -477,14 +542,44 @@ impl Engine for GpuEngine {
         match report.bad {
             None => {
                 self.steps = checks[checks.len() - 1];
-                // A cell over the adapter's per-cell limit means truncated force loops.
-                self.cells.check(ctx)
+                match &self.forces {
+                    // A cell over the adapter's per-cell limit means truncated force loops.
+                    Forces::PerParticle { cells, .. } => cells.check(ctx),
+                    Forces::CellBlock(_) => Ok(()),
+                }
             }
             Some((label, index)) => {
                 let passed = (report.passed as usize).clamp(1, checks.len() - 1);
                 let (good, bad) = (checks[passed - 1], checks[passed]);
                 self.guard.rollback(ctx)?;
                 self.steps = good;
+                if let Forces::CellBlock(b) = &self.forces {
+                    b.rebuild(ctx, good)?;
+                    if label == HEALTH_LABEL && index == 0 {
+                        return Err(Error::invalid(
+                            "GpuKernel::CellBlock slots",
+                            b.slots(),
+                            format!(
+                                "a cell collected more than {} particles between steps {good} \
+                                 and {bad} (the run is rolled back to step {good}); give more \
+                                 slots (GpuKernel::CellBlock {{ slots: Some(n) }}) or use \
+                                 GpuKernel::PerParticle",
+                                b.slots()
+                            ),
+                        ));
+                    }
+                    if label == HEALTH_LABEL {
+                        return Err(blow_up(
+                            bad,
+                            good,
+                            "a particle moved more than one cell width (at least the largest cutoff) in \
+                             one step",
+                            "a time step too large for the stiffest pair (see \
+                             time_step_guide) or particles started (nearly) on top of each \
+                             other; lower Config::dt",
+                        ));
+                    }
+                }
                 let (what, i) = match label.as_str() {
                     "md vir" => ("virial", index),
                     "md pos" => ("position", index / 4),
@@ -564,7 +659,11 @@ impl Engine for GpuEngine {
     }
 
     fn name(&self) -> String {
-        format!("gpu f32 ({})", self.ctx.adapter_info().name)
+        let kernel = match &self.forces {
+            Forces::PerParticle { .. } => "per-particle".to_string(),
+            Forces::CellBlock(b) => format!("cell-block, {} slots", b.slots()),
+        };
+        format!("gpu f32 ({}, {kernel})", self.ctx.adapter_info().name)
     }
 
     fn steps_done(&self) -> u64 {

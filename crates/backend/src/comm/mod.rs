@@ -1,0 +1,396 @@
+//! Communication between the processes of a distributed run: one layer every crate uses.
+//!
+//! - [`Comm`]: the communicator. [`Comm::serial`] (always compiled) is one process talking to
+//!   itself; `Comm::mpi` (cargo feature `mpi`, off by default) is `MPI_COMM_WORLD` through
+//!   the `mpi` crate (rsmpi, MPI-3). Crates take a `Comm` and run the same code on both, so
+//!   single-process paths and their tests need no MPI.
+//! - [`CartDecomposition`]: a 2D grid cut into `p_x x p_y` rectangular blocks, one per rank
+//!   (the factors chosen from the grid shape to keep the halo small, uneven splits allowed),
+//!   with neighbour ranks (periodic wrap where asked), halo exchange in the shift pattern
+//!   ([`CartDecomposition::exchange_halo`]) and gather of the blocks to rank 0
+//!   ([`CartDecomposition::gather`]).
+//!
+//! Every operation here is collective unless its documentation says otherwise: all ranks
+//! must call it, in the same order. Reductions are bitwise deterministic: [`Comm::all_max`]
+//! and [`Comm::all_min`] are exact in any order, and [`Comm::all_sum`] adds the ranks'
+//! values in rank order on every rank (not MPI's reduction tree), so its result depends on
+//! the rank count only through the per-rank partial sums the caller passes in.
+//!
+//! ```
+//! use simkit_backend::comm::{CartDecomposition, Comm};
+//! # fn main() -> simkit_backend::Result<()> {
+//! let comm = Comm::serial();
+//! assert_eq!((comm.rank(), comm.size()), (0, 1));
+//! assert_eq!(comm.all_sum(2.5)?, 2.5);
+//! // A 5 x 4 field, periodic along x: the halo exchange wraps the block onto itself.
+//! let d = CartDecomposition::new([5, 4], comm.size(), [true, false])?;
+//! let (nx, ny) = (5, 4);
+//! let w = nx + 2;
+//! let mut f = vec![0.0f64; w * (ny + 2)];
+//! for j in 1..=ny {
+//!     for i in 1..=nx {
+//!         f[j * w + i] = (10 * j + i) as f64;
+//!     }
+//! }
+//! d.exchange_halo(&comm, &mut f, 1)?;
+//! assert_eq!(f[2 * w], f[2 * w + nx]); // west ghost = east-most interior cell
+//! assert_eq!(f[w + 1 - w], 0.0); // no south neighbour: the south ghost row is untouched
+//! # Ok(())
+//! # }
+//! ```
+
+mod cart;
+
+pub use cart::{Block, CartDecomposition, Neighbors, split};
+
+use crate::{Error, Result, max_or_nan};
+use bytemuck::Pod;
+
+#[cfg(feature = "mpi")]
+use std::rc::Rc;
+
+/// The processes of a run and the messages between them (see the [module docs](self)).
+///
+/// Cloning is cheap and shares the same communicator. With MPI, dropping the last clone
+/// finalises MPI (it cannot be started again in the same process). With the `mpi` feature
+/// a `Comm` is neither `Send` nor `Sync`: it stays on the thread that made it, which is
+/// the one thread that communicates (rayon workers compute, they never send).
+#[derive(Clone)]
+pub struct Comm {
+    kind: Kind,
+}
+
+#[derive(Clone)]
+enum Kind {
+    Serial,
+    #[cfg(feature = "mpi")]
+    Mpi(Rc<MpiWorld>),
+}
+
+/// The world communicator and the MPI environment it lives in (dropped in this order).
+#[cfg(feature = "mpi")]
+struct MpiWorld {
+    world: mpi::topology::SimpleCommunicator,
+    _universe: mpi::environment::Universe,
+}
+
+impl std::fmt::Debug for Comm {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "Comm({}, rank {} of {})",
+            self.name(),
+            self.rank(),
+            self.size()
+        )
+    }
+}
+
+impl Default for Comm {
+    /// [`Comm::serial`].
+    fn default() -> Self {
+        Self::serial()
+    }
+}
+
+impl Comm {
+    /// One process, rank 0 of 1: every exchange is a copy onto itself (periodic wrap) or
+    /// nothing, every reduction returns its input.
+    pub fn serial() -> Self {
+        Self { kind: Kind::Serial }
+    }
+
+    /// `MPI_COMM_WORLD`: initialises MPI (thread level `MPI_THREAD_SERIALIZED`, so any one
+    /// thread at a time may communicate; rayon workers never do). Start the program with
+    /// `mpirun -np P ...`; run directly it is one rank of one.
+    ///
+    /// Errors: MPI was already initialised in this process (call this once and clone the
+    /// `Comm`), or the library gives less than `MPI_THREAD_SERIALIZED`.
+    #[cfg(feature = "mpi")]
+    pub fn mpi() -> Result<Self> {
+        use mpi::Threading;
+        let Some((universe, level)) = mpi::initialize_with_threading(Threading::Serialized) else {
+            return Err(Error::invalid(
+                "Comm::mpi",
+                "MPI already initialised",
+                "initialise MPI once per process and clone the Comm it returns",
+            ));
+        };
+        if level < Threading::Serialized {
+            return Err(Error::Unsupported(format!(
+                "the MPI library gives thread level {level:?}; simkit needs \
+                 MPI_THREAD_SERIALIZED (build OpenMPI or MPICH with thread support)"
+            )));
+        }
+        let world = universe.world();
+        Ok(Self {
+            kind: Kind::Mpi(Rc::new(MpiWorld {
+                world,
+                _universe: universe,
+            })),
+        })
+    }
+
+    /// `"serial"` or `"mpi"`.
+    pub fn name(&self) -> &'static str {
+        match &self.kind {
+            Kind::Serial => "serial",
+            #[cfg(feature = "mpi")]
+            Kind::Mpi(_) => "mpi",
+        }
+    }
+
+    /// This process's rank, `0..size()`.
+    pub fn rank(&self) -> usize {
+        match &self.kind {
+            Kind::Serial => 0,
+            #[cfg(feature = "mpi")]
+            Kind::Mpi(m) => {
+                use mpi::traits::Communicator;
+                m.world.rank() as usize
+            }
+        }
+    }
+
+    /// Number of ranks.
+    pub fn size(&self) -> usize {
+        match &self.kind {
+            Kind::Serial => 1,
+            #[cfg(feature = "mpi")]
+            Kind::Mpi(m) => {
+                use mpi::traits::Communicator;
+                m.world.size() as usize
+            }
+        }
+    }
+
+    /// Whether this is rank 0, the rank that receives gathered fields and writes files.
+    pub fn is_root(&self) -> bool {
+        self.rank() == 0
+    }
+
+    /// Stops every rank of the run with exit status `code` (`MPI_Abort`; on one process,
+    /// `std::process::exit`). For a failure on one rank that the others cannot learn of
+    /// (they would wait for it forever in the next collective call). Not collective.
+    pub fn abort(&self, code: i32) -> ! {
+        match &self.kind {
+            Kind::Serial => std::process::exit(code),
+            #[cfg(feature = "mpi")]
+            Kind::Mpi(m) => {
+                use mpi::traits::Communicator;
+                m.world.abort(code)
+            }
+        }
+    }
+
+    /// Waits until every rank has called it.
+    pub fn barrier(&self) {
+        match &self.kind {
+            Kind::Serial => {}
+            #[cfg(feature = "mpi")]
+            Kind::Mpi(m) => {
+                use mpi::traits::CommunicatorCollectives;
+                m.world.barrier();
+            }
+        }
+    }
+
+    fn check_rank(&self, what: &str, r: Option<usize>) -> Result<()> {
+        match r {
+            Some(r) if r >= self.size() => Err(Error::invalid(
+                what,
+                r,
+                format!("must be a rank below the communicator size {}", self.size()),
+            )),
+            _ => Ok(()),
+        }
+    }
+
+    /// One step of a shift: sends `send` to rank `dest` and receives `recv.len()` values
+    /// from rank `source` into `recv`, at the same time (`MPI_Sendrecv`, so a ring or a
+    /// chain of shifts cannot deadlock). `None` means no partner on that side (a domain
+    /// edge): nothing is sent or received there. `tag` tells shifts apart. Collective over
+    /// the ranks that name each other.
+    ///
+    /// Errors: a rank `>= size()`; on one process, a partner on one side only (the message
+    /// would never arrive) or `send` and `recv` of different lengths; with MPI, a message of
+    /// another length than `recv`.
+    // `tag` only matters between processes.
+    #[cfg_attr(not(feature = "mpi"), allow(unused_variables))]
+    pub fn shift<T: Pod>(
+        &self,
+        send: &[T],
+        dest: Option<usize>,
+        recv: &mut [T],
+        source: Option<usize>,
+        tag: u16,
+    ) -> Result<()> {
+        self.check_rank("destination rank", dest)?;
+        self.check_rank("source rank", source)?;
+        let me = self.rank();
+        if dest == Some(me) && source == Some(me) {
+            if send.len() != recv.len() {
+                return Err(Error::invalid(
+                    "length of a message to this rank itself",
+                    send.len(),
+                    format!("must equal the receive buffer's length {}", recv.len()),
+                ));
+            }
+            recv.copy_from_slice(send);
+            return Ok(());
+        }
+        match &self.kind {
+            Kind::Serial => match (dest, source) {
+                (None, None) => Ok(()),
+                _ => Err(Error::invalid(
+                    "shift partners on one process",
+                    format!("dest {dest:?}, source {source:?}"),
+                    "give both as Some(0) (a copy onto itself) or both as None",
+                )),
+            },
+            #[cfg(feature = "mpi")]
+            Kind::Mpi(m) => mpi_shift(&m.world, send, dest, recv, source, tag),
+        }
+    }
+
+    /// Every rank's `send` (the same length on all ranks), concatenated in rank order, on
+    /// every rank.
+    ///
+    /// Errors: with MPI, ranks that pass different lengths give garbage or abort, so keep
+    /// the lengths equal; on one process, never.
+    pub fn all_gather<T: Pod>(&self, send: &[T]) -> Result<Vec<T>> {
+        match &self.kind {
+            Kind::Serial => Ok(send.to_vec()),
+            #[cfg(feature = "mpi")]
+            Kind::Mpi(m) => {
+                use mpi::traits::CommunicatorCollectives;
+                let bytes: &[u8] = bytemuck::cast_slice(send);
+                let mut all = vec![0u8; bytes.len() * self.size()];
+                m.world.all_gather_into(bytes, &mut all[..]);
+                Ok(from_bytes(&all))
+            }
+        }
+    }
+
+    /// The largest of the ranks' `x`, on every rank; NaN if any rank's `x` is NaN (unlike
+    /// `f64::max`, so a blown-up rank is never hidden). Exact in any order.
+    pub fn all_max(&self, x: f64) -> Result<f64> {
+        Ok(self
+            .all_gather(&[x])?
+            .into_iter()
+            .fold(f64::NEG_INFINITY, max_or_nan))
+    }
+
+    /// The smallest of the ranks' `x`, on every rank; NaN if any rank's `x` is NaN.
+    pub fn all_min(&self, x: f64) -> Result<f64> {
+        Ok(-self
+            .all_gather(&[-x])?
+            .into_iter()
+            .fold(f64::NEG_INFINITY, max_or_nan))
+    }
+
+    /// The sum of the ranks' `x`, added in rank order (`((x_0 + x_1) + x_2) + ...`) on every
+    /// rank: the same bits on every rank and in every run with the same rank count.
+    pub fn all_sum(&self, x: f64) -> Result<f64> {
+        let all = self.all_gather(&[x])?;
+        Ok(all[1..].iter().fold(all[0], |a, b| a + b))
+    }
+
+    /// Whether any rank passes `true`, on every rank.
+    pub fn all_any(&self, x: bool) -> Result<bool> {
+        Ok(self.all_gather(&[u8::from(x)])?.contains(&1))
+    }
+
+    /// Every rank's `send` (any length per rank) on rank 0, in rank order: `Some` there,
+    /// `None` on the other ranks.
+    pub fn gather_to_root<T: Pod>(&self, send: &[T]) -> Result<Option<Vec<Vec<T>>>> {
+        match &self.kind {
+            Kind::Serial => Ok(Some(vec![send.to_vec()])),
+            #[cfg(feature = "mpi")]
+            Kind::Mpi(m) => {
+                use mpi::traits::{Communicator, Destination, Source};
+                const TAG: i32 = 0x5347; // gather
+                let bytes: &[u8] = bytemuck::cast_slice(send);
+                if self.rank() != 0 {
+                    m.world.process_at_rank(0).send_with_tag(bytes, TAG);
+                    return Ok(None);
+                }
+                let mut out = vec![send.to_vec()];
+                for r in 1..self.size() {
+                    let (got, _) = m
+                        .world
+                        .process_at_rank(r as i32)
+                        .receive_vec_with_tag::<u8>(TAG);
+                    if got.len() % std::mem::size_of::<T>().max(1) != 0 {
+                        return Err(Error::invalid(
+                            format!("message from rank {r} to the gather"),
+                            format!("{} bytes", got.len()),
+                            "every rank must gather values of the same type",
+                        ));
+                    }
+                    out.push(from_bytes(&got));
+                }
+                Ok(Some(out))
+            }
+        }
+    }
+}
+
+/// The values of `T` whose bytes are `bytes` (a whole number of values), copied into
+/// aligned storage.
+#[cfg(feature = "mpi")]
+fn from_bytes<T: Pod>(bytes: &[u8]) -> Vec<T> {
+    let mut out = vec![T::zeroed(); bytes.len() / std::mem::size_of::<T>().max(1)];
+    bytemuck::cast_slice_mut::<T, u8>(&mut out).copy_from_slice(bytes);
+    out
+}
+
+/// [`Comm::shift`] over MPI for partners that are not both this rank.
+#[cfg(feature = "mpi")]
+fn mpi_shift<T: Pod>(
+    world: &mpi::topology::SimpleCommunicator,
+    send: &[T],
+    dest: Option<usize>,
+    recv: &mut [T],
+    source: Option<usize>,
+    tag: u16,
+) -> Result<()> {
+    use mpi::traits::{Communicator, Destination, Source};
+    let tag = i32::from(tag);
+    let out: &[u8] = bytemuck::cast_slice(send);
+    let want = std::mem::size_of_val(recv);
+    let inb: &mut [u8] = bytemuck::cast_slice_mut(recv);
+    let status = match (dest, source) {
+        (Some(d), Some(s)) => Some(mpi::point_to_point::send_receive_into_with_tags(
+            out,
+            &world.process_at_rank(d as i32),
+            tag,
+            inb,
+            &world.process_at_rank(s as i32),
+            tag,
+        )),
+        (Some(d), None) => {
+            world.process_at_rank(d as i32).send_with_tag(out, tag);
+            None
+        }
+        (None, Some(s)) => Some(
+            world
+                .process_at_rank(s as i32)
+                .receive_into_with_tag(inb, tag),
+        ),
+        (None, None) => None,
+    };
+    if let Some(st) = status {
+        let got = st.count(<u8 as mpi::datatype::Equivalence>::equivalent_datatype()) as usize;
+        if got != want {
+            return Err(Error::invalid(
+                format!("message from rank {}", st.source_rank()),
+                format!("{got} bytes"),
+                format!(
+                    "the receiver expected {want} bytes: the ranks disagree on the block sizes"
+                ),
+            ));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,62 @@
+//! Tests that run under `mpirun`: a test launches its own test binary on P ranks.
+
+use std::process::Command;
+
+/// Set in the environment of the ranks [`mpirun_self`] starts.
+pub const MPI_CHILD_ENV: &str = "SIMKIT_MPI_CHILD";
+
+/// Environment variable that turns a missing `mpirun` from a skip into a test failure (set
+/// by `.ci/run`).
+pub const REQUIRE_MPI_ENV: &str = "SIMKIT_REQUIRE_MPI";
+
+/// Whether this process is one of the ranks [`mpirun_self`] started (then the test body
+/// runs its multi-rank part and returns).
+pub fn is_mpi_child() -> bool {
+    std::env::var_os(MPI_CHILD_ENV).is_some()
+}
+
+/// Runs the test `test` of the current test binary under
+/// `mpirun --allow-run-as-root --oversubscribe --timeout 300 -np P` for every `P` in
+/// `ranks` (one rayon thread per rank: the ranks share the machine's cores) and returns
+/// each run's standard output; `None` (with a message) when `mpirun` is not on the `PATH`.
+///
+/// # Panics
+/// When a run fails (its output is in the message), and when `mpirun` is missing while
+/// `SIMKIT_REQUIRE_MPI=1`.
+pub fn mpirun_self(test: &str, ranks: &[usize]) -> Option<Vec<String>> {
+    let have = Command::new("mpirun")
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !have {
+        assert!(
+            std::env::var(REQUIRE_MPI_ENV).as_deref() != Ok("1"),
+            "{test}: {REQUIRE_MPI_ENV}=1 but `mpirun` is not on the PATH (Debian: apt-get \
+             install openmpi-bin libopenmpi-dev)"
+        );
+        eprintln!("{test}: skipped, `mpirun` is not on the PATH (set {REQUIRE_MPI_ENV}=1 to fail)");
+        return None;
+    }
+    let exe = std::env::current_exe().expect("the test binary's path");
+    let runs = ranks.iter().map(|p| {
+        let out = Command::new("mpirun")
+            // A hung rank fails the test instead of blocking it.
+            .args(["--allow-run-as-root", "--oversubscribe", "--timeout", "300"])
+            .args(["-np", &p.to_string()])
+            .arg(&exe)
+            .args([test, "--exact", "--nocapture", "--test-threads=1"])
+            .env(MPI_CHILD_ENV, "1")
+            .env("RAYON_NUM_THREADS", "1")
+            .output()
+            .expect("starting mpirun");
+        let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            out.status.success(),
+            "{test}: mpirun -np {p} failed ({}):\n{stdout}\n{stderr}",
+            out.status
+        );
+        stdout
+    });
+    Some(runs.collect())
+}

@@ -1,0 +1,131 @@
+//! The communication layer under `mpirun -np P` (P = 2, 3, 4): halo exchange at depths 1
+//! to 3 with and without periodic axes (every ghost cell, corners included, checked against
+//! the global field), gather to rank 0 and the reductions. Built only with the `mpi`
+//! feature; the test launches its own binary under `mpirun` (skipped with a message when
+//! `mpirun` is missing, unless `SIMKIT_REQUIRE_MPI=1`).
+#![cfg(feature = "mpi")]
+
+use simkit_backend::testing::{is_mpi_child, mpirun_self};
+
+use simkit_backend::comm::{CartDecomposition, Comm};
+
+const NAME: &str = "halo_gather_and_reductions_across_ranks";
+
+/// The global test field: plane `s`, cell `(x, y)`.
+fn value(s: usize, x: usize, y: usize) -> f64 {
+    (10_000 * s + 100 * y + x) as f64 + 0.5
+}
+
+fn child(comm: &Comm) {
+    let (rank, size) = (comm.rank(), comm.size());
+    for (global, periodic) in [
+        ([13, 11], [false, false]),
+        ([13, 11], [true, true]),
+        ([13, 11], [true, false]),
+        ([9, 17], [false, true]),
+    ] {
+        let d = CartDecomposition::new(global, size, periodic).expect("decomposition");
+        let b = d.block(rank);
+        let [nx, ny] = b.len;
+        for depth in 1..=3 {
+            let (w, h) = (nx + 2 * depth, ny + 2 * depth);
+            let mut f = vec![-1.0f64; 2 * w * h];
+            for s in 0..2 {
+                for j in 0..ny {
+                    for i in 0..nx {
+                        f[s * w * h + (j + depth) * w + i + depth] =
+                            value(s, b.start[0] + i, b.start[1] + j);
+                    }
+                }
+            }
+            d.exchange_halo(comm, &mut f, depth).expect("exchange");
+            // A padded cell holds the global value at its position, wrapped on periodic
+            // axes; a cell outside a non-periodic edge keeps its -1.
+            let wrap = |c: isize, n: usize, p: bool| -> Option<usize> {
+                let n = n as isize;
+                if (0..n).contains(&c) {
+                    Some(c as usize)
+                } else if p {
+                    Some(c.rem_euclid(n) as usize)
+                } else {
+                    None
+                }
+            };
+            for s in 0..2 {
+                for j in 0..h {
+                    for i in 0..w {
+                        let gx = b.start[0] as isize + i as isize - depth as isize;
+                        let gy = b.start[1] as isize + j as isize - depth as isize;
+                        let want = match (
+                            wrap(gx, global[0], periodic[0]),
+                            wrap(gy, global[1], periodic[1]),
+                        ) {
+                            (Some(x), Some(y)) => value(s, x, y),
+                            _ => -1.0,
+                        };
+                        let got = f[s * w * h + j * w + i];
+                        assert_eq!(
+                            got, want,
+                            "rank {rank}/{size}, {global:?} periodic {periodic:?}, depth {depth}, \
+                             plane {s}, padded ({i}, {j})"
+                        );
+                    }
+                }
+            }
+        }
+        let local: Vec<f64> = (0..2)
+            .flat_map(|s| {
+                (0..ny).flat_map(move |j| {
+                    (0..nx).map(move |i| value(s, b.start[0] + i, b.start[1] + j))
+                })
+            })
+            .collect();
+        let all = d.gather(comm, &local).expect("gather");
+        assert_eq!(all.is_some(), rank == 0);
+        if let Some(all) = all {
+            let want: Vec<f64> = (0..2)
+                .flat_map(|s| {
+                    (0..global[1]).flat_map(move |y| (0..global[0]).map(move |x| value(s, x, y)))
+                })
+                .collect();
+            assert_eq!(all, want, "gathered field, {global:?}");
+        }
+    }
+    let x = 0.1 * (rank + 1) as f64;
+    let in_order = (1..size).fold(0.1, |a, r| a + 0.1 * (r + 1) as f64);
+    assert_eq!(comm.all_sum(x).unwrap().to_bits(), in_order.to_bits());
+    assert_eq!(comm.all_max(x).unwrap(), 0.1 * size as f64);
+    assert_eq!(comm.all_min(x).unwrap(), 0.1);
+    let nan = if rank == size - 1 { f64::NAN } else { x };
+    assert!(
+        comm.all_max(nan).unwrap().is_nan(),
+        "a NaN on one rank reaches all"
+    );
+    assert!(comm.all_any(rank == 1).unwrap());
+    assert!(!comm.all_any(false).unwrap());
+    if rank == 0 {
+        println!("SIMKIT_MPI_OK on {size} ranks");
+    }
+}
+
+#[test]
+fn halo_gather_and_reductions_across_ranks() {
+    if is_mpi_child() {
+        let comm = Comm::mpi().expect("MPI initialises");
+        // A failed assertion on one rank must stop all (the others would wait forever).
+        if std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| child(&comm))).is_err() {
+            comm.abort(1);
+        }
+        return;
+    }
+    let Some(outputs) = mpirun_self(NAME, &[2, 3, 4]) else {
+        return;
+    };
+    for (p, stdout) in [2, 3, 4].into_iter().zip(outputs) {
+        let want = format!("SIMKIT_MPI_OK on {p} ranks");
+        assert!(
+            stdout.contains(&want),
+            "mpirun -np {p}: no `{want}`:\n{stdout}"
+        );
+    }
+}

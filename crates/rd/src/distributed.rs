@@ -1,0 +1,402 @@
+//! [`DistributedRd`]: one grid cut into blocks over the ranks of a [`Comm`], each rank
+//! advancing its block on the CPU, bit-identical to the single-process CPU run.
+
+use simkit_backend::comm::{Block, CartDecomposition, Comm};
+use simkit_backend::guard::{blow_up, chunks, first_non_finite};
+use simkit_backend::{Error, Real, Result};
+
+use crate::boundary::{Boundaries, Boundary, fill_ghosts, ghost_value};
+use crate::config::Config;
+use crate::cpu::{interior_pass, padded_max_diffusivity};
+use crate::grid::{Grid, pad};
+use crate::model::Model;
+use crate::stepper::{
+    Integrator, Stepping, check_dt, check_dt_with, check_model, divergence_cause, dt_bound,
+    recheck_bound,
+};
+
+/// Reaction–diffusion of one grid block-decomposed over the ranks of a [`Comm`] (CPU only).
+///
+/// The grid is cut by [`CartDecomposition::new`] (blocks as even as the rank count allows,
+/// uneven splits included; periodic edges make the blocks wrap). Each rank keeps its block
+/// with one ghost layer. Every stencil pass (one per Euler step, two per Heun step) runs the
+/// same row kernel as the single-process CPU backend on the rank's interior, then refreshes
+/// the ghosts: from the neighbouring blocks by a halo exchange in the shift pattern (x, then
+/// y; 4 messages), and on the edges of the domain by the same boundary rule
+/// (`ghost_value`). Each cell therefore sees exactly the inputs, and runs exactly the
+/// arithmetic, of the single-process run, so [`DistributedRd::gather`] returns a grid
+/// bit-identical to [`crate::Rd`] on [`simkit_backend::Backend::Cpu`] for every rank count,
+/// grid size and boundary kind. Temporal blocking ([`Config::steps_per_sweep`]) is not used
+/// here (it would need halos `k` cells deep every `k` steps); it never changes results.
+///
+/// The blow-up checks of [`crate::Rd`] run on every rank at the same steps and are reduced
+/// over the ranks before anything is decided, so all ranks roll back together and return
+/// the same [`Error::BlowUp`] (naming the same first bad cell, in global coordinates) as
+/// the single-process run.
+///
+/// Every method that takes `&mut self` or returns a `Result` is collective: all ranks call
+/// it, in the same order. Each rank builds the run from the whole initial grid (simple,
+/// but every rank holds one copy of it while the run is built).
+///
+/// ```
+/// use simkit_backend::comm::Comm;
+/// use simkit_backend::{Backend, Simulation};
+/// use simkit_rd::{Config, DistributedRd, GrayScott, Rd, Stepping, scenes::gray_scott_square};
+/// # fn main() -> simkit_backend::Result<()> {
+/// let grid = gray_scott_square::<f64>(24, 1.0, 6, 1)?;
+/// let model = GrayScott::new(1.0, 0.5, 0.04, 0.06)?;
+/// let config = Config::new(Stepping::euler(0.2));
+/// // `Comm::mpi()?` under `mpirun -np P` (feature `mpi`); here one process.
+/// let mut dist = DistributedRd::new(&grid, model.clone(), &config, Comm::serial())?;
+/// dist.step(30)?;
+/// let mut one = Rd::new(grid, model, &config, Backend::Cpu)?;
+/// one.step(30)?;
+/// if let Some(gathered) = dist.gather()? {
+///     assert_eq!(gathered, one.state()?); // on rank 0
+/// }
+/// # Ok(())
+/// # }
+/// ```
+pub struct DistributedRd<T: Real, M: Model> {
+    comm: Comm,
+    decomposition: CartDecomposition,
+    block: Block,
+    model: M,
+    stepping: Stepping,
+    check_every: u32,
+    h: f64,
+    boundaries: Boundaries,
+    /// The padded species planes of this rank's block, `(len_x + 2) x (len_y + 2)` each.
+    cur: Vec<T>,
+    tmp: Vec<T>,
+    /// The padded coefficient planes of the block (ghosts from the global grid; static).
+    coef: Vec<T>,
+    /// The padded fields at the last check that passed.
+    good: Vec<T>,
+    steps: u64,
+}
+
+impl<T: Real, M: Model> std::fmt::Debug for DistributedRd<T, M> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("DistributedRd")
+            .field("comm", &self.comm)
+            .field("decomposition", &self.decomposition)
+            .field("model", &self.model)
+            .field("stepping", &self.stepping)
+            .field("steps", &self.steps)
+            .finish()
+    }
+}
+
+/// The padded window of block `b` (one ghost layer) out of padded global planes.
+fn window<T: Real>(global: &[T], gnx: usize, gny: usize, b: &Block) -> Vec<T> {
+    let (gw, gplane) = (gnx + 2, (gnx + 2) * (gny + 2));
+    let [x0, y0] = b.start;
+    let [nx, ny] = b.len;
+    let mut out = Vec::with_capacity((global.len() / gplane) * (nx + 2) * (ny + 2));
+    for p in global.chunks(gplane) {
+        for j in y0..y0 + ny + 2 {
+            out.extend_from_slice(&p[j * gw + x0..j * gw + x0 + nx + 2]);
+        }
+    }
+    out
+}
+
+/// The first non-finite value of a rank, as `[class, species, y, x, value]` in `f64`
+/// (class 0: an interior cell, `(x, y)` global; class 1: a ghost cell on the domain edge,
+/// `(x, y)` global padded; class 2: none), ordered like the single-process scan.
+type BadCell = [f64; 5];
+
+impl<T: Real, M: Model> DistributedRd<T, M> {
+    /// Validates `config`, checks the model against `grid` and `dt` against the stability
+    /// bound (as [`crate::Rd::new`] does, with the same errors on every rank), cuts the grid
+    /// into `comm.size()` blocks and keeps this rank's. Collective; every rank passes the
+    /// same grid, model and config.
+    ///
+    /// Errors: those of [`crate::Rd::new`] on the CPU, or a grid too small for
+    /// `comm.size()` blocks of at least one cell.
+    pub fn new(grid: &Grid<T>, model: M, config: &Config, comm: Comm) -> Result<Self> {
+        config.validate()?;
+        check_model(&model, grid)?;
+        check_dt(&model, grid, &config.stepping)?;
+        let (gnx, gny) = (grid.nx(), grid.ny());
+        let bc = grid.boundaries().clone();
+        let periodic = [
+            bc.west == Boundary::Periodic,
+            bc.south == Boundary::Periodic,
+        ];
+        let decomposition = CartDecomposition::new([gnx, gny], comm.size(), periodic)?;
+        let block = decomposition.block(comm.rank());
+        let gplane = (gnx + 2) * (gny + 2);
+        let mut all = grid.padded();
+        for (s, f) in all.chunks_mut(gplane).enumerate() {
+            fill_ghosts(f, gnx, gny, s, &bc);
+        }
+        let cur = window(&all, gnx, gny, &block);
+        drop(all);
+        let coef_fields: Vec<Vec<T>> = model
+            .coefficients()
+            .iter()
+            .map(|c| c.iter().map(|&v| T::from_f64(v)).collect())
+            .collect();
+        let mut coef = pad(&coef_fields, gnx, gny);
+        let cbc = bc.for_coefficients();
+        for f in coef.chunks_mut(gplane) {
+            fill_ghosts(f, gnx, gny, 0, &cbc);
+        }
+        let coef = window(&coef, gnx, gny, &block);
+        Ok(Self {
+            comm,
+            decomposition,
+            block,
+            model,
+            stepping: config.stepping,
+            check_every: config.check_every,
+            h: grid.h(),
+            boundaries: bc,
+            tmp: cur.clone(),
+            good: cur.clone(),
+            cur,
+            coef,
+            steps: 0,
+        })
+    }
+
+    /// The communicator.
+    pub fn comm(&self) -> &Comm {
+        &self.comm
+    }
+
+    /// How the grid is cut over the ranks.
+    pub fn decomposition(&self) -> &CartDecomposition {
+        &self.decomposition
+    }
+
+    /// This rank's block of the grid.
+    pub fn block(&self) -> Block {
+        self.block
+    }
+
+    /// The model.
+    pub fn model(&self) -> &M {
+        &self.model
+    }
+
+    /// The time-stepping settings.
+    pub fn stepping(&self) -> Stepping {
+        self.stepping
+    }
+
+    /// Steps taken so far.
+    pub fn steps_done(&self) -> u64 {
+        self.steps
+    }
+
+    /// Advances `steps` steps with the checks of [`crate::Rd`] (same steps checked, same
+    /// errors, same rollback), decided together by all ranks. Collective.
+    pub fn step(&mut self, steps: u32) -> Result<()> {
+        if self.steps.checked_add(u64::from(steps)).is_none() {
+            return Err(Error::invalid(
+                "steps",
+                steps,
+                format!(
+                    "{} steps are done: the step counter would overflow",
+                    self.steps
+                ),
+            ));
+        }
+        if self.model.field_dependent_diffusivity() {
+            let d = self.max_diffusivity()?;
+            check_dt_with(self.model.name(), d, self.h, &self.stepping)?;
+        }
+        if steps == 0 {
+            return Ok(());
+        }
+        self.checked_run(steps)
+    }
+
+    /// The whole grid on rank 0 (`Some`), `None` on the other ranks. Collective.
+    pub fn gather(&self) -> Result<Option<Grid<T>>> {
+        let [nx, ny] = self.block.len;
+        let w = nx + 2;
+        let plane = w * (ny + 2);
+        let mut local = Vec::with_capacity(self.cur.len() / plane * nx * ny);
+        for p in self.cur.chunks(plane) {
+            for j in 1..=ny {
+                local.extend_from_slice(&p[j * w + 1..j * w + 1 + nx]);
+            }
+        }
+        let Some(all) = self.decomposition.gather(&self.comm, &local)? else {
+            return Ok(None);
+        };
+        let [gnx, gny] = self.decomposition.global();
+        let fields = all.chunks(gnx * gny).map(<[T]>::to_vec).collect();
+        Grid::new(gnx, gny, self.h, self.boundaries.clone(), fields).map(Some)
+    }
+
+    /// The model's largest effective diffusivity over the whole grid (NaN if any rank's is).
+    fn max_diffusivity(&self) -> Result<f64> {
+        let [nx, ny] = self.block.len;
+        let local = padded_max_diffusivity(&self.model, nx, ny, &self.cur, &self.coef);
+        self.comm.all_max(local)
+    }
+
+    /// Steps in stretches ending on multiples of `check_every`, each followed by the finite
+    /// check over all ranks (and, inside the call, the bound re-check).
+    fn checked_run(&mut self, steps: u32) -> Result<()> {
+        let recheck = self.model.field_dependent_diffusivity();
+        self.good.copy_from_slice(&self.cur);
+        let mut good_step = self.steps;
+        let mut stretches = chunks(self.steps, steps, self.check_every).peekable();
+        while let Some(n) = stretches.next() {
+            self.advance(n)?;
+            self.steps += u64::from(n);
+            if let Some(what) = self.first_bad_cell()? {
+                let failed = self.steps;
+                self.cur.copy_from_slice(&self.good);
+                self.steps = good_step;
+                let bound = dt_bound(self.max_diffusivity()?, self.h);
+                let cause = divergence_cause(self.model.name(), &self.stepping, bound);
+                return Err(blow_up(failed, good_step, what, cause));
+            }
+            if stretches.peek().is_some() {
+                if recheck {
+                    let d = self.max_diffusivity()?;
+                    recheck_bound(self.model.name(), d, self.h, &self.stepping, self.steps)?;
+                }
+                self.good.copy_from_slice(&self.cur);
+                good_step = self.steps;
+            }
+        }
+        Ok(())
+    }
+
+    /// Advances `steps` steps, one stencil pass per stage, ghosts refreshed after each.
+    fn advance(&mut self, steps: u32) -> Result<()> {
+        let mut cur = std::mem::take(&mut self.cur);
+        let mut tmp = std::mem::take(&mut self.tmp);
+        let mut r = Ok(());
+        for _ in 0..steps {
+            r = match self.stepping.integrator {
+                Integrator::Euler => self.pass(&cur, &mut tmp, false).map(|()| {
+                    std::mem::swap(&mut cur, &mut tmp);
+                }),
+                Integrator::Heun => self
+                    .pass(&cur, &mut tmp, false)
+                    .and_then(|()| self.pass(&tmp, &mut cur, true)),
+            };
+            if r.is_err() {
+                break;
+            }
+        }
+        self.cur = cur;
+        self.tmp = tmp;
+        r
+    }
+
+    /// One stencil pass over the block from `src` into `dst`, then `dst`'s ghosts: halo
+    /// exchange with the neighbours, the boundary rule on the domain edges.
+    fn pass(&self, src: &[T], dst: &mut [T], average: bool) -> Result<()> {
+        let [nx, ny] = self.block.len;
+        let ih2 = 1.0 / (self.h * self.h);
+        let dt = self.stepping.dt;
+        interior_pass(&self.model, nx, ny, &self.coef, src, dst, dt, ih2, average);
+        self.decomposition.exchange_halo(&self.comm, dst, 1)?;
+        let nb = self.decomposition.neighbors(self.comm.rank());
+        let w = nx + 2;
+        let bc = &self.boundaries;
+        for (s, f) in dst.chunks_mut(w * (ny + 2)).enumerate() {
+            // A side without a neighbour is a domain edge that is not periodic: the
+            // opposite cell is never read there.
+            let g = |b: &Boundary, inner: T| ghost_value(b, s, inner, inner);
+            for j in 1..=ny {
+                let r = j * w;
+                if nb.west.is_none() {
+                    f[r] = g(&bc.west, f[r + 1]);
+                }
+                if nb.east.is_none() {
+                    f[r + nx + 1] = g(&bc.east, f[r + nx]);
+                }
+            }
+            for i in 1..=nx {
+                if nb.south.is_none() {
+                    f[i] = g(&bc.south, f[w + i]);
+                }
+                if nb.north.is_none() {
+                    f[(ny + 1) * w + i] = g(&bc.north, f[ny * w + i]);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// This rank's first non-finite value (see [`BadCell`]).
+    fn local_bad_cell(&self) -> BadCell {
+        let none = [2.0, 0.0, 0.0, 0.0, 0.0];
+        if first_non_finite(&self.cur).is_none() {
+            return none;
+        }
+        let [nx, ny] = self.block.len;
+        let [x0, y0] = self.block.start;
+        let [gnx, gny] = self.decomposition.global();
+        let w = nx + 2;
+        let plane = w * (ny + 2);
+        let bad = |v: T| !v.to_f64().is_finite();
+        // Interior cells in species, row, column order: the rank's first is its smallest
+        // in the global order too.
+        for (s, p) in self.cur.chunks(plane).enumerate() {
+            for j in 1..=ny {
+                for i in 1..=nx {
+                    let v = p[j * w + i];
+                    if bad(v) {
+                        let (x, y) = (x0 + i - 1, y0 + j - 1);
+                        return [0.0, s as f64, y as f64, x as f64, v.to_f64()];
+                    }
+                }
+            }
+        }
+        // Ghost cells on the domain edge, corners excepted (padded global coordinates; the
+        // other ghosts are copies of neighbours' cells, which those ranks report).
+        for (s, p) in self.cur.chunks(plane).enumerate() {
+            for j in 0..ny + 2 {
+                for i in 0..w {
+                    let (gx, gy) = (x0 + i, y0 + j);
+                    let (side_x, side_y) = (gx == 0 || gx == gnx + 1, gy == 0 || gy == gny + 1);
+                    // The domain's corner ghosts are never read (the single-process run
+                    // leaves them at 0); here they may hold copies from a y-shift.
+                    if (side_x != side_y) && bad(p[j * w + i]) {
+                        return [1.0, s as f64, gy as f64, gx as f64, p[j * w + i].to_f64()];
+                    }
+                }
+            }
+        }
+        none
+    }
+
+    /// The first non-finite value over all ranks, described as the single-process check
+    /// does; the same on every rank. Collective.
+    fn first_bad_cell(&self) -> Result<Option<String>> {
+        let all = self.comm.all_gather(&self.local_bad_cell())?;
+        let first = all.chunks(5).filter(|c| c[0] < 2.0).min_by(|a, b| {
+            a[..4]
+                .partial_cmp(&b[..4])
+                .unwrap_or(std::cmp::Ordering::Equal)
+        });
+        let Some(c) = first else {
+            return Ok(None);
+        };
+        let (s, y, x, v) = (
+            c[1] as usize,
+            c[2] as usize,
+            c[3] as usize,
+            T::from_f64(c[4]),
+        );
+        Ok(Some(if c[0] == 0.0 {
+            format!("species {s} at cell ({x}, {y}) = {v}")
+        } else {
+            let [gnx, gny] = self.decomposition.global();
+            let (x, y) = (x.clamp(1, gnx) - 1, y.clamp(1, gny) - 1);
+            format!("species {s} in the ghost cell next to cell ({x}, {y}) = {v}")
+        }))
+    }
+}
