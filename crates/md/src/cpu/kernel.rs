@@ -2,14 +2,20 @@
 //! ([`HalfListBlock`]) at a time, in lanes.
 //!
 //! For particle `i`, the same-image partners are taken `W = 16` at a time (one AVX-512
-//! register of `f32`, two of `f64`; 16 measured about 9 % faster than 8 in `f64` on the
-//! `in.lj` liquid, 32 slower in `f32`): a gather fills lane arrays with the separations and
-//! the coefficients of the species pair (`coeff[s_i * n_species + s_j]`, no branch on the
-//! species), one loop over the lanes evaluates [`pair_force_energy`] (the
+//! register of `f32`, two of `f64`; on the `in.lj` liquid 16 measured about 12 % faster
+//! than 8 in `f64` and 32 much slower in both): a gather fills lane arrays with the
+//! separations and the coefficients of the species pair (`coeff[s_i * n_species + s_j]`,
+//! no branch on the species), one loop over the lanes evaluates [`pair_force_energy`] (the
 //! law of every CPU path, called as is; the compiler turns its cutoff test into a lane
 //! mask and the loop into vector instructions), and a scalar loop subtracts the reactions
 //! from the partners. Lane `l` of `i`'s accumulators sums partners `l, l + W, ...`; the
-//! lanes are added in order at the end, then the cross-image partners one by one.
+//! lanes are added in order at the end, then the cross-image partners one by one. The
+//! full chunks need no tail handling; the last, short chunk runs at width `W / 2` when it
+//! fits (about 6 % of a step in `f64`). The energy and virial sums are a compile-time
+//! option: the engine asks for them only at the steps whose energies are read (about
+//! 20 % of a step in `f64`; the forces are the same bits either way). Skipping the
+//! reactions of the lanes beyond the cutoff was measured slower (the branches
+//! mispredict).
 //!
 //! The same Rust function is compiled three times: for AVX-512 (`avx512f`, `avx512vl`),
 //! for AVX2 (`avx2`, `fma`) and for the baseline target; [`Kernel::detect`] picks one at run
@@ -89,7 +95,8 @@ pub(crate) struct Inputs<'a, T, const D: usize> {
 /// Forces of block `nb`: `local[k]` gets the force on slot `nb.start() + k` from every
 /// pair the block lists (partners' reactions included: `local` spans the block and every
 /// slot its pairs reach, see [`reach`]), `ew[k]` the sums of `phi` and `r . F` over the
-/// particle's listed pairs (each pair counted once, at its first particle).
+/// particle's listed pairs (each pair counted once, at its first particle) when `energy`
+/// is set (`ew` is left as it is otherwise; the forces are the same bits either way).
 ///
 /// # Safety
 /// Every partner `j` of `nb` must satisfy `j < pos.len()` and `j < nb.start() +
@@ -100,9 +107,10 @@ pub(crate) unsafe fn block_forces<T: Real, const D: usize>(
     nb: &HalfListBlock<T, D>,
     local: &mut [[T; D]],
     ew: &mut [[T; 2]],
+    energy: bool,
 ) {
     // SAFETY: passed on from the caller.
-    unsafe { dispatch::<T, D, LANES>(kernel, inp, nb, local, ew) }
+    unsafe { dispatch::<T, D, LANES, { LANES / 2 }>(kernel, inp, nb, local, ew, energy) }
 }
 
 /// The slot one past the last that block `nb`'s pairs touch (at least its end).
@@ -117,22 +125,23 @@ pub(crate) fn reach<T, const D: usize>(nb: &HalfListBlock<T, D>) -> usize {
 /// # Safety
 /// As [`block_forces`].
 #[inline(always)]
-unsafe fn dispatch<T: Real, const D: usize, const W: usize>(
+unsafe fn dispatch<T: Real, const D: usize, const W: usize, const H: usize>(
     kernel: Kernel,
     inp: &Inputs<'_, T, D>,
     nb: &HalfListBlock<T, D>,
     local: &mut [[T; D]],
     ew: &mut [[T; 2]],
+    energy: bool,
 ) {
     match kernel {
         #[cfg(target_arch = "x86_64")]
         // SAFETY: `Kernel::detect` only returns Avx512 when the CPU has these features.
-        Kernel::Avx512 => unsafe { lanes_avx512::<T, D, W>(inp, nb, local, ew) },
+        Kernel::Avx512 => unsafe { lanes_avx512::<T, D, W, H>(inp, nb, local, ew, energy) },
         #[cfg(target_arch = "x86_64")]
         // SAFETY: `Kernel::detect` only returns Avx2 (or better) when the CPU has AVX2, FMA.
-        Kernel::Avx2 => unsafe { lanes_avx2::<T, D, W>(inp, nb, local, ew) },
+        Kernel::Avx2 => unsafe { lanes_avx2::<T, D, W, H>(inp, nb, local, ew, energy) },
         // SAFETY: as [`block_forces`].
-        _ => unsafe { lanes::<T, D, W>(inp, nb, local, ew) },
+        _ => unsafe { lanes::<T, D, W, H>(inp, nb, local, ew, energy) },
     }
 }
 
@@ -142,14 +151,15 @@ unsafe fn dispatch<T: Real, const D: usize, const W: usize>(
 /// The CPU must have AVX-512F, AVX-512VL, AVX2 and FMA; and as [`block_forces`].
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
-unsafe fn lanes_avx512<T: Real, const D: usize, const W: usize>(
+unsafe fn lanes_avx512<T: Real, const D: usize, const W: usize, const H: usize>(
     inp: &Inputs<'_, T, D>,
     nb: &HalfListBlock<T, D>,
     local: &mut [[T; D]],
     ew: &mut [[T; 2]],
+    energy: bool,
 ) {
     // SAFETY: passed on from the caller.
-    unsafe { lanes::<T, D, W>(inp, nb, local, ew) };
+    unsafe { lanes::<T, D, W, H>(inp, nb, local, ew, energy) };
 }
 
 /// [`lanes`] compiled for AVX2.
@@ -158,34 +168,37 @@ unsafe fn lanes_avx512<T: Real, const D: usize, const W: usize>(
 /// The CPU must have AVX2 and FMA; and as [`block_forces`].
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn lanes_avx2<T: Real, const D: usize, const W: usize>(
+unsafe fn lanes_avx2<T: Real, const D: usize, const W: usize, const H: usize>(
     inp: &Inputs<'_, T, D>,
     nb: &HalfListBlock<T, D>,
     local: &mut [[T; D]],
     ew: &mut [[T; 2]],
+    energy: bool,
 ) {
     // SAFETY: passed on from the caller.
-    unsafe { lanes::<T, D, W>(inp, nb, local, ew) };
+    unsafe { lanes::<T, D, W, H>(inp, nb, local, ew, energy) };
 }
 
 /// The kernel body (see the module doc), `W` lanes; the coefficient gather is left out
-/// for a single species.
+/// for a single species, the energy and virial sums when `energy` is not set.
 ///
 /// # Safety
 /// As [`block_forces`].
 #[inline(always)]
-unsafe fn lanes<T: Real, const D: usize, const W: usize>(
+unsafe fn lanes<T: Real, const D: usize, const W: usize, const H: usize>(
     inp: &Inputs<'_, T, D>,
     nb: &HalfListBlock<T, D>,
     local: &mut [[T; D]],
     ew: &mut [[T; 2]],
+    energy: bool,
 ) {
     // SAFETY: passed on from the caller.
     unsafe {
-        if inp.n_species == 1 {
-            body::<T, D, W, true>(inp, nb, local, ew);
-        } else {
-            body::<T, D, W, false>(inp, nb, local, ew);
+        match (inp.n_species == 1, energy) {
+            (true, true) => body::<T, D, W, H, true, true>(inp, nb, local, ew),
+            (true, false) => body::<T, D, W, H, true, false>(inp, nb, local, ew),
+            (false, true) => body::<T, D, W, H, false, true>(inp, nb, local, ew),
+            (false, false) => body::<T, D, W, H, false, false>(inp, nb, local, ew),
         }
     }
 }
@@ -193,7 +206,14 @@ unsafe fn lanes<T: Real, const D: usize, const W: usize>(
 /// # Safety
 /// As [`block_forces`].
 #[inline(always)]
-unsafe fn body<T: Real, const D: usize, const W: usize, const SINGLE: bool>(
+unsafe fn body<
+    T: Real,
+    const D: usize,
+    const W: usize,
+    const H: usize,
+    const SINGLE: bool,
+    const ENERGY: bool,
+>(
     inp: &Inputs<'_, T, D>,
     nb: &HalfListBlock<T, D>,
     local: &mut [[T; D]],
@@ -204,80 +224,55 @@ unsafe fn body<T: Real, const D: usize, const W: usize, const SINGLE: bool>(
     let start = nb.start();
     let (offsets, partners) = (nb.offsets(), nb.partners());
     let (img_offsets, img_partners) = (nb.image_offsets(), nb.image_partners());
-    // Unused lanes get the squared distance `pad^2`, beyond every cutoff: the law gives
-    // (0, 0) there, and adding +0 leaves a sum unchanged (a sum started at +0 is never -0).
-    let pad2 = inp.pad * inp.pad;
     for (k, ew) in ew.iter_mut().enumerate().take(nb.len()) {
         let i = start + k;
         let xi = pos[i];
         let row = &coeff[species[i] as usize * ns..][..ns];
-        let mut fa = [[T::ZERO; W]; D];
-        let mut ea = [T::ZERO; W];
-        let mut wa = [T::ZERO; W];
+        let mut acc = Acc {
+            f: [[T::ZERO; W]; D],
+            e: [T::ZERO; W],
+            w: [T::ZERO; W],
+        };
         let list = &partners[offsets[k] as usize..offsets[k + 1] as usize];
-        for chunk in list.chunks(W) {
-            // Gather (unused lanes read particle `i` itself: a zero separation, whose
-            // squared distance is replaced by `pad^2` below).
-            let cnt = chunk.len();
-            let mut idx = [i as u32; W];
-            idx[..cnt].copy_from_slice(chunk);
-            let mut sep = [[T::ZERO; W]; D];
-            for l in 0..W {
-                // SAFETY: `idx[l]` is `i` or a partner of `i`, both below `pos.len()` (the
-                // caller's guarantee).
-                let xj = unsafe { pos.get_unchecked(idx[l] as usize) };
-                for d in 0..D {
-                    sep[d][l] = xi[d] - xj[d];
-                }
-            }
-            let c0 = row[0];
-            let [mut c12, mut c6, mut rc2, mut shift] =
-                [c0.c12, c0.c6, c0.rc2, c0.shift].map(|x| [x; W]);
-            if !SINGLE {
-                for (l, &j) in chunk.iter().enumerate() {
-                    let c = &row[species[j as usize] as usize];
-                    (c12[l], c6[l], rc2[l], shift[l]) = (c.c12, c.c6, c.rc2, c.shift);
-                }
-            }
-            // The law, lane by lane (vectorised).
-            let mut fp = [[T::ZERO; W]; D];
-            for l in 0..W {
-                let mut r2 = T::ZERO;
-                for s in &sep {
-                    r2 += s[l] * s[l];
-                }
-                let r2 = if l < cnt { r2 } else { pad2 };
-                let c = PairCoeff {
-                    c12: c12[l],
-                    c6: c6[l],
-                    rc2: rc2[l],
-                    shift: shift[l],
-                };
-                let (fr, e) = pair_force_energy(&c, r2);
-                for d in 0..D {
-                    fp[d][l] = fr * sep[d][l];
-                    fa[d][l] += fp[d][l];
-                }
-                ea[l] += e;
-                wa[l] += fr * r2;
-            }
-            // Reactions.
-            for (l, &j) in chunk.iter().enumerate() {
-                // SAFETY: `start < j < start + local.len()` (the caller's guarantee).
-                let fj = unsafe { local.get_unchecked_mut(j as usize - start) };
-                for d in 0..D {
-                    fj[d] = fj[d] - fp[d][l];
-                }
-            }
+        let mut full = list.chunks_exact(W);
+        for chunk in &mut full {
+            let idx: &[u32; W] = chunk.try_into().unwrap_or_else(|_| unreachable!());
+            // SAFETY: passed on from the caller.
+            unsafe {
+                chunk_forces::<T, D, W, W, SINGLE, ENERGY>(
+                    inp, row, xi, idx, W, start, local, &mut acc,
+                )
+            };
+        }
+        let rest = full.remainder();
+        // The last chunk at half width when it fits (the unused lanes read particle `i`
+        // itself: a zero separation, whose squared distance is replaced by `pad^2`).
+        let cnt = rest.len();
+        if cnt > H {
+            let idx: [u32; W] = std::array::from_fn(|l| rest.get(l).copied().unwrap_or(i as u32));
+            // SAFETY: passed on from the caller.
+            unsafe {
+                chunk_forces::<T, D, W, W, SINGLE, ENERGY>(
+                    inp, row, xi, &idx, cnt, start, local, &mut acc,
+                )
+            };
+        } else if cnt > 0 {
+            let idx: [u32; H] = std::array::from_fn(|l| rest.get(l).copied().unwrap_or(i as u32));
+            // SAFETY: passed on from the caller.
+            unsafe {
+                chunk_forces::<T, D, H, W, SINGLE, ENERGY>(
+                    inp, row, xi, &idx, cnt, start, local, &mut acc,
+                )
+            };
         }
         let mut fi = [T::ZERO; D];
         let (mut e, mut w) = (T::ZERO, T::ZERO);
         for l in 0..W {
-            for d in 0..D {
-                fi[d] += fa[d][l];
+            for (f, a) in fi.iter_mut().zip(&acc.f) {
+                *f += a[l];
             }
-            e += ea[l];
-            w += wa[l];
+            e += acc.e[l];
+            w += acc.w[l];
         }
         for &(j, shift) in &img_partners[img_offsets[k] as usize..img_offsets[k + 1] as usize] {
             let j = j as usize;
@@ -293,14 +288,107 @@ unsafe fn body<T: Real, const D: usize, const W: usize, const SINGLE: bool>(
                 fi[d] += f;
                 fj[d] = fj[d] - f;
             }
-            e += pe;
-            w += fr * r2;
+            if ENERGY {
+                e += pe;
+                w += fr * r2;
+            }
         }
         let own = &mut local[k];
         for d in 0..D {
             own[d] += fi[d];
         }
-        *ew = [e, w];
+        if ENERGY {
+            *ew = [e, w];
+        }
+    }
+}
+
+/// Particle `i`'s lane accumulators: force, `phi` and `r . F` (lane `l` sums partners
+/// `l, l + W, ...`).
+struct Acc<T, const D: usize, const W: usize> {
+    f: [[T; W]; D],
+    e: [T; W],
+    w: [T; W],
+}
+
+/// One chunk of `C <= W` of `i`'s partners, into lanes `0..C` of `acc`: `idx[..cnt]` are
+/// partners, the other lanes `i` itself (given the squared distance `pad^2`, beyond every
+/// cutoff: the law gives (0, 0) there, and adding +0 leaves a sum unchanged, a sum started
+/// at +0 being never -0; so a short last chunk gives the same bits at `C = W` or `W / 2`).
+///
+/// # Safety
+/// As [`block_forces`], `idx` holding `i` or partners of `i`, `cnt <= C <= W`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+unsafe fn chunk_forces<
+    T: Real,
+    const D: usize,
+    const C: usize,
+    const W: usize,
+    const SINGLE: bool,
+    const ENERGY: bool,
+>(
+    inp: &Inputs<'_, T, D>,
+    row: &[PairCoeff<T>],
+    xi: [T; D],
+    idx: &[u32; C],
+    cnt: usize,
+    start: usize,
+    local: &mut [[T; D]],
+    acc: &mut Acc<T, D, W>,
+) {
+    let (pos, species) = (inp.pos, inp.species);
+    // Gather.
+    let mut sep = [[T::ZERO; C]; D];
+    for l in 0..C {
+        // SAFETY: `idx[l]` is `i` or a partner of `i`, both below `pos.len()` (the caller's
+        // guarantee).
+        let xj = unsafe { pos.get_unchecked(idx[l] as usize) };
+        for d in 0..D {
+            sep[d][l] = xi[d] - xj[d];
+        }
+    }
+    let c0 = row[0];
+    let [mut c12, mut c6, mut rc2, mut shift] = [c0.c12, c0.c6, c0.rc2, c0.shift].map(|x| [x; C]);
+    if !SINGLE {
+        for (l, &j) in idx[..cnt].iter().enumerate() {
+            // SAFETY: `j < pos.len() == species.len()` (the caller's guarantee).
+            let c = &row[unsafe { *species.get_unchecked(j as usize) } as usize];
+            (c12[l], c6[l], rc2[l], shift[l]) = (c.c12, c.c6, c.rc2, c.shift);
+        }
+    }
+    let pad2 = inp.pad * inp.pad;
+    // The law, lane by lane (vectorised).
+    let mut fp = [[T::ZERO; C]; D];
+    for l in 0..C {
+        let mut r2 = T::ZERO;
+        for s in &sep {
+            r2 += s[l] * s[l];
+        }
+        let r2 = if cnt == C || l < cnt { r2 } else { pad2 };
+        let c = PairCoeff {
+            c12: c12[l],
+            c6: c6[l],
+            rc2: rc2[l],
+            shift: shift[l],
+        };
+        let (fr, e) = pair_force_energy(&c, r2);
+        for d in 0..D {
+            fp[d][l] = fr * sep[d][l];
+            acc.f[d][l] += fp[d][l];
+        }
+        if ENERGY {
+            acc.e[l] += e;
+            acc.w[l] += fr * r2;
+        }
+    }
+    // Reactions.
+    for (l, &j) in idx[..cnt].iter().enumerate() {
+        // SAFETY: `start < j < start + local.len()` (the caller's guarantee).
+        let fj = unsafe { local.get_unchecked_mut(j as usize - start) };
+        for d in 0..D {
+            fj[d] = fj[d] - fp[d][l];
+        }
     }
 }
 
@@ -350,6 +438,7 @@ mod tests {
         species: &[u32],
         list: &BlockedHalfList<T, 3>,
         coeff: &[PairCoeff<T>],
+        energy: bool,
     ) -> (Vec<[T; 3]>, Vec<[T; 2]>) {
         let inp = Inputs {
             pos,
@@ -363,7 +452,16 @@ mod tests {
         for nb in list.blocks() {
             let mut local = vec![[T::ZERO; 3]; reach(nb) - nb.start()];
             // SAFETY: `local` spans `reach(nb)`, the list was built for `pos`.
-            unsafe { block_forces(kernel, &inp, nb, &mut local, &mut ew[nb.start()..nb.end()]) };
+            unsafe {
+                block_forces(
+                    kernel,
+                    &inp,
+                    nb,
+                    &mut local,
+                    &mut ew[nb.start()..nb.end()],
+                    energy,
+                )
+            };
             for (k, x) in local.iter().enumerate() {
                 for d in 0..3 {
                     f[nb.start() + k][d] += x[d];
@@ -381,7 +479,7 @@ mod tests {
         let (pos, species, list) = liquid::<T>(3000, 15.0);
         assert!(list.blocks().len() > 2 && list.pair_count() > 50_000);
         let coeff = table().coefficients::<T>(true);
-        let (f0, e0) = run(Kernel::Portable, &pos, &species, &list, &coeff);
+        let (f0, e0) = run(Kernel::Portable, &pos, &species, &list, &coeff, true);
         // Against a plain loop over every pair with the minimum image, in f64.
         let c64 = table().coefficients::<f64>(true);
         let l = 15.0;
@@ -415,8 +513,12 @@ mod tests {
         };
         assert!(worst < tol, "{name}: {worst:e}");
         for kernel in Kernel::available() {
-            let (f, e) = run(kernel, &pos, &species, &list, &coeff);
+            let (f, e) = run(kernel, &pos, &species, &list, &coeff, true);
             assert_eq!(bits(&f), bits(&f0), "{name} {kernel:?}");
+            // Without the energies: the same forces, `ew` untouched.
+            let (f, e_off) = run(kernel, &pos, &species, &list, &coeff, false);
+            assert_eq!(bits(&f), bits(&f0), "{name} {kernel:?} without energies");
+            assert!(e_off.iter().flatten().all(|x| x.to_f64().to_bits() == 0));
             let eb = |v: &[[T; 2]]| -> Vec<u64> {
                 v.iter().flatten().map(|x| x.to_f64().to_bits()).collect()
             };

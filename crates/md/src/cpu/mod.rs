@@ -84,7 +84,9 @@ pub(crate) struct CpuEngine<const D: usize, T: Real> {
     acc: Vec<[T; D]>,
     /// Total force per slot.
     force: Vec<[T; D]>,
-    /// Per slot, `sum phi` and `sum r . F` over the pairs it lists (each pair once).
+    /// Per slot, `sum phi` and `sum r . F` over the pairs it lists (each pair once), at
+    /// the positions of the last step of each checked chunk (the state `check`, the
+    /// snapshot and the diagnostics see; the other steps leave them out).
     ew: Vec<[T; 2]>,
     /// The positions at the last list build (wrapped, in slot order).
     reference: Vec<[T; D]>,
@@ -252,7 +254,7 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
                 }
             }
         }
-        e.forces()?;
+        e.forces(true)?;
         if saved.is_none() && e.integrator == Integrator::Leapfrog {
             let h = T::from_f64(0.5 * dt);
             kick(&mut e.vel, &e.acc, h);
@@ -382,9 +384,9 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
         out
     }
 
-    /// Forces, potential energy and virial at the current positions (the list rebuilt
-    /// first if a particle moved more than `skin / 2`).
-    fn forces(&mut self) -> Result<()> {
+    /// Forces at the current positions, with the potential energy and virial when
+    /// `energy` is set (the list rebuilt first if a particle moved more than `skin / 2`).
+    fn forces(&mut self, energy: bool) -> Result<()> {
         if beyond(self.max_displacement2(), self.rebuild2) {
             self.rebuild()?;
         }
@@ -405,7 +407,7 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
             .for_each(|((nb, local), ew)| {
                 // SAFETY: `size_buffers` (after every build) checked that no block reaches
                 // beyond `pos.len()` and sized `local` to the block's reach.
-                unsafe { kernel::block_forces(kern, &inp, nb, local, ew) }
+                unsafe { kernel::block_forces(kern, &inp, nb, local, ew, energy) }
             });
         // Totals: the own block's entry, then the earlier blocks' in block order.
         let local = &self.local;
@@ -497,18 +499,19 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
         }
     }
 
-    fn one_step(&mut self) -> Result<()> {
+    /// One step; `energy`: compute the potential energy and virial at its end.
+    fn one_step(&mut self, energy: bool) -> Result<()> {
         match self.integrator {
             Integrator::VelocityVerlet => {
                 let h = T::from_f64(0.5 * self.dt);
                 kick(&mut self.vel, &self.acc, h);
                 self.move_particles();
-                self.forces()?;
+                self.forces(energy)?;
                 kick(&mut self.vel, &self.acc, h);
             }
             Integrator::Leapfrog => {
                 self.move_particles();
-                self.forces()?;
+                self.forces(energy)?;
                 kick(&mut self.vel, &self.acc, T::from_f64(self.dt));
             }
         }
@@ -654,8 +657,9 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
         for n in chunks(self.steps, steps, self.check_every) {
             self.keep();
             let mut failed = None;
-            for _ in 0..n {
-                if let Err(e) = self.one_step() {
+            for s in 0..n {
+                // The energies only where the check (and the caller) looks: the last step.
+                if let Err(e) = self.one_step(s + 1 == n) {
                     failed = Some((self.steps + 1, e.to_string()));
                     break;
                 }
