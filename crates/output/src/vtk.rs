@@ -121,11 +121,7 @@ impl PointArrays {
         data: &[T],
     ) -> Result<()> {
         self.check_scalar(points, name, data.len())?;
-        self.scalars.push(Array {
-            name: name.into(),
-            components: 1,
-            data: Values::F64(data.iter().map(|&v| v.into()).collect()),
-        });
+        self.push_scalar(name, Values::F64(data.iter().map(|&v| v.into()).collect()));
         Ok(())
     }
 
@@ -136,12 +132,17 @@ impl PointArrays {
         data: &[T],
     ) -> Result<()> {
         self.check_scalar(points, name, data.len())?;
+        self.push_scalar(name, Values::I64(data.iter().map(|&v| v.into()).collect()));
+        Ok(())
+    }
+
+    /// Appends a one-component array (its length already checked).
+    fn push_scalar(&mut self, name: &str, data: Values) {
         self.scalars.push(Array {
             name: name.into(),
             components: 1,
-            data: Values::I64(data.iter().map(|&v| v.into()).collect()),
+            data,
         });
-        Ok(())
     }
 
     fn add_vector<T: Copy + Into<f64>>(
