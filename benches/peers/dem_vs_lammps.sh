@@ -4,30 +4,15 @@
 # Usage (from the repository root): sh benches/peers/dem_vs_lammps.sh [STEPS]
 # Without STEPS: the deck's 2000 steps, dem timed by the criterion bench. With STEPS: that
 # many steps on both sides, dem timed by `examples/dem_box_timer` (one run from the start).
-# Needs `lmp` (Debian package `lammps`) and `mpirun` on PATH for the LAMMPS half.
+# Needs `lmp` (Debian package `lammps`: installed with apt-get when missing and running as
+# root) and `mpirun` on PATH for the LAMMPS half. Shared functions: benches/peers/lib.sh.
 set -e
-N=20000
+. "$(dirname "$0")/lib.sh"
+N=$DEM_N
 STEPS=${1:-2000}
-deck=benches/peers/dem_gran3d.lmp
-lammps_rate() {
-  # $1 = number of MPI ranks; prints particle-steps/s from the "Loop time" line.
-  log=$(mktemp)
-  if [ "$1" -eq 1 ]; then
-    lmp -in "$deck" -var steps "$STEPS" -log none -screen "$log" >/dev/null 2>&1
-  else
-    mpirun --allow-run-as-root --oversubscribe -np "$1" lmp -in "$deck" -var steps "$STEPS" -log none -screen "$log" >/dev/null 2>&1
-  fi
-  awk -v n=$N -v s=$STEPS '/^Loop time/ {printf "%.4g\n", n * s / $4}' "$log"
-  rm -f "$log"
-}
-if command -v lmp >/dev/null 2>&1; then
-  L1=$(lammps_rate 1)
-  L2=$(lammps_rate 2)
-else
-  # A ratio counts only against a peer run on this machine in this session.
-  echo "lmp not found: install LAMMPS (apt-get install lammps) to compare side by side" >&2
-  exit 1
-fi
+lammps_ensure || exit 1
+L1=$(lammps_rate "$DEM_DECK" "$N" "$STEPS" 1)
+L2=$(lammps_rate "$DEM_DECK" "$N" "$STEPS" 2)
 if [ -z "$1" ]; then
   out=$(mktemp)
   cargo bench --bench dem -- dem_box3d_20000/cpu 2>/dev/null | tee "$out" >/dev/null
@@ -40,12 +25,8 @@ if [ -z "$1" ]; then
   rm -f "$out"
 else
   cargo build --release --example dem_box_timer 2>/dev/null
-  timer() {
-    RAYON_NUM_THREADS=$1 target/release/examples/dem_box_timer --steps "$STEPS" |
-      awk '{for (i = 1; i <= NF; i++) if ($i == "particle-steps/s") print $(i - 1)}'
-  }
-  D1=$(timer 1)
-  D2=$(timer 2)
+  D1=$(dem_timer_rate 1 "$STEPS")
+  D2=$(dem_timer_rate 2 "$STEPS")
 fi
 echo "window: $STEPS steps"
 echo "LAMMPS gran/hooke: 1 rank $L1, 2 ranks $L2 particle-steps/s"

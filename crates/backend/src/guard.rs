@@ -50,6 +50,24 @@ pub fn chunks(done: u64, steps: u32, every: u32) -> impl Iterator<Item = u32> {
     })
 }
 
+/// The step count after `steps` more steps from `done`, or the error that names the overflow
+/// of the step counter (every run refuses it before stepping).
+///
+/// ```
+/// use simkit_backend::guard::end_step;
+/// assert_eq!(end_step(10, 5).unwrap(), 15);
+/// assert!(end_step(u64::MAX - 1, 2).is_err());
+/// ```
+pub fn end_step(done: u64, steps: u32) -> crate::Result<u64> {
+    done.checked_add(u64::from(steps)).ok_or_else(|| {
+        Error::invalid(
+            "steps",
+            steps,
+            format!("{done} steps are done: the step counter would overflow"),
+        )
+    })
+}
+
 /// Index of the first value that is NaN or infinite, if any (in parallel for long slices).
 pub fn first_non_finite<T: Real>(values: &[T]) -> Option<usize> {
     const SERIAL: usize = 1 << 15;

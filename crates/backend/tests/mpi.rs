@@ -1,11 +1,11 @@
 //! The communication layer under `mpirun -np P` (P = 2, 3, 4): halo exchange at depths 1
 //! to 3 with and without periodic axes (every ghost cell, corners included, checked against
-//! the global field), gather to rank 0 and the reductions. Built only with the `mpi`
+//! the global field), gather to rank 0, the reductions and the broadcast from rank 0. Built only with the `mpi`
 //! feature; the test launches its own binary under `mpirun` (skipped with a message when
 //! `mpirun` is missing, unless `SIMKIT_REQUIRE_MPI=1`).
 #![cfg(feature = "mpi")]
 
-use simkit_backend::testing::{is_mpi_child, mpirun_self};
+use simkit_backend::testing::check_on_ranks;
 
 use simkit_backend::comm::{CartDecomposition, Comm};
 
@@ -16,7 +16,7 @@ fn value(s: usize, x: usize, y: usize) -> f64 {
     (10_000 * s + 100 * y + x) as f64 + 0.5
 }
 
-fn child(comm: &Comm) {
+fn child(comm: &Comm) -> Result<usize, String> {
     let (rank, size) = (comm.rank(), comm.size());
     for (global, periodic) in [
         ([13, 11], [false, false]),
@@ -103,29 +103,23 @@ fn child(comm: &Comm) {
     );
     assert!(comm.all_any(rank == 1).unwrap());
     assert!(!comm.all_any(false).unwrap());
-    if rank == 0 {
-        println!("SIMKIT_MPI_OK on {size} ranks");
-    }
+    // Rank 0's bytes reach every rank, whatever the others pass; an empty message too.
+    let root: Vec<u8> = (0..1000u32).map(|k| (k * 7 % 251) as u8).collect();
+    let mine = if rank == 0 {
+        Some(root.clone())
+    } else {
+        Some(vec![9; 3])
+    };
+    assert_eq!(comm.broadcast_from_root(mine).unwrap(), root);
+    let empty = comm.broadcast_from_root(Some(Vec::<f64>::new())).unwrap();
+    assert!(empty.is_empty());
+    // Rank 0 without data: an error on every rank, not a hang.
+    let none = if rank == 0 { None } else { Some(vec![1.0f64]) };
+    assert!(comm.broadcast_from_root(none).is_err());
+    Ok(1)
 }
 
 #[test]
 fn halo_gather_and_reductions_across_ranks() {
-    if is_mpi_child() {
-        let comm = Comm::mpi().expect("MPI initialises");
-        // A failed assertion on one rank must stop all (the others would wait forever).
-        if std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| child(&comm))).is_err() {
-            comm.abort(1);
-        }
-        return;
-    }
-    let Some(outputs) = mpirun_self(NAME, &[2, 3, 4]) else {
-        return;
-    };
-    for (p, stdout) in [2, 3, 4].into_iter().zip(outputs) {
-        let want = format!("SIMKIT_MPI_OK on {p} ranks");
-        assert!(
-            stdout.contains(&want),
-            "mpirun -np {p}: no `{want}`:\n{stdout}"
-        );
-    }
+    check_on_ranks(NAME, &[2, 3, 4], 1, child);
 }

@@ -17,6 +17,9 @@
 //! - Checkpoints: [`LatticeGas`] implements [`simkit_backend::Restart`] (`checkpoint`,
 //!   `write_checkpoint`, `resume`, `resume_file`): the settings, the lattice and the step
 //!   counter that keys the random bits, so a resumed run continues bit for bit, on any backend.
+//! - [`DistributedLatticeGas`]: the lattice block-decomposed over the ranks of a
+//!   [`simkit_backend::comm::Comm`] (MPI with the `mpi` feature), bit-identical to one
+//!   process on any rank count; gathers the lattice and writes checkpoints on rank 0.
 //! - [`poiseuille`]: the viscosity from the profile of a body-forced channel.
 //! - [`viscosity`]: the shear-wave viscosity measurement and the FHP-I theory.
 //! - [`field`]: the lattice vectors and [`field::BlockField`], block sums of density and
@@ -45,6 +48,7 @@
 
 pub mod config;
 pub mod cpu;
+mod distributed;
 mod engine;
 pub mod field;
 #[cfg(feature = "gpu")]
@@ -60,6 +64,7 @@ pub mod viscosity;
 pub use config::{Config, CpuMethod, GpuLayout};
 pub use cpu::lut::LutCpu;
 pub use cpu::multispin::MultiSpinCpu;
+pub use distributed::DistributedLatticeGas;
 #[cfg(feature = "gpu")]
 pub use gpu::GpuLattice;
 pub use lattice::{Lattice, Obstacle, ROW_SPACING};

@@ -147,42 +147,54 @@ impl Simulation for LatticeGas {
 /// ```
 impl Restart for LatticeGas {
     fn checkpoint(&mut self) -> Result<Vec<u8>> {
-        let lattice = self.engine.state()?;
-        let saved = Saved {
-            config: self.config.clone(),
-            width: lattice.width() as u64,
-            height: lattice.height() as u64,
-            cells: lattice.cells().to_vec(),
-            steps: self.steps,
-        };
-        checkpoint::encode(
-            env!("CARGO_PKG_NAME"),
-            env!("CARGO_PKG_VERSION"),
-            MODEL,
-            &saved,
-        )
+        encode_checkpoint(&self.config, &self.engine.state()?, self.steps)
     }
 
     fn resume(bytes: &[u8], backend: Backend<'_>) -> Result<Self> {
-        let saved: Saved = checkpoint::decode(
-            bytes,
-            env!("CARGO_PKG_NAME"),
-            env!("CARGO_PKG_VERSION"),
-            MODEL,
-        )?;
-        let size = |name: &str, v: u64| {
-            usize::try_from(v).map_err(|_| {
-                simkit_backend::Error::invalid(name, v, "does not fit this machine's usize")
-            })
-        };
-        let lattice = Lattice::from_cells(
-            size("width", saved.width)?,
-            size("height", saved.height)?,
-            saved.cells,
-        )?;
-        let mut sim = Self::new(lattice, &saved.config, backend)?;
-        sim.engine.set_steps(saved.steps)?;
-        sim.steps = saved.steps;
+        let (config, lattice, steps) = decode_checkpoint(bytes)?;
+        let mut sim = Self::new(lattice, &config, backend)?;
+        sim.engine.set_steps(steps)?;
+        sim.steps = steps;
         Ok(sim)
     }
+}
+
+/// The checkpoint bytes of a run of `config` at `lattice` after `steps` steps (the format
+/// of [`LatticeGas`]'s [`Restart`], also written by [`crate::DistributedLatticeGas`]).
+pub(crate) fn encode_checkpoint(config: &Config, lattice: &Lattice, steps: u64) -> Result<Vec<u8>> {
+    let saved = Saved {
+        config: config.clone(),
+        width: lattice.width() as u64,
+        height: lattice.height() as u64,
+        cells: lattice.cells().to_vec(),
+        steps,
+    };
+    checkpoint::encode(
+        env!("CARGO_PKG_NAME"),
+        env!("CARGO_PKG_VERSION"),
+        MODEL,
+        &saved,
+    )
+}
+
+/// The settings, lattice and step counter of [`encode_checkpoint`] bytes (the lattice
+/// validated by [`Lattice::from_cells`], the settings not yet against it).
+pub(crate) fn decode_checkpoint(bytes: &[u8]) -> Result<(Config, Lattice, u64)> {
+    let saved: Saved = checkpoint::decode(
+        bytes,
+        env!("CARGO_PKG_NAME"),
+        env!("CARGO_PKG_VERSION"),
+        MODEL,
+    )?;
+    let size = |name: &str, v: u64| {
+        usize::try_from(v).map_err(|_| {
+            simkit_backend::Error::invalid(name, v, "does not fit this machine's usize")
+        })
+    };
+    let lattice = Lattice::from_cells(
+        size("width", saved.width)?,
+        size("height", saved.height)?,
+        saved.cells,
+    )?;
+    Ok((saved.config, lattice, saved.steps))
 }

@@ -33,8 +33,9 @@ use crate::MAX_CELLS;
 /// Cells are at least the list range wide (the cutoff plus the skin); a sparse box gets
 /// wider cells, at most about `8 n + 4096` of them (and never more than [`MAX_CELLS`]),
 /// which only costs distance checks at builds. Cells are ordered with the last axis
-/// slowest; within a cell the sort is stable. Distances are computed in `f64` whatever the
-/// precision `T` of the positions.
+/// slowest; within a cell the particles are ordered by their first coordinate (ties keep
+/// their order, so sorting sorted positions again keeps them in place). Distances are
+/// computed in `f64` whatever the precision `T` of the positions.
 ///
 /// ```
 /// use simkit_neighbor::BlockedHalfList;
@@ -97,9 +98,23 @@ pub struct HalfListBlock<T, const D: usize> {
     partners: Vec<u32>,
     image_offsets: Vec<u32>,
     image_partners: Vec<(u32, [T; D])>,
+    reach: usize,
 }
 
 impl<T, const D: usize> HalfListBlock<T, D> {
+    /// Sets [`reach`](Self::reach) from the lists (loops the compiler vectorises; inlined
+    /// into the vector builds).
+    #[inline(always)]
+    fn set_reach(&mut self) {
+        let past = |max: u32, empty: bool| if empty { 0 } else { max as usize + 1 };
+        let same = self.partners.iter().fold(0, |m, &j| m.max(j));
+        let image = self.image_partners.iter().fold(0, |m, &(j, _)| m.max(j));
+        self.reach = self
+            .end
+            .max(past(same, self.partners.is_empty()))
+            .max(past(image, self.image_partners.is_empty()));
+    }
+
     /// First sorted slot of the block.
     #[inline]
     pub fn start(&self) -> usize {
@@ -169,6 +184,15 @@ impl<T, const D: usize> HalfListBlock<T, D> {
             *self.image_offsets.get(k.checked_add(1)?)?,
         );
         self.image_partners.get(a as usize..b as usize)
+    }
+
+    /// One past the largest sorted slot the block's pairs touch: the greatest of
+    /// [`end`](Self::end) and every partner (of both kinds) plus one, found at the build
+    /// (`end()` before the first). A force loop that writes the reactions of the block's
+    /// pairs into a buffer of its own needs slots `start()..reach()`.
+    #[inline]
+    pub fn reach(&self) -> usize {
+        self.reach
     }
 
     /// Number of pairs listed by the block (both kinds).
@@ -276,6 +300,7 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
                 partners: Vec::new(),
                 image_offsets: Vec::new(),
                 image_partners: Vec::new(),
+                reach: ((b + 1) * block_size).min(n),
             })
             .collect();
         Ok(Self {
@@ -361,10 +386,13 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
         }
     }
 
-    /// Counting sort of `pos` by cell (last axis slowest, stable within a cell): returns
+    /// Counting sort of `pos` by cell (last axis slowest), then within each cell by the
+    /// first coordinate (`f64` value; NaN last; a stable sort, so ties keep their current
+    /// order and the result depends only on the positions and their current order): returns
     /// `order`, where `order[k]` is the current index of the particle that goes to sorted
-    /// slot `k`. A coordinate outside the box goes to the nearest boundary cell; periodic
-    /// coordinates must have been wrapped into the box. A NaN coordinate goes to the first
+    /// slot `k`. Positions already in this order are left in place (identity `order`). A
+    /// coordinate outside the box goes to the nearest boundary cell; periodic coordinates
+    /// must have been wrapped into the box. A NaN coordinate goes to the first
     /// cell, and such a particle is within range of no other (a NaN distance is not below
     /// the range): check positions for non-finite values before the list is used (the
     /// simulation crates' blow-up guards do).
@@ -390,6 +418,21 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
             let s = &mut cursor[c as usize];
             order[*s as usize] = i as u32;
             *s += 1;
+        }
+        // Within a cell by the first coordinate (stable: ties keep their current order), so
+        // that `build` finds the candidates of a particle in a slice of each cell.
+        let mut keyed: Vec<(u64, u32)> = Vec::new();
+        for c in 0..nc {
+            let (a, b) = (self.start[c] as usize, self.start[c + 1] as usize);
+            if b - a > 1 {
+                keyed.clear();
+                let key = |&p: &u32| (x_key(pos[p as usize][0].to_f64()), p);
+                keyed.extend(order[a..b].iter().map(key));
+                keyed.sort_by_key(|&(k, _)| k);
+                for (o, &(_, p)) in order[a..b].iter_mut().zip(&keyed) {
+                    *o = p;
+                }
+            }
         }
         Ok(order)
     }
@@ -429,6 +472,14 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
     /// every pair. The partners of a particle are listed in an order that depends only on
     /// the positions.
     ///
+    /// Each particle checks, in each row of neighbour cells along the first axis, only the
+    /// slots whose first coordinate is within the range of its own (a slice of the row,
+    /// since `sort` orders every cell by the first coordinate); the distances are then
+    /// computed 8 candidates at a time with AVX-512F or AVX2 where the CPU has them, in a
+    /// portable vectorised loop otherwise, all rounded alike (no fused multiply-add), so
+    /// every path gives the same list. Positions whose cells are not in the order of `sort`
+    /// are noticed and take a slower build that checks every slot of the rows.
+    ///
     /// Errors: `pos.len()` differs from the particle count.
     pub fn build(&mut self, pos: &[[T; D]], parallel: bool) -> Result<()> {
         self.check_len("build:", pos.len())?;
@@ -441,7 +492,9 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
         }
         let this = &*self;
         let per_cell = (0..D).all(|d| !this.periodic[d] || this.cells[d] >= 3);
-        let build = |b: &mut HalfListBlock<T, D>| {
+        // Returns false if the block found a cell whose particles are not in the order of
+        // `sort` (first coordinate): the windows would then miss pairs.
+        let build = |windowed: bool, b: &mut HalfListBlock<T, D>| -> bool {
             b.offsets.clear();
             b.partners.clear();
             b.offsets.push(0);
@@ -449,15 +502,29 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
             b.image_partners.clear();
             b.image_offsets.push(0);
             if per_cell {
-                this.build_block_per_cell_dispatch(b, pos, &coords);
+                this.build_block_per_cell_dispatch(b, pos, &coords, windowed)
             } else {
                 this.build_block_min_image(b, pos);
+                b.set_reach();
+                true
             }
         };
-        if parallel {
-            blocks.par_iter_mut().for_each(build);
-        } else {
-            blocks.iter_mut().for_each(build);
+        let build_all = |blocks: &mut [HalfListBlock<T, D>], windowed: bool| -> bool {
+            if parallel {
+                blocks
+                    .par_iter_mut()
+                    .map(|b| build(windowed, b))
+                    .reduce(|| true, |x, y| x & y)
+            } else {
+                blocks
+                    .iter_mut()
+                    .fold(true, |ok, b| build(windowed, b) & ok)
+            }
+        };
+        if !build_all(&mut blocks, true) {
+            // Positions not in the order of the last sort within some cell (not the
+            // documented use): every candidate of the stencil cells is checked instead.
+            build_all(&mut blocks, false);
         }
         self.blocks = blocks;
         self.coords = coords;
@@ -521,8 +588,11 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
                 sh[0] = s0;
                 out[count] = SlotRange {
                     start: self.start[base + t0] as usize,
+                    first_end: self.start[base + t0 + 1] as usize,
+                    last_start: self.start[base + t1] as usize,
                     end: self.start[base + t1 + 1] as usize,
                     shift: sh,
+                    shifted: sh.iter().any(|&s| s != 0.0),
                 };
                 count += 1;
                 m += 1;
@@ -542,59 +612,96 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
         }
     }
 
-    /// [`build_block_per_cell`](Self::build_block_per_cell), compiled for AVX2 when the CPU
-    /// has it (AVX-512 measured no faster). The list is the same on every path: the
-    /// distances are rounded the same way (no fused multiply-add).
+    /// [`build_block_per_cell`](Self::build_block_per_cell) with the AVX-512F scan where the
+    /// CPU has it (with POPCNT), else the AVX2 one, else the portable one. The list is the
+    /// same on every path: the distances are rounded the same way (no fused multiply-add).
     fn build_block_per_cell_dispatch(
         &self,
         b: &mut HalfListBlock<T, D>,
         pos: &[[T; D]],
         coords: &[Vec<f64>; D],
-    ) {
+        windowed: bool,
+    ) -> bool {
         #[cfg(target_arch = "x86_64")]
         {
-            if std::arch::is_x86_feature_detected!("avx2") {
-                // SAFETY: the CPU supports AVX2 (checked above).
-                unsafe { self.build_block_per_cell_avx2(b, pos, coords) };
-                return;
+            let popcnt = std::arch::is_x86_feature_detected!("popcnt");
+            if popcnt && std::arch::is_x86_feature_detected!("avx512f") {
+                // SAFETY: the CPU supports AVX-512F and POPCNT (checked above).
+                return unsafe { self.build_block_per_cell_avx512(b, pos, coords, windowed) };
+            }
+            if popcnt && std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU supports AVX2 and POPCNT (checked above).
+                return unsafe { self.build_block_per_cell_avx2(b, pos, coords, windowed) };
             }
         }
-        self.build_block_per_cell(b, pos, coords);
+        self.build_block_per_cell::<PORTABLE>(b, pos, coords, windowed)
     }
 
-    /// [`build_block_per_cell`](Self::build_block_per_cell) with AVX2.
+    /// [`build_block_per_cell`](Self::build_block_per_cell) with AVX-512F (and POPCNT).
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
+    #[target_feature(enable = "avx512f,popcnt")]
+    fn build_block_per_cell_avx512(
+        &self,
+        b: &mut HalfListBlock<T, D>,
+        pos: &[[T; D]],
+        coords: &[Vec<f64>; D],
+        windowed: bool,
+    ) -> bool {
+        self.build_block_per_cell::<AVX512>(b, pos, coords, windowed)
+    }
+
+    /// [`build_block_per_cell`](Self::build_block_per_cell) with AVX2 (and POPCNT).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,popcnt")]
     fn build_block_per_cell_avx2(
         &self,
         b: &mut HalfListBlock<T, D>,
         pos: &[[T; D]],
         coords: &[Vec<f64>; D],
-    ) {
-        self.build_block_per_cell(b, pos, coords);
+        windowed: bool,
+    ) -> bool {
+        self.build_block_per_cell::<AVX2>(b, pos, coords, windowed)
     }
 
     /// Builds block `b` cell by cell: the stencil ranges and their image shifts are found
     /// once per run of particles in the same cell, the distances of each particle to a
     /// range are computed in chunks the compiler vectorises.
+    ///
+    /// When `windowed`, only the slots of a range whose first coordinate can be within the
+    /// list range are checked: `sort` orders every cell by the first coordinate, so these
+    /// are a slice from the first cell of the range to its last, and as the particles of a
+    /// cell are visited in that order the ends of each slice only move forward. Returns
+    /// false if a cell of the block is not in that order (the windowed list is then
+    /// incomplete and the caller builds again without windows).
     #[inline(always)]
-    fn build_block_per_cell(
+    fn build_block_per_cell<const ISA: u8>(
         &self,
         b: &mut HalfListBlock<T, D>,
         pos: &[[T; D]],
         coords: &[Vec<f64>; D],
-    ) {
-        let mut ranges = [SlotRange {
-            start: 0,
-            end: 0,
-            shift: [0.0; D],
-        }; MAX_RANGES];
+        windowed: bool,
+    ) -> bool {
+        let mut ranges = [SlotRange::<D>::default(); MAX_RANGES];
+        // Cross-image hits of one range before their shifts are attached.
+        let mut image = Vec::new();
+        let x = &coords[0];
+        let mut in_order = true;
+        if b.start > 0 && b.start < b.end {
+            // The block may begin inside a cell: its predecessor there belongs to the check.
+            let k = b.start;
+            if self.cell_coords(&pos[k - 1]) == self.cell_coords(&pos[k]) {
+                in_order &= x_key(x[k - 1]) <= x_key(x[k]);
+            }
+        }
         let mut i = b.start;
         while i < b.end {
             let c = self.cell_coords(&pos[i]);
-            let mut group_end = i + 1;
-            while group_end < b.end && self.cell_coords(&pos[group_end]) == c {
-                group_end += 1;
+            // The particles of the block in cell `c`, from the sort.
+            let group_end = (self.start[self.linear(c) + 1] as usize).clamp(i + 1, b.end);
+            let mut amax = x[i].abs();
+            for k in i + 1..group_end {
+                in_order &= x_key(x[k - 1]) <= x_key(x[k]);
+                amax = amax.max(x[k].abs());
             }
             let nr = self.stencil_ranges(c, &mut ranges);
             // Ranges wholly before the run of particles never hold a partner.
@@ -605,19 +712,44 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
                     live += 1;
                 }
             }
+            // Half width of the windows: the range, widened far beyond the rounding of the
+            // separations and of the window ends (relative 2^-52 of the coordinates); one
+            // width for the run keeps the window ends monotone in x_i.
+            let half = self.range + WINDOW_SLACK * (self.range + amax + self.len[0]);
+            // The slice of every live range, `from` in its first cell, `to` in its last.
+            let mut windows = [Window::default(); MAX_RANGES];
+            for (w, r) in windows.iter_mut().zip(&ranges[..live]) {
+                *w = Window {
+                    from: r.start,
+                    to: if windowed { r.last_start } else { r.end },
+                };
+            }
             for i in i..group_end {
                 let xi: [f64; D] = std::array::from_fn(|d| coords[d][i]);
-                for r in &ranges[..live] {
-                    let from = r.start.max(i + 1);
-                    if r.shift.iter().all(|&s| s == 0.0) {
-                        scan::<D, false>(coords, xi, r.shift, self.range2, from, r.end, |j| {
-                            b.partners.push(j)
-                        });
+                for (w, r) in windows.iter_mut().zip(&ranges[..live]) {
+                    if windowed {
+                        let xs = xi[0] - r.shift[0];
+                        let (lo, hi) = (xs - half, xs + half);
+                        while w.from < r.first_end && x[w.from] < lo {
+                            w.from += 1;
+                        }
+                        while w.to < r.end && x[w.to] <= hi {
+                            w.to += 1;
+                        }
+                    }
+                    let (lo, hi) = (w.from.max(i + 1), w.to);
+                    if lo >= hi {
+                        continue;
+                    }
+                    let (sh, r2) = (r.shift, self.range2);
+                    if !r.shifted {
+                        let out = &mut b.partners;
+                        scan_into::<D, false, ISA>(out, coords, xi, sh, r2, lo, hi);
                     } else {
-                        let shift: [T; D] = std::array::from_fn(|d| T::from_f64(r.shift[d]));
-                        scan::<D, true>(coords, xi, r.shift, self.range2, from, r.end, |j| {
-                            b.image_partners.push((j, shift))
-                        });
+                        image.clear();
+                        scan_into::<D, true, ISA>(&mut image, coords, xi, sh, r2, lo, hi);
+                        let shift: [T; D] = std::array::from_fn(|d| T::from_f64(sh[d]));
+                        b.image_partners.extend(image.iter().map(|&j| (j, shift)));
                     }
                 }
                 b.offsets.push(b.partners.len() as u32);
@@ -625,6 +757,8 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
             }
             i = group_end;
         }
+        b.set_reach();
+        in_order
     }
 
     /// Builds block `b` pair by pair with the minimum image of each pair (any number of
@@ -686,20 +820,75 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
     }
 }
 
-/// Calls `hit(j)` for every slot `j` in `from..to` with `|(x_i - x_j) - shift|^2 < range2`
-/// (the shift is left out when not `SHIFTED`: it is zero then), in increasing `j`; the
-/// distances are computed `CHUNK` candidates at a time in a loop the compiler vectorises.
-/// The columns of `coords` hold `CHUNK` padding entries past the last particle.
+/// Appends to `out` every slot `j` of `from..to` with `|(x_i - x_j) - shift|^2 < range2`,
+/// in increasing `j` (see [`scan`]).
 #[inline(always)]
-fn scan<const D: usize, const SHIFTED: bool>(
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the arguments of scan and the output"
+)]
+fn scan_into<const D: usize, const SHIFTED: bool, const ISA: u8>(
+    out: &mut Vec<u32>,
     coords: &[Vec<f64>; D],
     xi: [f64; D],
     shift: [f64; D],
     range2: f64,
     from: usize,
     to: usize,
-    mut hit: impl FnMut(u32),
 ) {
+    debug_assert!(from < to && to + CHUNK <= coords[0].len());
+    out.reserve(to - from + STORE_SLACK);
+    let len = out.len();
+    // SAFETY: `scan` writes below `to - from + STORE_SLACK` entries past `len`, room reserved
+    // above, and returns how many of them hold hits; `from < to` and the columns hold
+    // `CHUNK` padding entries (the build's contract).
+    unsafe {
+        let n = scan::<D, SHIFTED, ISA>(
+            coords,
+            xi,
+            shift,
+            range2,
+            from,
+            to,
+            out.as_mut_ptr().add(len),
+        );
+        out.set_len(len + n);
+    }
+}
+
+/// Writes to `dst[0..]` every slot `j` in `from..to` with `|(x_i - x_j) - shift|^2 < range2`
+/// (the shift is left out when not `SHIFTED`: it is zero then), in increasing `j`, and
+/// returns their number; the distances are computed several candidates at a time, with
+/// the vector instructions `ISA` ([`PORTABLE`]: a loop the compiler vectorises, `CHUNK`
+/// candidates at a time). Every path rounds as the minimum-image path does: `((x_i - x_j) -
+/// s)^2` summed over the axes in order, no fused multiply-add.
+///
+/// # Safety
+/// `dst` must be valid for writes of `to - from + STORE_SLACK` entries (the vector paths
+/// store 8 entries at a time, the hits first); `from < to`; the columns of `coords` hold
+/// `CHUNK` padding entries past `to`; the CPU has the features of `ISA`.
+#[inline(always)]
+unsafe fn scan<const D: usize, const SHIFTED: bool, const ISA: u8>(
+    coords: &[Vec<f64>; D],
+    xi: [f64; D],
+    shift: [f64; D],
+    range2: f64,
+    from: usize,
+    to: usize,
+    dst: *mut u32,
+) -> usize {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if ISA == AVX2 {
+            // SAFETY: passed on from the caller.
+            return unsafe { scan_avx2::<D, SHIFTED>(coords, xi, shift, range2, from, to, dst) };
+        }
+        if ISA == AVX512 {
+            // SAFETY: passed on from the caller.
+            return unsafe { scan_avx512::<D, SHIFTED>(coords, xi, shift, range2, from, to, dst) };
+        }
+    }
+    let mut n = 0;
     let mut j0 = from;
     while j0 < to {
         let m = (to - j0).min(CHUNK);
@@ -721,19 +910,192 @@ fn scan<const D: usize, const SHIFTED: bool>(
             }
             mask |= Mask::from(v < range2) << k;
         }
-        mask &= Mask::MAX >> (CHUNK - m);
+        mask &= Mask::MAX >> (Mask::BITS as usize - m);
         while mask != 0 {
-            hit((j0 + mask.trailing_zeros() as usize) as u32);
+            // SAFETY: at most one entry per slot of `from..to` (the caller's contract).
+            unsafe {
+                dst.add(n)
+                    .write((j0 + mask.trailing_zeros() as usize) as u32)
+            };
+            n += 1;
             mask &= mask - 1;
         }
         j0 += m;
     }
+    n
 }
 
-/// A bit per candidate of a chunk.
+/// Byte `k` of `COMPRESS[m]` is the position of the `k`-th set bit of the 8-bit mask `m`
+/// (then zeros): the lanes a step of 8 candidates stores.
+const COMPRESS: [u64; 256] = {
+    let mut table = [0u64; 256];
+    let mut m = 0;
+    while m < 256 {
+        let (mut k, mut bit) = (0, 0);
+        while bit < 8 {
+            if (m >> bit) & 1 == 1 {
+                table[m] |= (bit as u64) << (8 * k);
+                k += 1;
+            }
+            bit += 1;
+        }
+        m += 1;
+    }
+    table
+};
+
+/// Entries past the hits that a vector path of [`scan`] may overwrite.
+const STORE_SLACK: usize = 8;
+
+/// Stores `j + k` for every bit `k` set in the 8-bit `mask` at `dst[n..]` (8 entries
+/// written, the hits first, without branches) and returns the new `n`.
+///
+/// # Safety
+/// The CPU supports AVX2 and POPCNT; `dst[n..n + 8]` is valid for writes.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,popcnt")]
+#[inline]
+unsafe fn compress_store(mask: u32, j: usize, dst: *mut u32, n: usize) -> usize {
+    use std::arch::x86_64::*;
+    let lanes = _mm_cvtsi64_si128(COMPRESS[mask as usize & 0xff] as i64);
+    // Slots fit in 32 bits (the particle count does); lanes are read back as u32.
+    let slots = _mm256_add_epi32(
+        _mm256_cvtepu8_epi32(lanes),
+        _mm256_set1_epi32(j as u32 as i32),
+    );
+    // SAFETY: `dst[n..n + 8]` is valid for writes (the caller's contract).
+    unsafe { _mm256_storeu_si256(dst.add(n).cast(), slots) };
+    n + (mask & 0xff).count_ones() as usize
+}
+
+/// [`scan`] with AVX2: 8 candidates (two vectors of 4) per step, the hits stored with
+/// [`compress_store`].
+///
+/// # Safety
+/// As [`scan`], on a CPU with AVX2 and POPCNT.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,popcnt")]
+#[inline]
+unsafe fn scan_avx2<const D: usize, const SHIFTED: bool>(
+    coords: &[Vec<f64>; D],
+    xi: [f64; D],
+    shift: [f64; D],
+    range2: f64,
+    from: usize,
+    to: usize,
+    dst: *mut u32,
+) -> usize {
+    use std::arch::x86_64::*;
+    let x: [__m256d; D] = std::array::from_fn(|d| _mm256_set1_pd(xi[d]));
+    let s: [__m256d; D] = std::array::from_fn(|d| _mm256_set1_pd(shift[d]));
+    let r2 = _mm256_set1_pd(range2);
+    let ptr: [*const f64; D] = std::array::from_fn(|d| coords[d].as_ptr());
+    // The bits of the candidates j0..j0 + 4 H within the range (H = 1 or 2 vectors).
+    let step = |j0: usize, vectors: usize| -> u32 {
+        let mut v = [_mm256_setzero_pd(); 2];
+        for d in 0..D {
+            for (h, v) in v.iter_mut().enumerate().take(vectors) {
+                // SAFETY: j0 < to, so j0 + 8 <= to + 7 < coords[d].len() (the caller's
+                // contract).
+                let xj = unsafe { _mm256_loadu_pd(ptr[d].add(j0 + 4 * h)) };
+                let mut t = _mm256_sub_pd(x[d], xj);
+                if SHIFTED {
+                    t = _mm256_sub_pd(t, s[d]);
+                }
+                let t2 = _mm256_mul_pd(t, t);
+                // 0 + t^2 is t^2 (t^2 is never -0), so the first axis needs no add.
+                *v = if d == 0 { t2 } else { _mm256_add_pd(*v, t2) };
+            }
+        }
+        let lo = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(v[0], r2)) as u32;
+        if vectors == 1 {
+            return lo;
+        }
+        let hi = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(v[1], r2)) as u32;
+        lo | hi << 4
+    };
+    let (mut n, mut j) = (0, from);
+    while j + 8 <= to {
+        // SAFETY: n <= j - from, so dst[n..n + 8] lies within the caller's room.
+        n = unsafe { compress_store(step(j, 2), j, dst, n) };
+        j += 8;
+    }
+    // The rest (fewer than 8) in one step of one or two vectors.
+    if j < to {
+        let vectors = if to - j > 4 { 2 } else { 1 };
+        let mask = step(j, vectors) & (0xff >> (8 - (to - j)));
+        // SAFETY: as above.
+        n = unsafe { compress_store(mask, j, dst, n) };
+    }
+    n
+}
+
+/// [`scan`] with AVX-512F: 8 candidates (one vector) per step, compared into a mask
+/// register, the hits stored with [`compress_store`].
+///
+/// # Safety
+/// As [`scan`], on a CPU with AVX-512F and POPCNT.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,popcnt")]
+#[inline]
+unsafe fn scan_avx512<const D: usize, const SHIFTED: bool>(
+    coords: &[Vec<f64>; D],
+    xi: [f64; D],
+    shift: [f64; D],
+    range2: f64,
+    from: usize,
+    to: usize,
+    dst: *mut u32,
+) -> usize {
+    use std::arch::x86_64::*;
+    let x: [__m512d; D] = std::array::from_fn(|d| _mm512_set1_pd(xi[d]));
+    let s: [__m512d; D] = std::array::from_fn(|d| _mm512_set1_pd(shift[d]));
+    let r2 = _mm512_set1_pd(range2);
+    let ptr: [*const f64; D] = std::array::from_fn(|d| coords[d].as_ptr());
+    // The bits of the candidates j0..j0 + 8 within the range.
+    let step = |j0: usize| -> u32 {
+        let mut v = _mm512_setzero_pd();
+        for d in 0..D {
+            // SAFETY: j0 < to, so j0 + 8 <= to + 7 < coords[d].len() (the caller's
+            // contract).
+            let xj = unsafe { _mm512_loadu_pd(ptr[d].add(j0)) };
+            let mut t = _mm512_sub_pd(x[d], xj);
+            if SHIFTED {
+                t = _mm512_sub_pd(t, s[d]);
+            }
+            let t2 = _mm512_mul_pd(t, t);
+            // 0 + t^2 is t^2 (t^2 is never -0), so the first axis needs no add.
+            v = if d == 0 { t2 } else { _mm512_add_pd(v, t2) };
+        }
+        u32::from(_mm512_cmp_pd_mask::<_CMP_LT_OQ>(v, r2))
+    };
+    let (mut n, mut j) = (0, from);
+    while j + 8 <= to {
+        // SAFETY: n <= j - from, so dst[n..n + 8] lies within the caller's room; AVX-512F
+        // implies AVX2 (and the caller's CPU has POPCNT).
+        n = unsafe { compress_store(step(j), j, dst, n) };
+        j += 8;
+    }
+    if j < to {
+        let mask = step(j) & (0xff >> (8 - (to - j)));
+        // SAFETY: as above.
+        n = unsafe { compress_store(mask, j, dst, n) };
+    }
+    n
+}
+
+/// [`scan`] instruction sets: a loop the compiler vectorises for the target.
+const PORTABLE: u8 = 0;
+/// [`scan`] instruction sets: AVX2 intrinsics.
+const AVX2: u8 = 1;
+/// [`scan`] instruction sets: AVX-512F intrinsics.
+const AVX512: u8 = 2;
+
+/// A bit per candidate of a chunk of the portable scan.
 type Mask = u64;
 
-/// Candidates whose distances are computed in one go by the per-cell build.
+/// Candidates whose distances the portable scan computes in one go, and the padding past
+/// the last particle in the build's coordinate columns (at least the 8 of a vector step).
 const CHUNK: usize = Mask::BITS as usize;
 
 /// Most slot ranges in a stencil: two per row of neighbour cells along axis 0, 3^(D-1) rows.
@@ -744,6 +1106,259 @@ const MAX_RANGES: usize = 18;
 #[derive(Clone, Copy, Debug)]
 struct SlotRange<const D: usize> {
     start: usize,
+    /// End of the first cell of the run.
+    first_end: usize,
+    /// Start of the last cell of the run.
+    last_start: usize,
     end: usize,
     shift: [f64; D],
+    /// Whether `shift` is not zero.
+    shifted: bool,
+}
+
+impl<const D: usize> Default for SlotRange<D> {
+    fn default() -> Self {
+        Self {
+            start: 0,
+            first_end: 0,
+            last_start: 0,
+            end: 0,
+            shift: [0.0; D],
+            shifted: false,
+        }
+    }
+}
+
+/// The slots `from..to` of a [`SlotRange`] that a particle checks (see
+/// `build_block_per_cell`).
+#[derive(Clone, Copy, Debug, Default)]
+struct Window {
+    from: usize,
+    to: usize,
+}
+
+/// Relative widening of the per-particle windows of the per-cell build (see
+/// `build_block_per_cell`): far above the rounding error of a separation, far below any
+/// width that matters.
+const WINDOW_SLACK: f64 = 1e-9;
+
+/// The key of the order of particles within a cell: increasing first coordinate (`-0.0`
+/// before `0.0`), every NaN last and equal to the others.
+#[inline]
+fn x_key(x: f64) -> u64 {
+    if x.is_nan() {
+        return u64::MAX;
+    }
+    let bits = x.to_bits();
+    // Negative values in reverse bit order below the positive ones (+inf < u64::MAX).
+    if bits >> 63 == 1 {
+        !bits
+    } else {
+        bits | 1 << 63
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::{RngExt, SeedableRng};
+
+    use super::*;
+
+    /// The per-cell lists of every block of `list` over the sorted `pos` with the scan
+    /// `isa`, with or without the windows; `None` if this CPU lacks `isa`. The second item
+    /// is whether every cell was in the order of `sort`.
+    fn per_cell<const D: usize>(
+        list: &BlockedHalfList<f64, D>,
+        pos: &[[f64; D]],
+        isa: u8,
+        windowed: bool,
+    ) -> Option<(Vec<HalfListBlock<f64, D>>, bool)> {
+        let coords: [Vec<f64>; D] = std::array::from_fn(|d| {
+            let mut c: Vec<f64> = pos.iter().map(|x| x[d]).collect();
+            c.extend([f64::NAN; CHUNK]);
+            c
+        });
+        let mut blocks = list.blocks.clone();
+        let mut in_order = true;
+        for b in &mut blocks {
+            for v in [&mut b.offsets, &mut b.image_offsets] {
+                v.clear();
+                v.push(0);
+            }
+            b.partners.clear();
+            b.image_partners.clear();
+            in_order &= match isa {
+                PORTABLE => list.build_block_per_cell::<PORTABLE>(b, pos, &coords, windowed),
+                #[cfg(target_arch = "x86_64")]
+                AVX2 if std::arch::is_x86_feature_detected!("avx2")
+                    && std::arch::is_x86_feature_detected!("popcnt") =>
+                {
+                    // SAFETY: the CPU supports AVX2 (checked above).
+                    unsafe { list.build_block_per_cell_avx2(b, pos, &coords, windowed) }
+                }
+                #[cfg(target_arch = "x86_64")]
+                AVX512
+                    if std::arch::is_x86_feature_detected!("avx512f")
+                        && std::arch::is_x86_feature_detected!("popcnt") =>
+                {
+                    // SAFETY: the CPU supports AVX-512F (checked above).
+                    unsafe { list.build_block_per_cell_avx512(b, pos, &coords, windowed) }
+                }
+                _ => return None,
+            };
+        }
+        Some((blocks, in_order))
+    }
+
+    /// Positions in `[lo, lo + len)` (a few outside along closed axes, some non-finite),
+    /// dense or sparse, in clusters and on a jittered lattice.
+    fn system<const D: usize>(
+        rng: &mut rand_pcg::Pcg64,
+        len: [f64; D],
+        periodic: [bool; D],
+        n: usize,
+    ) -> Vec<[f64; D]> {
+        let side = (n as f64).powf(1.0 / D as f64).ceil() as usize;
+        (0..n)
+            .map(|k| match k % 5 {
+                // A jittered lattice: many equal first coordinates before the jitter.
+                0 | 1 => std::array::from_fn(|d| {
+                    let site = (k / side.pow(d as u32)) % side;
+                    let x = (site as f64 + 0.5) * len[d] / side as f64;
+                    (x + rng.random_range(-0.01..0.01)).rem_euclid(len[d])
+                }),
+                4 if k % 97 == 4 => std::array::from_fn(|d| {
+                    [f64::NAN, -f64::NAN, f64::INFINITY, 1.0][(k / 97 + d) % 4]
+                }),
+                _ => std::array::from_fn(|d| {
+                    let out = if periodic[d] { 0.0 } else { 0.1 * len[d] };
+                    rng.random_range(-out..len[d] + out)
+                }),
+            })
+            .collect()
+    }
+
+    /// Every scan path, with and without the windows, gives the same lists (same order),
+    /// on dense and sparse 2D and 3D systems with every mix of periodic axes.
+    fn paths_agree<const D: usize>(seed: u64) -> Vec<u8> {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+        let mut ran = Vec::new();
+        for case in 0..12usize {
+            let periodic: [bool; D] = std::array::from_fn(|d| (case >> d) & 1 == 1);
+            let range = rng.random_range(0.5..1.5);
+            let len: [f64; D] = std::array::from_fn(|_| range * rng.random_range(3.0..9.0));
+            let n = if case < 6 { 3000 } else { 200 };
+            let pos = system(&mut rng, len, periodic, n);
+            let mut list = BlockedHalfList::<f64, D>::new([0.0; D], len, periodic, range, n)
+                .expect("a valid list");
+            let order = list.sort(&pos).expect("sort");
+            let sorted: Vec<[f64; D]> = order.iter().map(|&k| pos[k as usize]).collect();
+            let (reference, in_order) =
+                per_cell(&list, &sorted, PORTABLE, false).expect("portable");
+            assert!(in_order, "sort left a cell out of order");
+            let pairs: usize = reference.iter().map(HalfListBlock::pair_count).sum();
+            assert!(pairs > 0, "case {case}: no pairs");
+            for isa in [PORTABLE, AVX2, AVX512] {
+                for windowed in [false, true] {
+                    let Some((blocks, _)) = per_cell(&list, &sorted, isa, windowed) else {
+                        continue;
+                    };
+                    ran.push(isa);
+                    for (b, r) in blocks.iter().zip(&reference) {
+                        assert_eq!(b.offsets, r.offsets, "case {case} isa {isa} {windowed}");
+                        assert_eq!(b.partners, r.partners, "case {case} isa {isa} {windowed}");
+                        assert_eq!(b.image_offsets, r.image_offsets);
+                        assert_eq!(b.image_partners, r.image_partners);
+                        assert_eq!(b.reach, r.reach);
+                    }
+                }
+            }
+        }
+        ran
+    }
+
+    fn report(test: &str, ran: &[u8]) {
+        for (isa, feature) in [(AVX2, "avx2"), (AVX512, "avx512f")] {
+            simkit_backend::testing::simd_exercised(test, feature, ran.contains(&isa));
+        }
+    }
+
+    #[test]
+    fn scan_paths_and_windows_give_the_same_lists_2d() {
+        report("blocked 2d", &paths_agree::<2>(11));
+    }
+
+    #[test]
+    fn scan_paths_and_windows_give_the_same_lists_3d() {
+        report("blocked 3d", &paths_agree::<3>(12));
+    }
+
+    #[test]
+    fn the_cell_order_key_is_the_order_of_the_numbers_with_nan_last() {
+        let xs = [
+            f64::NEG_INFINITY,
+            -1e300,
+            -1.0,
+            -f64::MIN_POSITIVE,
+            -0.0,
+            0.0,
+            5e-324,
+            1.0,
+            1e300,
+            f64::INFINITY,
+        ];
+        for w in xs.windows(2) {
+            assert!(x_key(w[0]) < x_key(w[1]), "{} {}", w[0], w[1]);
+        }
+        assert_eq!(x_key(f64::NAN), x_key(-f64::NAN));
+        assert!(x_key(f64::INFINITY) < x_key(f64::NAN));
+    }
+
+    #[test]
+    fn cells_out_of_order_are_found() {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(13);
+        let pos = system(&mut rng, [6.0; 3], [true; 3], 2000);
+        let mut list = BlockedHalfList::<f64, 3>::new([0.0; 3], [6.0; 3], [true; 3], 1.0, 2000)
+            .expect("a valid list");
+        let order = list.sort(&pos).expect("sort");
+        let mut sorted: Vec<[f64; 3]> = order.iter().map(|&k| pos[k as usize]).collect();
+        assert!(
+            per_cell(&list, &sorted, PORTABLE, true)
+                .expect("portable")
+                .1
+        );
+        // Swap two particles of one cell with different first coordinates.
+        let k = (0..sorted.len() - 1)
+            .find(|&k| {
+                list.cell_coords(&sorted[k]) == list.cell_coords(&sorted[k + 1])
+                    && sorted[k][0] < sorted[k + 1][0]
+            })
+            .expect("a cell with two particles");
+        sorted.swap(k, k + 1);
+        assert!(
+            !per_cell(&list, &sorted, PORTABLE, true)
+                .expect("portable")
+                .1
+        );
+    }
+
+    #[test]
+    fn sort_orders_each_cell_by_the_first_coordinate() {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(14);
+        let pos = system(&mut rng, [7.0, 5.0], [false, true], 1500);
+        let mut list =
+            BlockedHalfList::<f64, 2>::new([0.0; 2], [7.0, 5.0], [false, true], 1.1, 1500)
+                .expect("a valid list");
+        let order = list.sort(&pos).expect("sort");
+        let sorted: Vec<[f64; 2]> = order.iter().map(|&k| pos[k as usize]).collect();
+        for c in 0..list.start.len() - 1 {
+            let (a, b) = (list.start[c] as usize, list.start[c + 1] as usize);
+            for k in a + 1..b {
+                assert!(x_key(sorted[k - 1][0]) <= x_key(sorted[k][0]));
+                if x_key(sorted[k - 1][0]) == x_key(sorted[k][0]) {
+                    assert!(order[k - 1] < order[k], "ties must keep their order");
+                }
+            }
+        }
+    }
 }

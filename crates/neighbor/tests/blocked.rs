@@ -35,6 +35,10 @@ fn listed<T: Real, const D: usize>(list: &BlockedHalfList<T, D>) -> Pairs<D> {
             *b.image_offsets().last().unwrap() as usize,
             b.image_partners().len()
         );
+        let top = b.partners().iter().copied();
+        let top = top.chain(b.image_partners().iter().map(|&(j, _)| j));
+        let reach = top.map(|j| j as usize + 1).fold(b.end(), usize::max);
+        assert_eq!(b.reach(), reach, "block {t}: reach");
         for k in 0..b.len() {
             let i = b.start() + k;
             for &j in b.partners_of(k).expect("built") {
@@ -132,6 +136,24 @@ fn check<T: Real, const D: usize>(
     // A second sort of the sorted positions keeps them in place (stable within a cell).
     let again = list.sort(&sorted).unwrap();
     assert!(again.iter().enumerate().all(|(k, &o)| o as usize == k));
+    // Within a cell the slots are in increasing first coordinate (NaN last).
+    let cells = list.cells();
+    let cell = |x: &[T; D]| -> [usize; D] {
+        std::array::from_fn(|d| {
+            let t = ((x[d].to_f64() - lo[d]) * (cells[d] as f64 / len[d])).floor();
+            if t >= 0.0 {
+                (t as usize).min(cells[d] - 1)
+            } else {
+                0
+            }
+        })
+    };
+    for k in 1..sorted.len() {
+        let (a, b) = (sorted[k - 1][0].to_f64(), sorted[k][0].to_f64());
+        if cell(&sorted[k - 1]) == cell(&sorted[k]) && !b.is_nan() {
+            assert!(a <= b || (a == 0.0 && b == 0.0), "slots {k}: {a} then {b}");
+        }
+    }
     serial.len()
 }
 
@@ -328,5 +350,75 @@ fn non_finite_positions_are_in_range_of_nothing() {
                 assert!(sorted[i].iter().chain(&sorted[j]).all(|x| x.is_finite()));
             }
         }
+    }
+}
+
+#[test]
+fn half_list_equals_brute_force_in_dense_boxes() {
+    // About 16 particles per cell (as in a Lennard-Jones liquid): a jittered FCC lattice
+    // (many particles near the same planes) and uniform positions, periodic and closed, in
+    // f64 and f32, and their 2D projections.
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
+    for case in 0..4usize {
+        let periodic = [case & 1 == 1; 3];
+        let lattice = case & 2 == 2;
+        let (range, side) = (1.4, 4usize);
+        let a = 1.0;
+        let l = side as f64 * a * 2.0;
+        let mut pos: Vec<[f64; 3]> = Vec::new();
+        if lattice {
+            let m = 2 * side;
+            for k in 0..m * m * m {
+                let cell = [k % m, (k / m) % m, k / (m * m)];
+                for b in [
+                    [0.0, 0.0, 0.0],
+                    [0.5, 0.5, 0.0],
+                    [0.5, 0.0, 0.5],
+                    [0.0, 0.5, 0.5],
+                ] {
+                    pos.push(std::array::from_fn(|d| {
+                        ((cell[d] as f64 + b[d]) * a + rng.random_range(-0.02..0.02)).rem_euclid(l)
+                    }));
+                }
+            }
+        } else {
+            pos = (0..2048)
+                .map(|_| std::array::from_fn(|_| rng.random_range(0.0..l)))
+                .collect();
+        }
+        let pairs = check([0.0; 3], [l; 3], periodic, range, &pos);
+        assert!(pairs > 10 * pos.len(), "case {case}: {pairs} pairs");
+        let p32: Vec<[f32; 3]> = pos.iter().map(|x| x.map(|c| c as f32)).collect();
+        check([0.0; 3], [l; 3], periodic, range, &p32);
+        let p2: Vec<[f64; 2]> = pos.iter().take(1500).map(|x| [x[0], x[1]]).collect();
+        check([0.0; 2], [l; 2], [periodic[0]; 2], 0.4, &p2);
+    }
+}
+
+#[test]
+fn positions_out_of_cell_order_still_give_every_pair() {
+    // `build` expects the positions of the last `sort`; given a cell in another order it
+    // notices and checks every candidate of the stencil cells.
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(8);
+    let (len, periodic, range) = ([6.0; 3], [true, false, true], 1.0);
+    let pos = random_positions(&mut rng, [0.0; 3], len, periodic, range, 1500);
+    let mut list = BlockedHalfList::<f64, 3>::new([0.0; 3], len, periodic, range, 1500).unwrap();
+    let order = list.sort(&pos).unwrap();
+    let mut sorted: Vec<[f64; 3]> = order.iter().map(|&k| pos[k as usize]).collect();
+    let same_cell =
+        |a: &[f64; 3], b: &[f64; 3]| (0..3).all(|d| (a[d] * 1.0).floor() == (b[d] * 1.0).floor());
+    // Reverse the slots of every cell (its particles stay in it).
+    let mut k = 0;
+    while k < sorted.len() {
+        let mut e = k + 1;
+        while e < sorted.len() && same_cell(&sorted[k], &sorted[e]) {
+            e += 1;
+        }
+        sorted[k..e].reverse();
+        k = e;
+    }
+    for parallel in [false, true] {
+        list.build(&sorted, parallel).unwrap();
+        assert_eq!(listed(&list), brute(&sorted, len, periodic, range));
     }
 }

@@ -1,6 +1,8 @@
 //! Conserved quantities and reference sums (plain f64, independent of the fast kernels; the
 //! pair laws are those of [`crate::laws`]).
 
+use std::ops::Range;
+
 use rayon::prelude::*;
 
 use crate::config::ForceLaw;
@@ -25,21 +27,30 @@ pub struct Diagnostics {
     pub force_magnitude_sum: f64,
 }
 
-/// Potential energy `sum_{i<j} q_i q_j phi(r_ij)`, summed in f64 (O(N^2), rayon).
+/// Potential energy `sum_{i<j} q_i q_j phi(r_ij)`, summed in f64 (O(N^2), rayon): the rows
+/// `q_i sum_{j>i} q_j phi(r_ij)` in parallel, then their sum in particle order, so the
+/// result does not depend on the thread count.
 pub fn potential_energy(p: &Particles, law: ForceLaw) -> f64 {
+    let mut rows = vec![0.0; p.len()];
+    potential_rows(p, law, 0..p.len(), &mut rows);
+    rows.iter().sum()
+}
+
+/// The rows `rows[i] = q_i sum_{j>i} q_j phi(r_ij)` of [`potential_energy`] for `i` in
+/// `range` (a distributed run computes each rank's range and gathers them).
+pub(crate) fn potential_rows(p: &Particles, law: ForceLaw, range: Range<usize>, rows: &mut [f64]) {
     let x = &p.position;
     let q = &p.charge;
-    (0..p.len())
-        .into_par_iter()
-        .map(|i| {
-            let mut s = 0.0;
-            for j in i + 1..p.len() {
-                let r = dist(x[i], x[j]);
-                s += q[j] * law.potential(r);
-            }
-            q[i] * s
-        })
-        .sum()
+    let first = range.start;
+    rows[range].par_iter_mut().enumerate().for_each(|(t, row)| {
+        let i = first + t;
+        let mut s = 0.0;
+        for j in i + 1..p.len() {
+            let r = dist(x[i], x[j]);
+            s += q[j] * law.potential(r);
+        }
+        *row = q[i] * s;
+    });
 }
 
 /// Accelerations by a plain scalar f64 double loop (a reference for tests): the pair
@@ -73,6 +84,11 @@ fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
 
 /// Diagnostics of `p` with accelerations `acc` (from the backend) under `law`.
 pub fn diagnostics(p: &Particles, acc: &[[f64; 3]], law: ForceLaw) -> Diagnostics {
+    with_potential(p, acc, potential_energy(p, law))
+}
+
+/// [`diagnostics`] with the potential energy given.
+pub(crate) fn with_potential(p: &Particles, acc: &[[f64; 3]], potential: f64) -> Diagnostics {
     let mut kinetic = 0.0;
     let mut momentum = [0.0; 3];
     let mut angular_momentum = [0.0; 3];
@@ -95,7 +111,6 @@ pub fn diagnostics(p: &Particles, acc: &[[f64; 3]], law: ForceLaw) -> Diagnostic
             force_magnitude_sum += (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
         }
     }
-    let potential = potential_energy(p, law);
     Diagnostics {
         kinetic,
         potential,

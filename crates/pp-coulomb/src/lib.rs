@@ -15,6 +15,8 @@
 //!   else a portable kernel compiled for AVX-512/AVX2 with runtime dispatch) or
 //!   [`Backend::Gpu`] (tiled all-pairs WGSL kernel, all steps on the device, f32, or f64 where
 //!   the adapter has `SHADER_F64`).
+//! - [`DistributedCoulomb`]: the CPU run over the ranks of a `simkit_backend::comm::Comm`
+//!   (MPI with the `mpi` feature) with replicated data, bit-identical to one process.
 //! - Blow-up checks inside `step(n)` ([`Config::check_every`], default every 100 steps, and
 //!   at the end of every call): non-finite positions or velocities, a coincident pair and,
 //!   under the exact law, a jump of the total energy beyond [`Config::energy_tolerance`]
@@ -80,18 +82,21 @@ pub mod analytic;
 mod config;
 mod cpu;
 mod diagnostics;
+mod distributed;
 mod engine;
 #[cfg(feature = "gpu")]
 mod gpu;
 mod guard;
 pub mod laws;
 mod particles;
+mod run;
 pub mod scenes;
 mod sim;
 pub mod units;
 
 pub use config::{Config, DEFAULT_ENERGY_TOLERANCE, ForceLaw, Integrator};
 pub use diagnostics::{Diagnostics, diagnostics, potential_energy, reference_accelerations};
+pub use distributed::DistributedCoulomb;
 #[cfg(feature = "gpu")]
 pub use gpu::gpu_max_particles;
 pub use particles::{MAX_PARTICLES, Particles, Region, Species, Velocities};

@@ -1,8 +1,8 @@
 //! CPU backend: cache-blocked tiles of the padded grid, processed in parallel with rayon.
 
 use rayon::prelude::*;
-use simkit_backend::guard::{blow_up, chunks};
-use simkit_backend::{Error, Real, Result};
+use simkit_backend::guard::{blow_up, chunks, end_step};
+use simkit_backend::{Real, Result};
 
 use crate::boundary::fill_ghosts;
 use crate::config::Config;
@@ -13,7 +13,7 @@ use crate::stepper::{
     Integrator, Stepping, check_dt, check_dt_with, check_model, checked_bound, divergence_cause,
     dt_bound, recheck_bound,
 };
-use crate::sweep::{ScratchPool, Sweep, can_fuse};
+use crate::sweep::{ScratchPool, Sweep, with_slices};
 use simkit_backend::max_or_nan;
 
 /// Rows per band (the unit of parallel work).
@@ -73,11 +73,10 @@ pub(crate) fn interior_pass<T: Real, M: Model>(
                         i0,
                         i1,
                     };
-                    let mut outs: Vec<&mut [T]> = chunks
-                        .iter_mut()
-                        .map(|c| &mut c[r * w + i0..r * w + i1])
-                        .collect();
-                    model.update_row(&input, dt, ih2, &mut outs, average);
+                    let outs = chunks.iter_mut().map(|c| &mut c[r * w + i0..r * w + i1]);
+                    with_slices(outs, |outs| {
+                        model.update_row(&input, dt, ih2, outs, average)
+                    });
                 }
             }
         });
@@ -114,11 +113,12 @@ pub(crate) fn padded_max_diffusivity<T: Real, M: Model>(
 ///
 /// Explicit Euler fuses [`Config::steps_per_sweep`] steps into one sweep over the grid
 /// (temporal blocking: intermediate steps of a band of rows stay in a small per-thread
-/// buffer), bit-identical to one pass per step; Heun and grids with periodic south/north
-/// edges take one pass per stage.
+/// buffer), bit-identical to one pass per step, for every edge condition; Heun takes one
+/// pass per stage.
 ///
-/// The blow-up check keeps a copy of the padded fields as they were at the last check that
-/// passed (`good`, one copy per check) and puts it back when a check fails.
+/// The blow-up check keeps the padded fields as they were at the last check that passed
+/// (`good`) and puts them back when a check fails. For Euler no copy is made: the state that
+/// passed moves to `good` and the next sweep reads it from there.
 #[derive(Debug)]
 pub(crate) struct CpuRd<T: Real, M: Model> {
     model: M,
@@ -235,11 +235,11 @@ impl<T: Real, M: Model> CpuRd<T, M> {
     fn checked_run(&mut self, steps: u32) -> Result<()> {
         let (nx, ny, h) = (self.grid.nx(), self.grid.ny(), self.grid.h());
         let recheck = self.model.field_dependent_diffusivity();
-        self.good.copy_from_slice(&self.cur);
+        std::mem::swap(&mut self.good, &mut self.cur);
         let mut good_step = self.steps;
         let mut stretches = chunks(self.steps, steps, self.check_every).peekable();
         while let Some(n) = stretches.next() {
-            self.advance(n);
+            self.advance_from_good(n);
             self.snapshot_fresh = false;
             self.steps += u64::from(n);
             if let Some(what) = first_bad_cell(&self.cur, nx, ny) {
@@ -259,40 +259,39 @@ impl<T: Real, M: Model> CpuRd<T, M> {
                     };
                     recheck_bound(self.model.name(), d, h, &self.stepping, self.steps)?;
                 }
-                self.good.copy_from_slice(&self.cur);
+                std::mem::swap(&mut self.good, &mut self.cur);
                 good_step = self.steps;
             }
         }
         Ok(())
     }
 
-    /// Advances `steps` steps.
-    fn advance(&mut self, steps: u32) {
+    /// Advances `steps >= 1` steps from the state in `good` (which is left as it is) into
+    /// `cur`.
+    fn advance_from_good(&mut self, steps: u32) {
         let mut cur = std::mem::take(&mut self.cur);
         let mut tmp = std::mem::take(&mut self.tmp);
         match self.stepping.integrator {
             Integrator::Euler => {
-                let fuse = self.steps_per_sweep > 1 && can_fuse(self.grid.boundaries());
                 let mut left = steps;
                 while left > 0 {
-                    let k = if fuse {
-                        left.min(self.steps_per_sweep)
-                    } else {
-                        1
-                    };
+                    let k = left.min(self.steps_per_sweep);
+                    let src = if left == steps { &self.good } else { &cur };
                     left -= k;
                     self.next_dmax = None;
                     if k == 1 {
-                        self.pass(&cur, &mut tmp, false);
+                        self.pass(src, &mut tmp, false);
                     } else {
                         // The last sweep of the call also finds the next call's stability bound.
                         let want = left == 0 && self.model.field_dependent_diffusivity();
-                        self.next_dmax = self.fused(k as usize, &cur, &mut tmp, want);
+                        self.next_dmax = self.fused(k as usize, src, &mut tmp, want);
                     }
                     std::mem::swap(&mut cur, &mut tmp);
                 }
             }
             Integrator::Heun => {
+                // The second stage averages with the state it overwrites.
+                cur.copy_from_slice(&self.good);
                 self.next_dmax = None;
                 for _ in 0..steps {
                     self.pass(&cur, &mut tmp, false);
@@ -307,17 +306,7 @@ impl<T: Real, M: Model> CpuRd<T, M> {
 
 impl<T: Real, M: Model> Engine<T, M> for CpuRd<T, M> {
     fn step(&mut self, steps: u32) -> Result<()> {
-        let end = self.steps.checked_add(u64::from(steps));
-        if end.is_none() {
-            return Err(Error::invalid(
-                "steps",
-                steps,
-                format!(
-                    "{} steps are done: the step counter would overflow",
-                    self.steps
-                ),
-            ));
-        }
+        end_step(self.steps, steps)?;
         if self.model.field_dependent_diffusivity() {
             let d = match self.next_dmax {
                 Some(d) => d,

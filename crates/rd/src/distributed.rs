@@ -1,15 +1,18 @@
 //! [`DistributedRd`]: one grid cut into blocks over the ranks of a [`Comm`], each rank
 //! advancing its block on the CPU, bit-identical to the single-process CPU run.
 
+use std::path::Path;
+
 use simkit_backend::comm::{Block, CartDecomposition, Comm};
 use simkit_backend::guard::{blow_up, chunks, first_non_finite};
-use simkit_backend::{Error, Real, Result};
+use simkit_backend::{Real, Result};
 
 use crate::boundary::{Boundaries, Boundary, fill_ghosts, ghost_value};
 use crate::config::Config;
 use crate::cpu::{interior_pass, padded_max_diffusivity};
 use crate::grid::{Grid, pad};
 use crate::model::Model;
+use crate::sim::{RunState, decode_checkpoint, encode_checkpoint};
 use crate::stepper::{
     Integrator, Stepping, check_dt, check_dt_with, check_model, divergence_cause, dt_bound,
     recheck_bound,
@@ -33,6 +36,10 @@ use crate::stepper::{
 /// over the ranks before anything is decided, so all ranks roll back together and return
 /// the same [`Error::BlowUp`] (naming the same first bad cell, in global coordinates) as
 /// the single-process run.
+///
+/// Checkpoints are those of [`crate::Rd`]: [`DistributedRd::checkpoint`] gathers the grid on
+/// rank 0 and encodes it as `Rd` does, and [`DistributedRd::resume`] takes such bytes on any
+/// number of ranks, so a run moves between one process and any rank count, bit for bit.
 ///
 /// Every method that takes `&mut self` or returns a `Result` is collective: all ranks call
 /// it, in the same order. Each rank builds the run from the whole initial grid (simple,
@@ -62,8 +69,12 @@ pub struct DistributedRd<T: Real, M: Model> {
     decomposition: CartDecomposition,
     block: Block,
     model: M,
-    stepping: Stepping,
-    check_every: u32,
+    /// The settings (its stepping is the run's).
+    config: Config,
+    /// Simulated time at step `epoch_step` (carried through checkpoints of [`crate::Rd`]).
+    epoch_time: f64,
+    /// Step of the last change of `dt` in the run this one was resumed from.
+    epoch_step: u64,
     h: f64,
     boundaries: Boundaries,
     /// The padded species planes of this rank's block, `(len_x + 2) x (len_y + 2)` each.
@@ -82,7 +93,7 @@ impl<T: Real, M: Model> std::fmt::Debug for DistributedRd<T, M> {
             .field("comm", &self.comm)
             .field("decomposition", &self.decomposition)
             .field("model", &self.model)
-            .field("stepping", &self.stepping)
+            .field("stepping", &self.config.stepping)
             .field("steps", &self.steps)
             .finish()
     }
@@ -150,8 +161,9 @@ impl<T: Real, M: Model> DistributedRd<T, M> {
             decomposition,
             block,
             model,
-            stepping: config.stepping,
-            check_every: config.check_every,
+            config: *config,
+            epoch_time: 0.0,
+            epoch_step: 0,
             h: grid.h(),
             boundaries: bc,
             tmp: cur.clone(),
@@ -160,6 +172,49 @@ impl<T: Real, M: Model> DistributedRd<T, M> {
             coef,
             steps: 0,
         })
+    }
+
+    /// Resumes from checkpoint bytes of [`crate::Rd`] (`Restart::checkpoint`) or of
+    /// [`DistributedRd::checkpoint`], on any number of ranks: the run goes on bit for bit
+    /// (steps, simulated time and fields). Every rank passes the same bytes (read the file on
+    /// every rank, or on rank 0 and [`Comm::broadcast_from_root`]). Collective.
+    ///
+    /// Errors: those of `Rd::resume` (corrupt bytes, another crate, version, model or
+    /// precision) and of [`DistributedRd::new`].
+    pub fn resume(bytes: &[u8], comm: Comm) -> Result<Self> {
+        let s = decode_checkpoint::<T, M>(bytes)?;
+        let mut run = Self::new(&s.grid, s.model, &s.config, comm)?;
+        run.steps = s.steps;
+        run.epoch_time = s.epoch_time;
+        run.epoch_step = s.epoch_step;
+        Ok(run)
+    }
+
+    /// The checkpoint bytes of the run on rank 0 (`Some`; `None` on the other ranks), in
+    /// the format of [`crate::Rd`]'s checkpoints: resume them with `Rd::resume` in one
+    /// process or with [`DistributedRd::resume`] on any number of ranks. Collective (the
+    /// grid is gathered on rank 0).
+    pub fn checkpoint(&self) -> Result<Option<Vec<u8>>> {
+        let Some(grid) = self.gather()? else {
+            return Ok(None);
+        };
+        encode_checkpoint(&RunState {
+            grid,
+            model: self.model.clone(),
+            config: self.config,
+            steps: self.steps,
+            epoch_time: self.epoch_time,
+            epoch_step: self.epoch_step,
+        })
+        .map(Some)
+    }
+
+    /// Writes [`DistributedRd::checkpoint`] to `path` from rank 0, atomically (parent
+    /// directories created); collective: every rank returns once the file is complete, with
+    /// rank 0's error if it failed (the other ranks get an [`Error::Io`] naming the path).
+    pub fn write_checkpoint(&self, path: impl AsRef<Path>) -> Result<()> {
+        let bytes = self.checkpoint()?;
+        self.comm.write_from_root(path.as_ref(), bytes.as_deref())
     }
 
     /// The communicator.
@@ -184,7 +239,7 @@ impl<T: Real, M: Model> DistributedRd<T, M> {
 
     /// The time-stepping settings.
     pub fn stepping(&self) -> Stepping {
-        self.stepping
+        self.config.stepping
     }
 
     /// Steps taken so far.
@@ -195,19 +250,10 @@ impl<T: Real, M: Model> DistributedRd<T, M> {
     /// Advances `steps` steps with the checks of [`crate::Rd`] (same steps checked, same
     /// errors, same rollback), decided together by all ranks. Collective.
     pub fn step(&mut self, steps: u32) -> Result<()> {
-        if self.steps.checked_add(u64::from(steps)).is_none() {
-            return Err(Error::invalid(
-                "steps",
-                steps,
-                format!(
-                    "{} steps are done: the step counter would overflow",
-                    self.steps
-                ),
-            ));
-        }
+        simkit_backend::guard::end_step(self.steps, steps)?;
         if self.model.field_dependent_diffusivity() {
             let d = self.max_diffusivity()?;
-            check_dt_with(self.model.name(), d, self.h, &self.stepping)?;
+            check_dt_with(self.model.name(), d, self.h, &self.config.stepping)?;
         }
         if steps == 0 {
             return Ok(());
@@ -247,7 +293,7 @@ impl<T: Real, M: Model> DistributedRd<T, M> {
         let recheck = self.model.field_dependent_diffusivity();
         self.good.copy_from_slice(&self.cur);
         let mut good_step = self.steps;
-        let mut stretches = chunks(self.steps, steps, self.check_every).peekable();
+        let mut stretches = chunks(self.steps, steps, self.config.check_every).peekable();
         while let Some(n) = stretches.next() {
             self.advance(n)?;
             self.steps += u64::from(n);
@@ -256,13 +302,19 @@ impl<T: Real, M: Model> DistributedRd<T, M> {
                 self.cur.copy_from_slice(&self.good);
                 self.steps = good_step;
                 let bound = dt_bound(self.max_diffusivity()?, self.h);
-                let cause = divergence_cause(self.model.name(), &self.stepping, bound);
+                let cause = divergence_cause(self.model.name(), &self.config.stepping, bound);
                 return Err(blow_up(failed, good_step, what, cause));
             }
             if stretches.peek().is_some() {
                 if recheck {
                     let d = self.max_diffusivity()?;
-                    recheck_bound(self.model.name(), d, self.h, &self.stepping, self.steps)?;
+                    recheck_bound(
+                        self.model.name(),
+                        d,
+                        self.h,
+                        &self.config.stepping,
+                        self.steps,
+                    )?;
                 }
                 self.good.copy_from_slice(&self.cur);
                 good_step = self.steps;
@@ -277,7 +329,7 @@ impl<T: Real, M: Model> DistributedRd<T, M> {
         let mut tmp = std::mem::take(&mut self.tmp);
         let mut r = Ok(());
         for _ in 0..steps {
-            r = match self.stepping.integrator {
+            r = match self.config.stepping.integrator {
                 Integrator::Euler => self.pass(&cur, &mut tmp, false).map(|()| {
                     std::mem::swap(&mut cur, &mut tmp);
                 }),
@@ -299,7 +351,7 @@ impl<T: Real, M: Model> DistributedRd<T, M> {
     fn pass(&self, src: &[T], dst: &mut [T], average: bool) -> Result<()> {
         let [nx, ny] = self.block.len;
         let ih2 = 1.0 / (self.h * self.h);
-        let dt = self.stepping.dt;
+        let dt = self.config.stepping.dt;
         interior_pass(&self.model, nx, ny, &self.coef, src, dst, dt, ih2, average);
         self.decomposition.exchange_halo(&self.comm, dst, 1)?;
         let nb = self.decomposition.neighbors(self.comm.rank());

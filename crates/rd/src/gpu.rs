@@ -595,16 +595,7 @@ impl<T: Real, M: Model> GpuRd<T, M> {
 
 impl<T: Real, M: Model> Engine<T, M> for GpuRd<T, M> {
     fn step(&mut self, steps: u32) -> Result<()> {
-        if self.steps.checked_add(u64::from(steps)).is_none() {
-            return Err(Error::invalid(
-                "steps",
-                steps,
-                format!(
-                    "{} steps are done: the step counter would overflow",
-                    self.steps
-                ),
-            ));
-        }
+        simkit_backend::guard::end_step(self.steps, steps)?;
         let field_dependent = self.model.field_dependent_diffusivity();
         if field_dependent {
             check_dt_with(

@@ -42,9 +42,10 @@ use crate::{Boundaries, Config, Grid, Model, Real, Stepping};
 ///
 /// # Checkpoints
 ///
-/// [`Rd`] implements [`Restart`]: the checkpoint holds the grid (size, `h`, edges, fields), the model, the [`Config`], the step
-/// counter and the simulated time, and a resumed run continues bit for bit on the same
-/// backend.
+/// [`Rd`] implements [`Restart`]: the checkpoint holds the grid (size, `h`, edges, fields),
+/// the model, the [`Config`], the step counter and the simulated time, and a resumed run
+/// continues bit for bit on the same backend. [`crate::DistributedRd`] writes and reads the
+/// same bytes, so a run moves between one process and any number of ranks.
 pub struct Rd<T: Real, M: Model> {
     engine: Box<dyn Engine<T, M>>,
     config: Config,
@@ -211,85 +212,128 @@ fn model_string<T: Real, M>() -> String {
     format!("Rd<{}, {}>", T::WGSL, std::any::type_name::<M>())
 }
 
+/// What a checkpoint of `rd` holds besides its format header: the run of [`Rd`] or of
+/// [`crate::DistributedRd`] (which writes and reads the same bytes).
+pub(crate) struct RunState<T: Real, M> {
+    /// The whole grid.
+    pub grid: Grid<T>,
+    /// The model.
+    pub model: M,
+    /// The settings, with the current stepping.
+    pub config: Config,
+    /// Steps done.
+    pub steps: u64,
+    /// Simulated time at step `epoch_step` (the last change of `dt`).
+    pub epoch_time: f64,
+    /// Step of the last change of `dt`.
+    pub epoch_step: u64,
+}
+
+/// The checkpoint bytes of `run`.
+pub(crate) fn encode_checkpoint<T: Real, M: Model>(run: &RunState<T, M>) -> Result<Vec<u8>> {
+    let grid = &run.grid;
+    let fields = match T::PRECISION {
+        // `to_f64` is exact and f32 values convert back exactly.
+        Precision::F32 => SavedFields::F32(
+            grid.fields()
+                .iter()
+                .map(|f| f.iter().map(|v| v.to_f64() as f32).collect())
+                .collect(),
+        ),
+        Precision::F64 => SavedFields::F64(
+            grid.fields()
+                .iter()
+                .map(|f| f.iter().map(|v| v.to_f64()).collect())
+                .collect(),
+        ),
+    };
+    let saved = Saved {
+        nx: grid.nx() as u64,
+        ny: grid.ny() as u64,
+        h: grid.h(),
+        boundaries: grid.boundaries().clone(),
+        fields,
+        model: run.model.clone(),
+        config: run.config,
+        steps: run.steps,
+        epoch_time: run.epoch_time,
+        epoch_step: run.epoch_step,
+    };
+    checkpoint::encode(
+        env!("CARGO_PKG_NAME"),
+        env!("CARGO_PKG_VERSION"),
+        &model_string::<T, M>(),
+        &saved,
+    )
+}
+
+/// The run a checkpoint holds, its grid and clock validated (the model, config and `dt`
+/// are validated by the constructor that takes it).
+pub(crate) fn decode_checkpoint<T: Real, M: Model>(bytes: &[u8]) -> Result<RunState<T, M>> {
+    let s: Saved<M> = checkpoint::decode(
+        bytes,
+        env!("CARGO_PKG_NAME"),
+        env!("CARGO_PKG_VERSION"),
+        &model_string::<T, M>(),
+    )?;
+    let fields: Vec<Vec<T>> = match (s.fields, T::PRECISION) {
+        (SavedFields::F32(f), Precision::F32) => f
+            .into_iter()
+            .map(|f| f.into_iter().map(|v| T::from_f64(f64::from(v))).collect())
+            .collect(),
+        (SavedFields::F64(f), Precision::F64) => f
+            .into_iter()
+            .map(|f| f.into_iter().map(T::from_f64).collect())
+            .collect(),
+        _ => {
+            return Err(Error::checkpoint(format!(
+                "the fields are not in {}; resume it with the precision that wrote it",
+                T::WGSL
+            )));
+        }
+    };
+    let size = |v: u64| {
+        usize::try_from(v)
+            .map_err(|_| Error::checkpoint(format!("grid size {v} does not fit this machine")))
+    };
+    let grid = Grid::new(size(s.nx)?, size(s.ny)?, s.h, s.boundaries, fields)?;
+    if !s.epoch_time.is_finite() || s.epoch_step > s.steps {
+        return Err(Error::checkpoint(format!(
+            "simulated time {} at step {} of {} steps is not a valid clock",
+            s.epoch_time, s.epoch_step, s.steps
+        )));
+    }
+    Ok(RunState {
+        grid,
+        model: s.model,
+        config: s.config,
+        steps: s.steps,
+        epoch_time: s.epoch_time,
+        epoch_step: s.epoch_step,
+    })
+}
+
 impl<T: Real, M: Model> Restart for Rd<T, M> {
     /// The complete state: grid, model, config, step counter and simulated time (a GPU run
     /// downloads its fields).
     fn checkpoint(&mut self) -> Result<Vec<u8>> {
-        let grid = self.engine.state()?;
-        let fields = match T::PRECISION {
-            // `to_f64` is exact and f32 values convert back exactly.
-            Precision::F32 => SavedFields::F32(
-                grid.fields()
-                    .iter()
-                    .map(|f| f.iter().map(|v| v.to_f64() as f32).collect())
-                    .collect(),
-            ),
-            Precision::F64 => SavedFields::F64(
-                grid.fields()
-                    .iter()
-                    .map(|f| f.iter().map(|v| v.to_f64()).collect())
-                    .collect(),
-            ),
-        };
         let mut config = self.config;
         config.stepping = self.engine.stepping();
-        let saved = Saved {
-            nx: grid.nx() as u64,
-            ny: grid.ny() as u64,
-            h: grid.h(),
-            boundaries: grid.boundaries().clone(),
-            fields,
+        encode_checkpoint(&RunState {
+            grid: self.engine.state()?,
             model: self.engine.model().clone(),
             config,
             steps: self.engine.steps_done(),
             epoch_time: self.epoch_time,
             epoch_step: self.epoch_step,
-        };
-        checkpoint::encode(
-            env!("CARGO_PKG_NAME"),
-            env!("CARGO_PKG_VERSION"),
-            &model_string::<T, M>(),
-            &saved,
-        )
+        })
     }
 
     /// Rebuilds the run on `backend`, validating the grid, model, config and `dt` as
     /// [`Rd::new`] does.
     fn resume(bytes: &[u8], backend: Backend<'_>) -> Result<Self> {
-        let s: Saved<M> = checkpoint::decode(
-            bytes,
-            env!("CARGO_PKG_NAME"),
-            env!("CARGO_PKG_VERSION"),
-            &model_string::<T, M>(),
-        )?;
-        let fields: Vec<Vec<T>> = match (s.fields, T::PRECISION) {
-            (SavedFields::F32(f), Precision::F32) => f
-                .into_iter()
-                .map(|f| f.into_iter().map(|v| T::from_f64(f64::from(v))).collect())
-                .collect(),
-            (SavedFields::F64(f), Precision::F64) => f
-                .into_iter()
-                .map(|f| f.into_iter().map(T::from_f64).collect())
-                .collect(),
-            _ => {
-                return Err(Error::checkpoint(format!(
-                    "the fields are not in {}; resume it with the precision that wrote it",
-                    T::WGSL
-                )));
-            }
-        };
-        let size = |v: u64| {
-            usize::try_from(v)
-                .map_err(|_| Error::checkpoint(format!("grid size {v} does not fit this machine")))
-        };
-        let grid = Grid::new(size(s.nx)?, size(s.ny)?, s.h, s.boundaries, fields)?;
-        if !s.epoch_time.is_finite() || s.epoch_step > s.steps {
-            return Err(Error::checkpoint(format!(
-                "simulated time {} at step {} of {} steps is not a valid clock",
-                s.epoch_time, s.epoch_step, s.steps
-            )));
-        }
-        Self::build(grid, s.model, &s.config, backend, s.steps, s.epoch_time).map(|mut r| {
+        let s = decode_checkpoint::<T, M>(bytes)?;
+        Self::build(s.grid, s.model, &s.config, backend, s.steps, s.epoch_time).map(|mut r| {
             r.epoch_step = s.epoch_step;
             r
         })

@@ -9,38 +9,14 @@
 
 mod common;
 
-use simkit_backend::testing::{is_mpi_child, mpirun_self};
-
-use simkit_backend::comm::Comm;
+use simkit_backend::testing::check_on_ranks;
 
 #[test]
 fn ranks_2_3_4_match_one_process_bit_for_bit() {
-    if is_mpi_child() {
-        let comm = Comm::mpi().expect("MPI initialises");
-        // A failure on one rank must stop all (the others would wait for it forever).
-        let run =
-            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| common::check_all(&comm)));
-        let n = match run {
-            Ok(Ok(n)) => n,
-            Ok(Err(e)) => {
-                eprintln!("rank {}: {e}", comm.rank());
-                comm.abort(1)
-            }
-            Err(_) => comm.abort(2),
-        };
-        if comm.is_root() {
-            println!("SIMKIT_MPI_OK {n} cases on {} ranks", comm.size());
-        }
-        return;
-    }
-    let Some(outputs) = mpirun_self("ranks_2_3_4_match_one_process_bit_for_bit", &[2, 3, 4]) else {
-        return;
-    };
-    for (p, stdout) in [2, 3, 4].into_iter().zip(outputs) {
-        let want = format!("SIMKIT_MPI_OK 26 cases on {p} ranks");
-        assert!(
-            stdout.contains(&want),
-            "mpirun -np {p}: the cases did not run on rank 0 (no `{want}`):\n{stdout}"
-        );
-    }
+    check_on_ranks(
+        "ranks_2_3_4_match_one_process_bit_for_bit",
+        &[2, 3, 4],
+        27,
+        common::check_all,
+    );
 }

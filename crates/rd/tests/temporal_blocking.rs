@@ -19,6 +19,16 @@ fn run<T: Real, M: Model>(grid: &Grid<T>, model: &M, dt: f64, k: u32, steps: u32
 }
 
 fn same_for_every_depth<T: Real, M: Model>(grid: &Grid<T>, model: &M, dt: f64, steps: u32) {
+    same_for_depths(grid, model, dt, steps, &[2, 3, 4, 7]);
+}
+
+fn same_for_depths<T: Real, M: Model>(
+    grid: &Grid<T>,
+    model: &M,
+    dt: f64,
+    steps: u32,
+    depths: &[u32],
+) {
     let plain = run(grid, model, dt, 1, steps);
     assert_ne!(&plain, grid, "the fields must change");
     for threads in [1, 3] {
@@ -26,17 +36,30 @@ fn same_for_every_depth<T: Real, M: Model>(grid: &Grid<T>, model: &M, dt: f64, s
             .num_threads(threads)
             .build()
             .unwrap();
-        for k in [2, 3, 4, 7] {
+        for &k in depths {
             let fused = pool.install(|| run(grid, model, dt, k, steps));
             assert!(
                 fused == plain,
-                "{} {}x{}: k = {k}, {threads} threads differs from one pass per step",
+                "{} {}x{} {:?}: k = {k}, {threads} threads differs from one pass per step",
                 model.name(),
                 grid.nx(),
-                grid.ny()
+                grid.ny(),
+                grid.boundaries()
             );
         }
     }
+}
+
+/// A grid of `species` fields of uniform noise in [0, 1).
+fn noise_grid(nx: usize, ny: usize, bc: Boundaries, species: u32) -> Grid<f64> {
+    let fields = (0..species)
+        .map(|s| {
+            (0..nx * ny)
+                .map(|k| f64::from(rng_uniform(7 + s, 0, k as u32)))
+                .collect()
+        })
+        .collect();
+    Grid::new(nx, ny, 1.0, bc, fields).unwrap()
 }
 
 /// The colony scene (no-flux, coefficient field, f32 and f64) on grids of 1, 2, 3 bands and a
@@ -52,15 +75,11 @@ fn colony_fused_is_bit_identical() {
 }
 
 /// Mixed edges: Dirichlet south (one value per species), no-flux north, periodic or Dirichlet
-/// west/east; Gray–Scott with no-flux north and Dirichlet south.
+/// west/east; diffusion and Gray–Scott, also on grids of 1-3 rows with k up to 16.
 #[test]
 fn mixed_edges_fused_are_bit_identical() {
-    let (nx, ny) = (29, 71);
-    let noise = |seed| {
-        (0..nx * ny)
-            .map(|k| f64::from(rng_uniform(seed, 0, k as u32)))
-            .collect::<Vec<f64>>()
-    };
+    let diffusion = Diffusion::new(&[1.0, 0.4]).unwrap();
+    let gs = GrayScott::new(1.0, 0.5, 0.04, 0.06).unwrap();
     for (west, east) in [
         (Boundary::Periodic, Boundary::Periodic),
         (Boundary::Dirichlet(vec![0.5, -1.0]), Boundary::NoFlux),
@@ -71,23 +90,69 @@ fn mixed_edges_fused_are_bit_identical() {
             south: Boundary::Dirichlet(vec![1.0, -0.5]),
             north: Boundary::NoFlux,
         };
-        let grid = Grid::new(nx, ny, 1.0, bc.clone(), vec![noise(1), noise(2)]).unwrap();
-        same_for_every_depth(&grid, &Diffusion::new(&[1.0, 0.4]).unwrap(), 0.2, 31);
-        let gs = GrayScott::new(1.0, 0.5, 0.04, 0.06).unwrap();
+        let grid = noise_grid(29, 71, bc.clone(), 2);
+        same_for_every_depth(&grid, &diffusion, 0.2, 31);
         same_for_every_depth(&grid.convert::<f32>(), &gs, 0.2, 31);
+        for (nx, ny) in [(9, 1), (7, 2), (6, 3)] {
+            let grid = noise_grid(nx, ny, bc.clone(), 2);
+            same_for_depths(&grid, &diffusion, 0.2, 37, &[2, 3, 5, 16]);
+            same_for_depths(&grid.convert::<f32>(), &gs, 0.2, 37, &[2, 3, 5, 16]);
+        }
     }
 }
 
-/// Periodic south/north edges fall back to one pass per step (still identical), and bad
-/// depths are refused.
+/// Periodic south/north edges: the bands at the bottom and top take their halo rows from
+/// the other end of the grid. Grids of 1-3 rows (lower than the halo, so a row wraps more than
+/// once) with k up to 16, grids lower than a band and heights that are not a multiple of the
+/// band; periodic, Dirichlet and no-flux west/east edges; diffusion, Gray–Scott (f32, f64)
+/// and the colony scene made periodic (a coefficient field that wraps too).
 #[test]
-fn periodic_y_and_bad_depths() {
-    let f = (0..24 * 24)
-        .map(|k| f64::from(rng_uniform(3, 0, k as u32)))
-        .collect();
-    let grid = Grid::new(24, 24, 1.0, Boundaries::periodic(), vec![f]).unwrap();
+fn periodic_y_fused_is_bit_identical() {
+    let wests = [
+        (Boundary::Periodic, Boundary::Periodic),
+        (Boundary::Dirichlet(vec![0.5, -1.0]), Boundary::NoFlux),
+    ];
+    let gs = GrayScott::new(1.0, 0.5, 0.04, 0.06).unwrap();
+    let diffusion = Diffusion::new(&[1.0, 0.4]).unwrap();
+    for (west, east) in wests {
+        let bc = Boundaries {
+            west,
+            east,
+            south: Boundary::Periodic,
+            north: Boundary::Periodic,
+        };
+        for (nx, ny) in [(9, 1), (7, 2), (6, 3)] {
+            let grid = noise_grid(nx, ny, bc.clone(), 2);
+            let depths = [2, 3, 5, 16];
+            same_for_depths(&grid, &diffusion, 0.2, 37, &depths);
+            same_for_depths(&grid.convert::<f32>(), &gs, 0.2, 37, &depths);
+        }
+        for (nx, ny) in [(24, 24), (17, 63), (29, 64), (13, 130), (11, 200)] {
+            let grid = noise_grid(nx, ny, bc.clone(), 2);
+            same_for_every_depth(&grid, &diffusion, 0.2, 31);
+            same_for_every_depth(&grid, &gs, 0.2, 31);
+            same_for_every_depth(&grid.convert::<f32>(), &gs, 0.2, 31);
+        }
+    }
+    for (nx, ny) in [(40, 37), (20, 1), (18, 3), (70, 65)] {
+        let (grid, model) = colony_scene::<f32>(nx, ny, 13).unwrap();
+        let periodic = Grid::new(
+            nx,
+            ny,
+            grid.h(),
+            Boundaries::periodic(),
+            grid.fields().to_vec(),
+        )
+        .unwrap();
+        same_for_every_depth(&periodic, &model, 0.005, 23);
+    }
+}
+
+/// The default depth and the bounds on it: 0 and 17 are refused.
+#[test]
+fn default_and_bad_depths() {
+    let grid = noise_grid(24, 24, Boundaries::periodic(), 1);
     let model = Diffusion::new(&[1.0]).unwrap();
-    same_for_every_depth(&grid, &model, 0.2, 9);
     let config = Config::new(Stepping::euler(0.2));
     assert_eq!(config.steps_per_sweep, DEFAULT_STEPS_PER_SWEEP);
     for bad in [0, 17] {

@@ -529,5 +529,10 @@ mod tests {
         comm.shift(&[1.0, 2.0], Some(0), &mut r, Some(0), 0)
             .unwrap();
         assert_eq!(r, [1.0, 2.0]);
+        assert_eq!(
+            comm.broadcast_from_root(Some(vec![3u8, 4])).unwrap(),
+            [3, 4]
+        );
+        assert!(comm.broadcast_from_root::<u8>(None).is_err());
     }
 }

@@ -301,6 +301,75 @@ impl Comm {
         Ok(self.all_gather(&[u8::from(x)])?.contains(&1))
     }
 
+    /// Rank 0's `data` on every rank (`MPI_Bcast` of the length, then of the values): rank 0
+    /// passes `Some`, the others anything (their `data` is ignored). E.g. rank 0 reads a
+    /// checkpoint file and every rank resumes from the bytes.
+    ///
+    /// Errors: rank 0 passes `None`.
+    pub fn broadcast_from_root<T: Pod>(&self, data: Option<Vec<T>>) -> Result<Vec<T>> {
+        let root_missing = || {
+            Error::invalid(
+                "broadcast_from_root",
+                "None on rank 0",
+                "rank 0 must pass the data (Some) that the other ranks receive",
+            )
+        };
+        match &self.kind {
+            Kind::Serial => data.ok_or_else(root_missing),
+            #[cfg(feature = "mpi")]
+            Kind::Mpi(m) => {
+                use mpi::traits::{Communicator, Root};
+                let root = m.world.process_at_rank(0);
+                // A length of u64::MAX stands for "rank 0 has nothing", so all ranks fail.
+                let mut len = match (&data, self.is_root()) {
+                    (Some(d), true) => std::mem::size_of_val(d.as_slice()) as u64,
+                    (None, true) => u64::MAX,
+                    _ => 0,
+                };
+                root.broadcast_into(&mut len);
+                if len == u64::MAX {
+                    return Err(root_missing());
+                }
+                let n = usize::try_from(len).map_err(|_| {
+                    Error::invalid(
+                        "broadcast_from_root",
+                        format!("{len} bytes"),
+                        "too many for this machine",
+                    )
+                })?;
+                let mut bytes = vec![0u8; n];
+                if let (true, Some(d)) = (self.is_root(), &data) {
+                    bytes.copy_from_slice(bytemuck::cast_slice(d));
+                }
+                // (OpenMPI refuses an empty buffer's dangling pointer: nothing to send.)
+                if n > 0 {
+                    root.broadcast_into(&mut bytes[..]);
+                }
+                Ok(from_bytes(&bytes))
+            }
+        }
+    }
+
+    /// Writes `bytes` (rank 0's; the other ranks pass `None`) to `path` from rank 0, atomically
+    /// ([`crate::checkpoint::write_file`]: parent directories are created). Collective: every
+    /// rank returns once the file is complete; if rank 0 fails it returns its error and the
+    /// other ranks an [`Error::Io`] naming the path. For checkpoints gathered on rank 0.
+    pub fn write_from_root(&self, path: &std::path::Path, bytes: Option<&[u8]>) -> Result<()> {
+        let written = match bytes {
+            Some(b) if self.is_root() => crate::checkpoint::write_file(path, b),
+            _ => Ok(()),
+        };
+        // Rank 0 tells the others whether the file is there.
+        if self.all_any(written.is_err())? {
+            written?;
+            return Err(Error::Io {
+                path: path.display().to_string(),
+                message: "rank 0 could not write the file (its error is on rank 0)".into(),
+            });
+        }
+        Ok(())
+    }
+
     /// Every rank's `send` (any length per rank) on rank 0, in rank order: `Some` there,
     /// `None` on the other ranks.
     pub fn gather_to_root<T: Pod>(&self, send: &[T]) -> Result<Option<Vec<Vec<T>>>> {

@@ -9,6 +9,8 @@
 mod mpirun;
 #[cfg(feature = "gpu")]
 mod wgsl;
+#[cfg(feature = "mpi")]
+pub use mpirun::check_on_ranks;
 pub use mpirun::{MPI_CHILD_ENV, REQUIRE_MPI_ENV, is_mpi_child, mpirun_self};
 #[cfg(feature = "gpu")]
 pub use wgsl::{FieldOffset, WgslStruct, assert_mirrors, eval_wgsl, wgsl_struct};

@@ -60,3 +60,48 @@ pub fn mpirun_self(test: &str, ranks: &[usize]) -> Option<Vec<String>> {
     });
     Some(runs.collect())
 }
+
+/// The whole of a test that runs `cases` on each rank count of `ranks` under `mpirun`: in
+/// the test process, launches the test binary on every rank count ([`mpirun_self`]) and
+/// asserts that rank 0 reported `expected` cases each time; in a rank it started, runs
+/// `cases` over [`Comm::mpi`](crate::comm::Comm::mpi) and reports the number of cases it
+/// checked. A failure or panic on any rank aborts every rank (the others would otherwise
+/// wait for it forever), which fails the launching test with the rank's message.
+///
+/// # Panics
+/// As [`mpirun_self`], and when a run does not report `expected` cases.
+#[cfg(feature = "mpi")]
+pub fn check_on_ranks(
+    test: &str,
+    ranks: &[usize],
+    expected: usize,
+    cases: impl FnOnce(&crate::comm::Comm) -> Result<usize, String>,
+) {
+    const MARK: &str = "SIMKIT_MPI_OK";
+    if is_mpi_child() {
+        let comm = crate::comm::Comm::mpi().expect("MPI initialises");
+        let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| cases(&comm)));
+        let n = match run {
+            Ok(Ok(n)) => n,
+            Ok(Err(e)) => {
+                eprintln!("{test}: rank {}: {e}", comm.rank());
+                comm.abort(1)
+            }
+            Err(_) => comm.abort(2),
+        };
+        if comm.is_root() {
+            println!("{MARK} {n} cases on {} ranks", comm.size());
+        }
+        return;
+    }
+    let Some(outputs) = mpirun_self(test, ranks) else {
+        return;
+    };
+    for (p, stdout) in ranks.iter().zip(outputs) {
+        let want = format!("{MARK} {expected} cases on {p} ranks");
+        assert!(
+            stdout.contains(&want),
+            "{test}: mpirun -np {p}: rank 0 did not report `{want}`:\n{stdout}"
+        );
+    }
+}

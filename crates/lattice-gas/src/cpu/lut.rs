@@ -19,11 +19,7 @@ use crate::{CollisionTable, Config, EAST, Lattice, REST, WALL, WEST};
 pub struct LutCpu {
     lattice: Lattice,
     next: Vec<u8>,
-    config: Config,
-    /// The collision table indexed by `state | chirality << 6`.
-    table: [u8; 256],
-    /// Whether the AVX-512 VBMI path runs.
-    vbmi: bool,
+    rule: LutRule,
     steps: u64,
 }
 
@@ -34,50 +30,43 @@ impl LutCpu {
         config.validate_for(&lattice)?;
         let next = vec![0; lattice.cells().len()];
         Ok(Self {
-            table: table256(&CollisionTable::new(config.rules)),
-            vbmi: has_vbmi(),
+            rule: LutRule::new(config),
             lattice,
             next,
-            config: config.clone(),
             steps: 0,
         })
     }
 
     /// Runs the portable scalar loop even where AVX-512 VBMI is present (for comparisons).
     pub fn force_scalar(mut self) -> Self {
-        self.vbmi = false;
+        self.rule.vbmi = false;
         self
     }
 
     /// Whether the AVX-512 VBMI path runs (decided at construction from the CPU's features).
     pub fn uses_vbmi(&self) -> bool {
-        self.vbmi
+        self.rule.vbmi
     }
 
     fn step_once(&mut self) {
         let w = self.lattice.width();
         let h = self.lattice.height();
-        let t = self.steps as u32;
-        let ctx = RowCtx {
+        let rows = self.rule.at_step(self.steps as u32);
+        let ctx = PadCtx {
             src: self.lattice.cells(),
             w,
             h,
-            config: &self.config,
-            table: &self.table,
-            vbmi: self.vbmi,
-            key: step_key(self.config.seed, t),
-            force_key: step_key(self.config.seed ^ FORCE_STREAM, t),
-            threshold: force_threshold(self.config.body_force),
+            config: &self.rule.config,
         };
-        let force = self.config.body_force > 0.0;
         self.next.par_chunks_mut(w).enumerate().for_each_init(
             || vec![0u8; 3 * (w + 2)],
             |pad, (j, row)| {
-                if force {
-                    ctx.row::<true>(j, row, pad);
-                } else {
-                    ctx.row::<false>(j, row, pad);
-                }
+                let (mid, rest) = pad.split_at_mut(w + 2);
+                let (up, down) = rest.split_at_mut(w + 2);
+                ctx.pad_row(Some(j), mid);
+                ctx.pad_row(ctx.neighbour_row(j, true), up);
+                ctx.pad_row(ctx.neighbour_row(j, false), down);
+                rows.row(j, (j * w) as u32, row, [mid, up, down], [true, true]);
             },
         );
         let cells = std::mem::take(&mut self.next);
@@ -87,19 +76,15 @@ impl LutCpu {
     }
 }
 
-struct RowCtx<'a> {
+/// The edges of a whole lattice: the padded copies of a row and of its neighbours.
+struct PadCtx<'a> {
     src: &'a [u8],
     w: usize,
     h: usize,
     config: &'a Config,
-    table: &'a [u8; 256],
-    vbmi: bool,
-    key: u32,
-    force_key: u32,
-    threshold: u32,
 }
 
-impl RowCtx<'_> {
+impl PadCtx<'_> {
     /// Copies row `jj` (wrapped or absent) into `dst` (length w + 2) with one padding site
     /// on each side.
     fn pad_row(&self, jj: Option<usize>, dst: &mut [u8]) {
@@ -134,36 +119,107 @@ impl RowCtx<'_> {
             self.config.periodic_y.then_some(h - 1)
         }
     }
+}
 
-    #[inline(always)]
-    fn row<const FORCE: bool>(&self, j: usize, out: &mut [u8], pad: &mut [u8]) {
-        let w = self.w;
-        let (mid, rest) = pad.split_at_mut(w + 2);
-        let (up, down) = rest.split_at_mut(w + 2);
-        self.pad_row(Some(j), mid);
-        self.pad_row(self.neighbour_row(j, true), up);
-        self.pad_row(self.neighbour_row(j, false), down);
-        let odd = j & 1 == 1;
-        let done = self.sites_fast::<FORCE>(j, odd, out, [mid, up, down]);
-        if odd {
-            self.sites::<FORCE, true>(j, done, out, mid, up, down);
-        } else {
-            self.sites::<FORCE, false>(j, done, out, mid, up, down);
-        }
-        if self.config.inflow && out[0] & WALL == 0 {
-            out[0] = EAST;
-        }
-        if self.config.outflow && out[w - 1] & WALL == 0 {
-            out[w - 1] = 0;
+/// The lookup-table update rule: the settings, the collision table and whether the VBMI path
+/// runs. [`LutCpu`] and the blocks of [`crate::DistributedLatticeGas`] both step through it,
+/// so streaming, collision, forcing and the open columns are written once.
+#[derive(Clone, Debug)]
+pub(crate) struct LutRule {
+    config: Config,
+    /// The collision table indexed by `state | chirality << 6`.
+    table: [u8; 256],
+    /// Whether the AVX-512 VBMI path runs.
+    vbmi: bool,
+}
+
+impl LutRule {
+    /// The rule of `config` (validated by the caller), with the VBMI path where the CPU has
+    /// it.
+    pub(crate) fn new(config: &Config) -> Self {
+        Self {
+            table: table256(&CollisionTable::new(config.rules)),
+            vbmi: has_vbmi(),
+            config: config.clone(),
         }
     }
 
-    /// The VBMI path for the first `64 * (w / 64)` sites of row `j` (body force applied
+    /// The row update of step `step` (the number of steps completed before it, which keys
+    /// the random bits).
+    pub(crate) fn at_step(&self, step: u32) -> RowStep<'_> {
+        RowStep {
+            config: &self.config,
+            table: &self.table,
+            vbmi: self.vbmi,
+            key: step_key(self.config.seed, step),
+            force_key: step_key(self.config.seed ^ FORCE_STREAM, step),
+            threshold: force_threshold(self.config.body_force),
+        }
+    }
+}
+
+/// One step of the rule, applied to any run of consecutive sites of a row
+/// ([`RowStep::row`]).
+pub(crate) struct RowStep<'a> {
+    config: &'a Config,
+    table: &'a [u8; 256],
+    vbmi: bool,
+    key: u32,
+    force_key: u32,
+    threshold: u32,
+}
+
+impl RowStep<'_> {
+    /// The new states of `out.len()` consecutive sites of global row `j` (its parity picks
+    /// the neighbour offsets), the first of them global site index `first` (which keys the
+    /// random bits). `rows` are the padded old states of the same columns in row `j`, in
+    /// the row above (`j + 1`) and in the row below: `out.len() + 2` sites each, padded
+    /// index `q + 1` over `out[q]`, already wrapped or zero-filled at the lattice's edges.
+    /// `edges` says whether `out[0]` is in the lattice's first column and `out[last]` in its
+    /// last (where the inflow and outflow columns act).
+    #[inline(always)]
+    pub(crate) fn row(
+        &self,
+        j: usize,
+        first: u32,
+        out: &mut [u8],
+        rows: [&[u8]; 3],
+        edges: [bool; 2],
+    ) {
+        if self.config.body_force > 0.0 {
+            self.collide::<true>(j, first, out, rows);
+        } else {
+            self.collide::<false>(j, first, out, rows);
+        }
+        let n = out.len();
+        if edges[0] && self.config.inflow && out[0] & WALL == 0 {
+            out[0] = EAST;
+        }
+        if edges[1] && self.config.outflow && out[n - 1] & WALL == 0 {
+            out[n - 1] = 0;
+        }
+    }
+
+    /// Streaming, collision and body force of the run (the VBMI path first, the portable
+    /// loop for what it leaves).
+    #[inline(always)]
+    fn collide<const FORCE: bool>(&self, j: usize, first: u32, out: &mut [u8], rows: [&[u8]; 3]) {
+        let odd = j & 1 == 1;
+        let done = self.sites_fast::<FORCE>(first, odd, out, rows);
+        let [mid, up, down] = rows;
+        if odd {
+            self.sites::<FORCE, true>(first, done, out, mid, up, down);
+        } else {
+            self.sites::<FORCE, false>(first, done, out, mid, up, down);
+        }
+    }
+
+    /// The VBMI path for the first `64 * (out.len() / 64)` sites (body force applied
     /// afterwards); returns the number of sites done (0 without VBMI).
     #[cfg(target_arch = "x86_64")]
     fn sites_fast<const FORCE: bool>(
         &self,
-        j: usize,
+        first: u32,
         odd: bool,
         out: &mut [u8],
         rows: [&[u8]; 3],
@@ -172,7 +228,6 @@ impl RowCtx<'_> {
             return 0;
         }
         let table = self.table;
-        let first = (j * self.w) as u32;
         // SAFETY: `vbmi` is only set when `lut_vbmi::available()` returned true.
         let done = unsafe {
             if odd {
@@ -194,31 +249,25 @@ impl RowCtx<'_> {
     }
 
     #[cfg(not(target_arch = "x86_64"))]
-    fn sites_fast<const FORCE: bool>(
-        &self,
-        _: usize,
-        _: bool,
-        _: &mut [u8],
-        _: [&[u8]; 3],
-    ) -> usize {
+    fn sites_fast<const FORCE: bool>(&self, _: u32, _: bool, _: &mut [u8], _: [&[u8]; 3]) -> usize {
         0
     }
 
-    /// Gather + collide for the sites `start..w` of row `j` in two passes: the gather of
-    /// the incoming bits into `out` (branch-free byte operations the compiler vectorises),
-    /// then the lookup in place, in runs of sites that share one chirality hash (32
-    /// consecutive site indices).
+    /// Gather + collide for the sites `start..` of the run in two passes: the gather of the
+    /// incoming bits into `out` (branch-free byte operations the compiler vectorises), then
+    /// the lookup in place, in runs of sites that share one chirality hash (32 consecutive
+    /// site indices).
     #[inline(always)]
     fn sites<const FORCE: bool, const ODD: bool>(
         &self,
-        j: usize,
+        first: u32,
         start: usize,
         out: &mut [u8],
         mid: &[u8],
         up: &[u8],
         down: &[u8],
     ) {
-        let w = self.w;
+        let w = out.len();
         let len = w - start;
         // Padded index i + 1 is site i; its sources at i - 1 / i / i + 1 are padded i / i + 1
         // / i + 2: slices shifted by 0, 1 and 2.
@@ -237,10 +286,9 @@ impl RowCtx<'_> {
                 n | (u0[q] & 2) | (u1[q] & 4) | (d1[q] & 16) | (d0[q] & 32)
             };
         }
-        let base = (j * w) as u32;
         let mut i = start;
         while i < w {
-            let s0 = base + i as u32;
+            let s0 = first + i as u32;
             let run = (32 - (s0 & 31) as usize).min(w - i);
             let word = chirality_word(self.key, s0 >> 5) >> (s0 & 31);
             for (q, o) in out[i..i + run].iter_mut().enumerate() {

@@ -94,13 +94,13 @@ pub(crate) struct Inputs<'a, T, const D: usize> {
 
 /// Forces of block `nb`: `local[k]` gets the force on slot `nb.start() + k` from every
 /// pair the block lists (partners' reactions included: `local` spans the block and every
-/// slot its pairs reach, see [`reach`]), `ew[k]` the sums of `phi` and `r . F` over the
+/// slot its pairs reach, [`HalfListBlock::reach`]), `ew[k]` the sums of `phi` and `r . F` over the
 /// particle's listed pairs (each pair counted once, at its first particle) when `energy`
 /// is set (`ew` is left as it is otherwise; the forces are the same bits either way).
 ///
 /// # Safety
 /// Every partner `j` of `nb` must satisfy `j < pos.len()` and `j < nb.start() +
-/// local.len()` (`local.len() >= reach(nb) - nb.start()`), and `nb.end() <= pos.len()`.
+/// local.len()` (`local.len() >= nb.reach() - nb.start()`), and `nb.end() <= pos.len()`.
 pub(crate) unsafe fn block_forces<T: Real, const D: usize>(
     kernel: Kernel,
     inp: &Inputs<'_, T, D>,
@@ -111,15 +111,6 @@ pub(crate) unsafe fn block_forces<T: Real, const D: usize>(
 ) {
     // SAFETY: passed on from the caller.
     unsafe { dispatch::<T, D, LANES, { LANES / 2 }>(kernel, inp, nb, local, ew, energy) }
-}
-
-/// The slot one past the last that block `nb`'s pairs touch (at least its end).
-pub(crate) fn reach<T, const D: usize>(nb: &HalfListBlock<T, D>) -> usize {
-    let same = nb.partners().iter().copied();
-    let image = nb.image_partners().iter().map(|&(j, _)| j);
-    same.chain(image)
-        .map(|j| j as usize + 1)
-        .fold(nb.end(), usize::max)
 }
 
 /// # Safety
@@ -450,8 +441,8 @@ mod tests {
         let mut f = vec![[T::ZERO; 3]; pos.len()];
         let mut ew = vec![[T::ZERO; 2]; pos.len()];
         for nb in list.blocks() {
-            let mut local = vec![[T::ZERO; 3]; reach(nb) - nb.start()];
-            // SAFETY: `local` spans `reach(nb)`, the list was built for `pos`.
+            let mut local = vec![[T::ZERO; 3]; nb.reach() - nb.start()];
+            // SAFETY: `local` spans `nb.reach()`, the list was built for `pos`.
             unsafe {
                 block_forces(
                     kernel,

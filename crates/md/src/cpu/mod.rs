@@ -18,6 +18,12 @@
 //! blocks that reach it, added in block order. Block boundaries depend only on the
 //! particle count, so results are bit for bit independent of the number of threads.
 //!
+//! Without a thermostat a step makes two passes over the particle arrays besides the force
+//! kernel: the opening kick, the drift and the largest displacement since the build in one,
+//! the force totals, `a = F / m` and the closing kick in the other (the same operations per
+//! particle, in the same order, as separate passes: fusing them saves memory traffic, not
+//! rounding).
+//!
 //! The summation order depends on the list, hence on the positions at the last build: a
 //! checkpoint stores them (and the slot order), and a resumed run rebuilds the identical
 //! list and continues bit for bit. The results depend on the skin through the rebuild
@@ -345,7 +351,7 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
     fn size_buffers(&mut self) -> Result<()> {
         let n = self.pos.len();
         for (buf, nb) in self.local.iter_mut().zip(self.list.blocks()) {
-            let reach = kernel::reach(nb);
+            let reach = nb.reach();
             if reach > n {
                 return Err(Error::invalid(
                     "neighbour list",
@@ -387,7 +393,16 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
     /// Forces at the current positions, with the potential energy and virial when
     /// `energy` is set (the list rebuilt first if a particle moved more than `skin / 2`).
     fn forces(&mut self, energy: bool) -> Result<()> {
-        if beyond(self.max_displacement2(), self.rebuild2) {
+        let moved2 = self.max_displacement2();
+        self.forces_then_kick(moved2, energy, None)
+    }
+
+    /// [`forces`](Self::forces) given the largest squared displacement since the list
+    /// build, `moved2`; with `kick = Some(h)` it also adds `a h` to the velocities in the
+    /// same pass over the particles (the closing kick of a step: the same operations, in
+    /// the same order, as a separate [`kick`]).
+    fn forces_then_kick(&mut self, moved2: f64, energy: bool, kick: Option<T>) -> Result<()> {
+        if beyond(moved2, self.rebuild2) {
             self.rebuild()?;
         }
         let inp = kernel::Inputs {
@@ -415,8 +430,9 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
         self.force
             .par_chunks_mut(bs)
             .zip(self.acc.par_chunks_mut(bs))
+            .zip(self.vel.par_chunks_mut(bs))
             .enumerate()
-            .for_each(|(t, (f, a))| {
+            .for_each(|(t, ((f, a), v))| {
                 let start = t * bs;
                 f.copy_from_slice(&local[t][..f.len()]);
                 for (b, buf) in local[..t].iter().enumerate() {
@@ -435,27 +451,42 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
                     let im = inv_mass[species[start + k] as usize];
                     *a = f.map(|x| x * im);
                 }
+                if let Some(h) = kick {
+                    kick_slice(v, a, h);
+                }
             });
         Ok(())
     }
 
-    /// `x += v dt`, reflecting at closed faces (periodic coordinates are wrapped at the
-    /// next list build).
-    fn drift(&mut self) {
+    /// `v += a h` when `kick = Some(h)`, then `x += v dt`, reflecting at closed faces
+    /// (periodic coordinates are wrapped at the next list build), in one pass over the
+    /// particles; returns the largest squared displacement since the list build (NaN if
+    /// any is NaN), which [`max_displacement2`](Self::max_displacement2) would give.
+    fn kick_drift(&mut self, kick: Option<T>) -> f64 {
         let dt = T::from_f64(self.dt);
         let (lo, hi, per) = (self.lo, self.hi, self.periodic);
         self.pos
             .par_iter_mut()
             .zip(self.vel.par_iter_mut())
+            .zip(self.acc.par_iter())
+            .zip(self.reference.par_iter())
             .with_min_len(MIN_LEN)
-            .for_each(|(x, v)| {
+            .map(|(((x, v), a), r)| {
+                let mut s2 = T::ZERO;
                 for d in 0..D {
+                    if let Some(h) = kick {
+                        v[d] += a[d] * h;
+                    }
                     x[d] += v[d] * dt;
                     if !per[d] {
                         reflect(&mut x[d], &mut v[d], lo[d], hi[d]);
                     }
+                    let s = x[d] - r[d];
+                    s2 += s * s;
                 }
-            });
+                s2.to_f64()
+            })
+            .reduce(|| 0.0, max_or_nan)
     }
 
     /// The thermostatted drift `A O A` of BAOAB: `v' = c1 v + amplitude R`,
@@ -490,31 +521,34 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
             });
     }
 
-    /// The drift of a step: Newtonian, or thermostatted when a thermostat is on.
-    fn move_particles(&mut self) {
+    /// The opening kick `v += a h` (when `kick = Some(h)`) and the drift of a step:
+    /// Newtonian, or thermostatted when a thermostat is on; returns the largest squared
+    /// displacement since the list build.
+    fn move_particles(&mut self, kick: Option<T>) -> f64 {
         if self.langevin.is_some() {
+            if let Some(h) = kick {
+                kick_slice(&mut self.vel, &self.acc, h);
+            }
             self.drift_langevin();
+            self.max_displacement2()
         } else {
-            self.drift();
+            self.kick_drift(kick)
         }
     }
 
-    /// One step; `energy`: compute the potential energy and virial at its end.
+    /// One step; `energy`: compute the potential energy and virial at its end. The
+    /// kicks ride on the passes over the particles that the drift and the force totals
+    /// make anyway.
     fn one_step(&mut self, energy: bool) -> Result<()> {
-        match self.integrator {
+        let (open, close) = match self.integrator {
             Integrator::VelocityVerlet => {
                 let h = T::from_f64(0.5 * self.dt);
-                kick(&mut self.vel, &self.acc, h);
-                self.move_particles();
-                self.forces(energy)?;
-                kick(&mut self.vel, &self.acc, h);
+                (Some(h), h)
             }
-            Integrator::Leapfrog => {
-                self.move_particles();
-                self.forces(energy)?;
-                kick(&mut self.vel, &self.acc, T::from_f64(self.dt));
-            }
-        }
+            Integrator::Leapfrog => (None, T::from_f64(self.dt)),
+        };
+        let moved2 = self.move_particles(open);
+        self.forces_then_kick(moved2, energy, Some(close))?;
         self.steps += 1;
         Ok(())
     }
@@ -759,16 +793,20 @@ fn reflect<T: Real>(x: &mut T, v: &mut T, lo: T, hi: T) {
     }
 }
 
-/// `v += a h`.
+/// `v += a h` on the rayon pool.
 fn kick<T: Real, const D: usize>(v: &mut [[T; D]], a: &[[T; D]], h: T) {
-    v.par_iter_mut()
-        .zip(a.par_iter())
-        .with_min_len(MIN_LEN)
-        .for_each(|(v, a)| {
-            for d in 0..D {
-                v[d] += a[d] * h;
-            }
-        });
+    v.par_chunks_mut(MIN_LEN)
+        .zip(a.par_chunks(MIN_LEN))
+        .for_each(|(v, a)| kick_slice(v, a, h));
+}
+
+/// `v += a h` (the kick of every integrator).
+fn kick_slice<T: Real, const D: usize>(v: &mut [[T; D]], a: &[[T; D]], h: T) {
+    for (v, a) in v.iter_mut().zip(a) {
+        for d in 0..D {
+            v[d] += a[d] * h;
+        }
+    }
 }
 
 fn widen<T: Real, const D: usize>(v: &[[T; D]]) -> Vec<[f64; 3]> {

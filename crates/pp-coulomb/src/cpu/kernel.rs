@@ -6,6 +6,8 @@
 //! (one per vector lane), which lets the compiler keep them in SIMD registers without
 //! reassociating floating-point sums.
 
+use std::ops::Range;
+
 use multiversion::multiversion;
 use rayon::prelude::*;
 
@@ -135,21 +137,26 @@ fn block_field<T: CpuReal, L: Law>(xi: T, yi: T, zi: T, s: &Sources<'_, T>, p: T
     out
 }
 
-/// Fields at the first `ex.len()` sources (the targets), written to `ex, ey, ez`; `fast`
-/// selects the AVX-512 rsqrt path (only pass `true` when [`avx512::available`]).
+/// Fields at sources `first..first + ex.len()` (the targets), written to `ex, ey, ez`;
+/// `fast` selects the AVX-512 rsqrt path (only pass `true` when [`avx512::available`]).
+///
+/// Each target's field is summed in an order that depends only on the sources (lanes,
+/// then j-blocks), never on which other targets are computed with it: the field of a
+/// range of targets has the bits of the same targets in a pass over all of them.
 pub(crate) fn field<T: CpuReal>(
     law: ForceLaw,
     fast: bool,
     s: &Sources<'_, T>,
+    first: usize,
     ex: &mut [T],
     ey: &mut [T],
     ez: &mut [T],
 ) {
     let p = T::from_f64(law.squared_parameter());
     match law {
-        ForceLaw::Exact => field_with::<T, ExactLaw>(s, p, fast, ex, ey, ez),
-        ForceLaw::Exclusion { .. } => field_with::<T, ExclusionLaw>(s, p, fast, ex, ey, ez),
-        ForceLaw::Plummer { .. } => field_with::<T, PlummerLaw>(s, p, fast, ex, ey, ez),
+        ForceLaw::Exact => field_with::<T, ExactLaw>(s, p, fast, first, ex, ey, ez),
+        ForceLaw::Exclusion { .. } => field_with::<T, ExclusionLaw>(s, p, fast, first, ex, ey, ez),
+        ForceLaw::Plummer { .. } => field_with::<T, PlummerLaw>(s, p, fast, first, ex, ey, ez),
     }
 }
 
@@ -157,18 +164,19 @@ fn field_with<T: CpuReal, L: Law>(
     s: &Sources<'_, T>,
     p: T,
     fast: bool,
+    first: usize,
     ex: &mut [T],
     ey: &mut [T],
     ez: &mut [T],
 ) {
     let npad = s.x.len();
-    debug_assert!(npad.is_multiple_of(LANES) && ex.len() <= npad);
+    debug_assert!(npad.is_multiple_of(LANES) && first + ex.len() <= npad);
     ex.par_chunks_mut(TARGET_CHUNK)
         .zip(ey.par_chunks_mut(TARGET_CHUNK))
         .zip(ez.par_chunks_mut(TARGET_CHUNK))
         .enumerate()
         .for_each(|(c, ((ex, ey), ez))| {
-            let i0 = c * TARGET_CHUNK;
+            let i0 = first + c * TARGET_CHUNK;
             // Block sums are added in f64 (free: once per target and block), so that f32
             // rounding grows with the block length, not with N.
             let mut sum = [[0.0f64; 3]; TARGET_CHUNK];
@@ -197,15 +205,23 @@ fn field_with<T: CpuReal, L: Law>(
 }
 
 /// `phi_i = sum_j q_j / r_ij` ([`laws::exact_pair_potential`], the self pair and the
-/// zero-charge padding give 0) at the first `n` sources, in f64 (the differences are formed
-/// in `T`, as the field kernel does). Each target's sum has a fixed order, so the result
-/// does not depend on the thread count.
-pub(crate) fn exact_potentials<T: CpuReal>(s: &Sources<'_, T>, n: usize) -> Vec<f64> {
-    (0..n)
-        .into_par_iter()
+/// zero-charge padding give 0) at the sources `targets`, in f64 (the differences are formed
+/// in `T`, as the field kernel does), written to `phi[targets]`. Each target's sum has a
+/// fixed order, so the result depends neither on the thread count nor on the range.
+pub(crate) fn exact_potentials<T: CpuReal>(
+    s: &Sources<'_, T>,
+    targets: Range<usize>,
+    phi: &mut [f64],
+) {
+    let first = targets.start;
+    phi[targets]
+        .par_iter_mut()
         .with_min_len(TARGET_CHUNK)
-        .map(|i| block_potential(s.x[i], s.y[i], s.z[i], s))
-        .collect()
+        .enumerate()
+        .for_each(|(t, phi)| {
+            let i = first + t;
+            *phi = block_potential(s.x[i], s.y[i], s.z[i], s);
+        });
 }
 
 /// `sum_j q_j / r_ij` of one target over all sources (16 partial sums, like the field).

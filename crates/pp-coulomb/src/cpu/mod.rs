@@ -4,14 +4,19 @@
 mod avx512;
 mod kernel;
 mod pairs;
+mod share;
 
 use kernel::{CpuReal, LANES};
 use pairs::Sources;
+pub(crate) use share::{Alone, Ranks, Share};
+#[cfg(test)]
+mod tests;
 
 use std::collections::HashMap;
+use std::ops::Range;
 
 use simkit_backend::guard::{chunks, first_non_finite};
-use simkit_backend::{Precision, Result};
+use simkit_backend::{Error, Precision, Result};
 
 use crate::config::{Config, ForceLaw, Integrator, coincident_error};
 use crate::engine::{Engine, PositionsVelocities, pad_coordinate};
@@ -23,6 +28,11 @@ use crate::particles::Particles;
 /// CPU state in precision `T`. Positions are double-buffered: the force pass reads `x`, the
 /// drift writes `x_next`, then the two swap, so no position is written while it is read.
 /// `kept` is the state of the last blow-up check that passed.
+///
+/// Every pass takes a [`Share`]: the process computes accelerations for, and integrates,
+/// only its own targets (`Share::own`), and gathers the positions of the others after each
+/// drift. Outside the stepping loop, positions and velocities are complete on every
+/// process; accelerations are complete for the process's own targets.
 pub(crate) struct CpuEngine<T: CpuReal> {
     n: usize,
     x: [Vec<T>; 3],
@@ -63,6 +73,18 @@ pub(crate) fn engine(
     }
 }
 
+/// Why a step stopped: a coincident pair under the exact law, or a failed exchange.
+enum Stop {
+    Coincident(usize, usize, [f64; 3]),
+    Exchange(Error),
+}
+
+impl From<Error> for Stop {
+    fn from(e: Error) -> Self {
+        Stop::Exchange(e)
+    }
+}
+
 /// Whether the AVX-512 rsqrt path can run on this CPU.
 pub(crate) fn fast_path_available() -> bool {
     #[cfg(target_arch = "x86_64")]
@@ -85,7 +107,8 @@ fn copy3<T: Copy>(to: &mut [Vec<T>; 3], from: &[Vec<T>; 3]) {
 }
 
 impl<T: CpuReal> CpuEngine<T> {
-    fn new(p: &Particles, c: &Config, accelerations: Option<&[[f64; 3]]>) -> Self {
+    /// The engine of `p` under `c`, with the kept accelerations of a resumed run, if any.
+    pub(crate) fn new(p: &Particles, c: &Config, accelerations: Option<&[[f64; 3]]>) -> Self {
         let n = p.len();
         let coord = |k: usize| {
             padded(
@@ -149,9 +172,13 @@ impl<T: CpuReal> CpuEngine<T> {
         None
     }
 
-    /// Accelerations at the current positions into `a`; under the exact law, the first
-    /// coincident pair instead (and `a` untouched).
-    fn compute_accelerations(&mut self) -> std::result::Result<(), (usize, usize, [f64; 3])> {
+    /// Accelerations at the current positions into `a[own]`; under the exact law, the
+    /// first coincident pair instead (and `a` untouched). Every process looks for the pair
+    /// among all particles, so all find the same one.
+    fn compute_accelerations(
+        &mut self,
+        own: Range<usize>,
+    ) -> std::result::Result<(), (usize, usize, [f64; 3])> {
         if let Some(pair) = self.coincident() {
             return Err(pair);
         }
@@ -162,55 +189,98 @@ impl<T: CpuReal> CpuEngine<T> {
             q: &self.q,
         };
         let [ax, ay, az] = &mut self.a;
-        kernel::field(self.law, self.fast, &s, ax, ay, az);
-        for i in 0..self.n {
-            let qm = self.qm[i];
-            ax[i] = ax[i] * qm;
-            ay[i] = ay[i] * qm;
-            az[i] = az[i] * qm;
+        let first = own.start;
+        let (ax, ay, az) = (&mut ax[own.clone()], &mut ay[own.clone()], &mut az[own]);
+        kernel::field(self.law, self.fast, &s, first, ax, ay, az);
+        for (t, qm) in self.qm[first..first + ax.len()].iter().enumerate() {
+            ax[t] = ax[t] * *qm;
+            ay[t] = ay[t] * *qm;
+            az[t] = az[t] * *qm;
         }
         self.a_valid = true;
         Ok(())
     }
 
-    /// `v += a kick; x_next = x + v dt`, then swap the position buffers.
-    fn kick_drift(&mut self, kick: T) {
+    /// `v += a kick; x_next = x + v dt` for the targets `own`, then swap the position
+    /// buffers and gather the other processes' new positions.
+    fn kick_drift(&mut self, kick: T, own: Range<usize>, share: &impl Share) -> Result<()> {
         let dt = self.dt;
         for k in 0..3 {
             let (x, xn, v, a) = (&self.x[k], &mut self.x_next[k], &mut self.v[k], &self.a[k]);
-            for i in 0..self.n {
+            for i in own.clone() {
                 v[i] += a[i] * kick;
                 xn[i] = x[i] + v[i] * dt;
             }
         }
         std::mem::swap(&mut self.x, &mut self.x_next);
         self.a_valid = false;
+        let [x, y, z] = &mut self.x;
+        share.gather(&mut [x, y, z], self.n)
     }
 
-    fn kick(&mut self, kick: T) {
+    /// `v += a kick` for the targets `own`.
+    fn kick(&mut self, kick: T, own: Range<usize>) {
         for k in 0..3 {
-            for (v, a) in self.v[k].iter_mut().zip(&self.a[k]) {
+            for (v, a) in self.v[k][own.clone()]
+                .iter_mut()
+                .zip(&self.a[k][own.clone()])
+            {
                 *v += *a * kick;
             }
         }
     }
 
-    /// One step; a coincident pair under the exact law is returned instead.
-    fn one_step(&mut self) -> std::result::Result<(), (usize, usize, [f64; 3])> {
+    /// One step of this process's targets, positions gathered after each drift.
+    fn one_step(&mut self, share: &impl Share) -> std::result::Result<(), Stop> {
+        let own = share.own(self.n);
+        let coincident = |(i, j, x)| Stop::Coincident(i, j, x);
         match self.integrator {
             Integrator::SymplecticEuler => {
-                self.compute_accelerations()?;
-                self.kick_drift(self.dt);
+                self.compute_accelerations(own.clone())
+                    .map_err(coincident)?;
+                self.kick_drift(self.dt, own, share)?;
             }
             Integrator::Leapfrog => {
                 let half = self.dt * T::from_f64(0.5);
                 if !self.a_valid {
-                    self.compute_accelerations()?;
+                    self.compute_accelerations(own.clone())
+                        .map_err(coincident)?;
                 }
-                self.kick_drift(half);
-                self.compute_accelerations()?;
-                self.kick(half);
+                self.kick_drift(half, own.clone(), share)?;
+                self.compute_accelerations(own.clone())
+                    .map_err(coincident)?;
+                self.kick(half, own);
             }
+        }
+        Ok(())
+    }
+
+    /// Advances `steps` steps with the blow-up checks of `c` (see [`Engine::step`]); the
+    /// loop of both the single-process engine ([`Alone`]) and a distributed run. With
+    /// replicated data every process reaches every decision from the same values, so all
+    /// stop at the same step with the same error.
+    pub(crate) fn run(&mut self, steps: u32, c: &mut Checks<'_>, share: &impl Share) -> Result<()> {
+        self.keep();
+        let mut at = c.done;
+        let mut kept = at;
+        for n in chunks(c.done, steps, c.every) {
+            for s in 0..u64::from(n) {
+                match self.one_step(share) {
+                    Ok(()) => {}
+                    Err(Stop::Coincident(i, j, x)) => {
+                        self.restore();
+                        return Err(coincident_blow_up(at + s + 1, kept, i, j, x));
+                    }
+                    Err(Stop::Exchange(e)) => {
+                        self.restore();
+                        return Err(e);
+                    }
+                }
+            }
+            at += u64::from(n);
+            self.check(at, kept, c, share)?;
+            self.keep();
+            kept = at;
         }
         Ok(())
     }
@@ -255,14 +325,17 @@ impl<T: CpuReal> CpuEngine<T> {
     }
 
     /// Checks after reaching step `at` (last good state: step `kept`): finite state, and at
-    /// interval checks the energy jump; on failure, restores the kept state.
-    fn check(&mut self, at: u64, kept: u64, c: &mut Checks<'_>) -> Result<()> {
+    /// interval checks the energy jump; on failure, restores the kept state. Gathers the
+    /// velocities first, so the checks see the whole state.
+    fn check(&mut self, at: u64, kept: u64, c: &mut Checks<'_>, share: &impl Share) -> Result<()> {
+        let [vx, vy, vz] = &mut self.v;
+        share.gather(&mut [vx, vy, vz], self.n)?;
         if let Some(what) = self.first_non_finite() {
             self.restore();
             return Err(non_finite_blow_up(at, kept, what));
         }
         if let (true, Some(tol)) = (c.is_interval(at), c.energy_tolerance) {
-            let now = self.energy_now();
+            let now = self.energy_now(share)?;
             if let Some(reference) = *c.energy_ref {
                 let jump = energy_jump(reference, now);
                 if jump_fails(jump, tol) {
@@ -277,8 +350,10 @@ impl<T: CpuReal> CpuEngine<T> {
         Ok(())
     }
 
-    /// Kinetic and potential energy (exact law) of the current state, in f64.
-    fn energy_now(&self) -> Energy {
+    /// Kinetic and potential energy (exact law) of the current state, in f64; the
+    /// potentials of the targets are computed by their processes and gathered, then summed
+    /// in particle order (the bits of one process).
+    pub(crate) fn energy_now(&self, share: &impl Share) -> Result<Energy> {
         let kinetic = (0..self.n)
             .map(|i| {
                 let v2: f64 = (0..3).map(|k| self.v[k][i].to_f64().powi(2)).sum();
@@ -291,63 +366,79 @@ impl<T: CpuReal> CpuEngine<T> {
             z: &self.x[2],
             q: &self.q,
         };
-        let phi = kernel::exact_potentials(&s, self.n);
+        let mut phi = vec![0.0; self.n];
+        kernel::exact_potentials(&s, share.own(self.n), &mut phi);
+        share.gather(&mut [&mut phi], self.n)?;
         let potential = 0.5
             * phi
                 .iter()
                 .zip(&self.q)
                 .map(|(p, q)| p * q.to_f64())
                 .sum::<f64>();
-        Energy { kinetic, potential }
+        Ok(Energy { kinetic, potential })
+    }
+
+    /// The accelerations kept for the next step, if any, gathered from every process.
+    pub(crate) fn kept_accelerations_with(
+        &mut self,
+        share: &impl Share,
+    ) -> Result<Option<Vec<[f64; 3]>>> {
+        if !self.a_valid {
+            return Ok(None);
+        }
+        let [ax, ay, az] = &mut self.a;
+        share.gather(&mut [ax, ay, az], self.n)?;
+        Ok(Some(Self::to_f64(&self.a, self.n)))
+    }
+
+    /// Accelerations at the current positions (computed for the own targets if not kept),
+    /// gathered from every process.
+    pub(crate) fn accelerations_with(&mut self, share: &impl Share) -> Result<Vec<[f64; 3]>> {
+        if !self.a_valid
+            && let Err((i, j, at)) = self.compute_accelerations(share.own(self.n))
+        {
+            return Err(coincident_error(i, j, at));
+        }
+        let [ax, ay, az] = &mut self.a;
+        share.gather(&mut [ax, ay, az], self.n)?;
+        Ok(Self::to_f64(&self.a, self.n))
+    }
+
+    /// Current positions and velocities (f64; complete outside the stepping loop).
+    pub(crate) fn state_now(&self) -> PositionsVelocities {
+        (Self::to_f64(&self.x, self.n), Self::to_f64(&self.v, self.n))
+    }
+
+    /// Changes the time step for the following steps.
+    pub(crate) fn set_time_step(&mut self, dt: f64) {
+        self.dt = T::from_f64(dt);
     }
 }
 
 impl<T: CpuReal> Engine for CpuEngine<T> {
     fn step(&mut self, steps: u32, c: &mut Checks<'_>) -> Result<()> {
         // The whole loop on a pool thread: no hand-over to the pool per pass.
-        simkit_backend::pool::on_pool(|| {
-            self.keep();
-            let mut at = c.done;
-            let mut kept = at;
-            for n in chunks(c.done, steps, c.every) {
-                for s in 0..u64::from(n) {
-                    if let Err((i, j, x)) = self.one_step() {
-                        self.restore();
-                        return Err(coincident_blow_up(at + s + 1, kept, i, j, x));
-                    }
-                }
-                at += u64::from(n);
-                self.check(at, kept, c)?;
-                self.keep();
-                kept = at;
-            }
-            Ok(())
-        })
+        simkit_backend::pool::on_pool(|| self.run(steps, c, &Alone))
     }
 
     fn energy(&mut self) -> Result<Energy> {
-        Ok(simkit_backend::pool::on_pool(|| self.energy_now()))
+        simkit_backend::pool::on_pool(|| self.energy_now(&Alone))
     }
 
     fn kept_accelerations(&mut self) -> Result<Option<Vec<[f64; 3]>>> {
-        Ok(self.a_valid.then(|| Self::to_f64(&self.a, self.n)))
+        self.kept_accelerations_with(&Alone)
     }
 
     fn state(&mut self) -> Result<PositionsVelocities> {
-        Ok((Self::to_f64(&self.x, self.n), Self::to_f64(&self.v, self.n)))
+        Ok(self.state_now())
     }
 
     fn accelerations(&mut self) -> Result<Vec<[f64; 3]>> {
-        if !self.a_valid
-            && let Err((i, j, at)) = self.compute_accelerations()
-        {
-            return Err(coincident_error(i, j, at));
-        }
-        Ok(Self::to_f64(&self.a, self.n))
+        self.accelerations_with(&Alone)
     }
 
     fn set_dt(&mut self, dt: f64) -> Result<()> {
-        self.dt = T::from_f64(dt);
+        self.set_time_step(dt);
         Ok(())
     }
 

@@ -4,7 +4,7 @@
 //! with the single-process CPU run.
 
 use simkit_backend::comm::Comm;
-use simkit_backend::{Backend, Simulation};
+use simkit_backend::{Backend, Restart, Simulation};
 use simkit_rd::{
     Boundaries, Boundary, Config, Diffusion, DistributedRd, GrayScott, Grid, Model, Rd, Real,
     Stepping, scenes,
@@ -198,7 +198,67 @@ pub fn check_all(comm: &Comm) -> Result<usize, String> {
         Err(e) if e.contains("blow-up detected by step") => n += 1,
         other => return Err(format!("blow-up: expected a blow-up error, got {other:?}")),
     }
-    Ok(n)
+    checkpoint_case(comm, &with_edges(&gs, Boundaries::periodic()), &gray_scott)?;
+    Ok(n + 1)
+}
+
+/// A checkpoint moves between rank counts: one process (10 steps) -> `comm.size()` ranks
+/// (8 steps) -> `comm.size()` ranks again from rank 0's bytes (5 steps) and one process
+/// (13 steps), each continuing bit for bit, simulated time included, with the
+/// uninterrupted single-process run.
+fn checkpoint_case(comm: &Comm, grid: &Grid<f64>, model: &GrayScott) -> Result<(), String> {
+    let label = format!("checkpoint 1 -> {0} -> {0} and 1 rank(s)", comm.size());
+    let e = |what: &'static str| {
+        let label = label.clone();
+        move |e: simkit_backend::Error| format!("{label}: {what}: {e}")
+    };
+    let config = Config::new(Stepping::euler(0.2)).with_check_every(4);
+    let serial = |steps: u32| -> Result<Rd<f64, GrayScott>, String> {
+        let mut run =
+            Rd::new(grid.clone(), model.clone(), &config, Backend::Cpu).map_err(e("serial run"))?;
+        run.step(steps).map_err(e("serial step"))?;
+        Ok(run)
+    };
+    let saved = serial(10)?.checkpoint().map_err(e("serial checkpoint"))?;
+    let mut dist =
+        DistributedRd::<f64, GrayScott>::resume(&saved, comm.clone()).map_err(e("resume"))?;
+    dist.step(8).map_err(e("distributed step"))?;
+    let saved = dist.checkpoint().map_err(e("distributed checkpoint"))?;
+    if saved.is_some() != comm.is_root() {
+        return Err(format!("{label}: the checkpoint must be on rank 0 only"));
+    }
+    let again = comm
+        .broadcast_from_root(saved.clone())
+        .map_err(e("broadcast"))?;
+    let mut dist =
+        DistributedRd::<f64, GrayScott>::resume(&again, comm.clone()).map_err(e("resume"))?;
+    dist.step(5).map_err(e("distributed step"))?;
+    let gathered = dist.gather().map_err(e("gather"))?;
+    let (Some(saved), Some(gathered)) = (saved, gathered) else {
+        return Ok(());
+    };
+    let mut want = serial(23)?;
+    if bits(&gathered) != bits(&want.state().map_err(e("state"))?) || dist.steps_done() != 23 {
+        return Err(format!(
+            "{label}: the distributed run differs after 23 steps"
+        ));
+    }
+    let mut last =
+        Rd::<f64, GrayScott>::resume(&saved, Backend::Cpu).map_err(e("serial resume"))?;
+    last.step(13).map_err(e("serial step"))?;
+    want.step(8).map_err(e("serial step"))?;
+    let (got, want_grid) = (
+        last.state().map_err(e("state"))?,
+        want.state().map_err(e("state"))?,
+    );
+    if bits(&got) != bits(&want_grid) || last.time().to_bits() != want.time().to_bits() {
+        return Err(format!(
+            "{label}: after 31 steps the resumed run differs (time {} vs {})",
+            last.time(),
+            want.time()
+        ));
+    }
+    Ok(())
 }
 
 /// `b` with every Dirichlet edge's values set to `v`.

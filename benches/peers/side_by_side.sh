@@ -1,0 +1,387 @@
+#!/bin/sh
+# Side-by-side speed: simkit next to the peer programs it is compared with, on this machine,
+# in this session, the runs alternating, and one markdown table of medians and ratios.
+#
+# Usage (from anywhere in the repository):
+#   sh benches/peers/side_by_side.sh [--rounds R] [--quick] [--only LIST] [--peers DIR]
+#     --rounds R   alternating rounds (default 3); each round runs the peer and the simkit
+#                  measurement of every row once, the order swapped every other round
+#     --quick      tiny sizes, to check that every row runs: the figures are NOT comparable
+#                  with anything (the table says so)
+#     --only LIST  comma-separated rows: rd,neighbor,dem,md,lattice-gas,pp-coulomb
+#     --peers DIR  the peer programs (default ../shared/peers, or $SIMKIT_PEERS)
+#     --no-build   use the simkit examples already in target/release (the table says so)
+#   The table is printed and written to target/side_by_side/<UTC date>.md.
+#
+# Rows (simkit / peer; the rate of each side is the median over the rounds):
+#   rd           py-pde Gray-Scott 512^2 (compiled Euler stepper, JIT excluded) vs simkit rd
+#                Gray-Scott f64 512^2, 2 threads; cell updates/s
+#   neighbor     kiddo 6 (ImmutableKdTree build + per-point within().unsorted().visit()
+#                queries in tree order, rayon, 2 threads) vs simkit sorted cells (build + count
+#                every pair, 2 threads), N = 1e6 uniform points at density 1, cutoff 2.5; pairs/s
+#   dem          LAMMPS gran/hooke (mpirun -np 2) vs simkit dem (2 threads) on
+#                benches/peers/dem_gran3d.lmp, 20,000 spheres; particle-steps/s
+#   md           LAMMPS lj/cut vs simkit md (examples/lj_fluid, f64) on benches/peers/in.lj,
+#                32,000 atoms, 1 core and 2 cores; atom-steps/s
+#   lattice-gas  STREAM-like triad (2 OpenMP threads) vs simkit lattice-gas lookup table at
+#                16384^2 (2 threads), site updates/s x 2 bytes (one state byte read, one
+#                written): % of the measured memory bandwidth; and the source's serial FHP
+#                program vs simkit lattice-gas (automatic CPU method, 2 threads) at 1024^2
+#   pp-coulomb   FMA-loop peak (2 OpenMP threads) vs simkit direct sum at N = 50,000 in f32
+#                and f64 (interactions/s x 20 flops): % of peak; and the source's OpenMP
+#                direct sum (2 threads) vs simkit f64 at N = 50,000; interactions/s
+#
+# What it installs when missing: py-pde into a venv at target/pypde (pip), Debian's lammps
+# package (apt-get, as root), the kiddo peer (cargo, into target/peers/kiddo) and the C/C++
+# peers (gcc/g++ -O3 -march=native, into target/peers). A peer that cannot be built or run
+# is skipped with a line saying why. Peers are built and run from where they are; nothing of
+# them is copied into the repository.
+#
+# Default sizes take about 10 minutes on a 2-core machine (py-pde's JIT compile, ~40 s per
+# process, is the largest part). Run it on a quiet machine (check `uptime`): the load before
+# and after is in the table.
+
+set -u
+cd "$(dirname "$0")/../.." || exit 1
+. benches/peers/lib.sh
+
+ROUNDS=3
+QUICK=0
+NOBUILD=0
+ONLY="rd,neighbor,dem,md,lattice-gas,pp-coulomb"
+PEERS=${SIMKIT_PEERS:-../shared/peers}
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --rounds) ROUNDS=${2:-}; shift 2 ;;
+    --quick) QUICK=1; shift ;;
+    --only) ONLY=${2:-}; shift 2 ;;
+    --peers) PEERS=${2:-}; shift 2 ;;
+    --no-build) NOBUILD=1; shift ;;
+    -h | --help) sed -n '2,/^$/p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    *) echo "unknown argument: $1 (see --help)" >&2; exit 2 ;;
+  esac
+done
+case "$ROUNDS" in '' | *[!0-9]*) echo "--rounds needs a positive integer" >&2; exit 2 ;; esac
+[ "$ROUNDS" -ge 1 ] || { echo "--rounds needs a positive integer" >&2; exit 2; }
+PEERS_ARG=$PEERS
+PEERS=$(cd "$PEERS" 2>/dev/null && pwd) || PEERS=""
+
+# Sizes: default (timed runs of about 2-5 s each on a 2-core machine) and --quick.
+if [ "$QUICK" -eq 1 ]; then
+  RD_N=64 RD_PEER_STEPS=50 RD_STEPS=200
+  NB_N=20000 NB_REPS=3 KIDDO_REPS=1
+  DEM_STEPS=50
+  MD_STEPS=10
+  LG_N=1024 LG_STEPS=4 TRIAD_REPS=3
+  FHP_N=128 FHP_STEPS=20
+  PP_N=2000 PP_STEPS=1 FMA_ITERS=1000000
+else
+  RD_N=512 RD_PEER_STEPS=1000 RD_STEPS=8000
+  NB_N=1000000 NB_REPS=15 KIDDO_REPS=3
+  DEM_STEPS=4000
+  MD_STEPS=500
+  LG_N=16384 LG_STEPS=60 TRIAD_REPS=20
+  FHP_N=1024 FHP_STEPS=100
+  PP_N=50000 PP_STEPS=3 FMA_ITERS=20000000
+fi
+
+STAMP=$(date -u '+%Y-%m-%dT%H%MZ')
+OUTDIR=target/side_by_side
+PB=target/peers
+mkdir -p "$OUTDIR" "$PB"
+ROWS=$(mktemp)    # table rows, in order
+SKIPS=$(mktemp)   # "name: skipped (why)" lines
+NOTES=$(mktemp)   # per-round samples
+SKLOG=$(mktemp)   # every peer_rates line
+trap 'rm -f "$ROWS" "$SKIPS" "$NOTES" "$SKLOG"' EXIT
+
+say() { echo "$*" >&2; }
+skip() { echo "- $1: skipped ($2)" >>"$SKIPS"; say "$1: skipped ($2)"; }
+want() { case ",$ONLY," in *",$1,"*) return 0 ;; *) return 1 ;; esac; }
+# rate_of: R of a "rate=R ..." line (peer_rates' output) on stdin, or nothing.
+rate_of() { sed -n 's/^rate=\([^ ]*\) .*/\1/p' | head -n 1; }
+# field KEY: the value of KEY=VALUE in a peer_rates line on stdin.
+field() { tr ' ' '\n' | sed -n "s/^$1=//p" | head -n 1; }
+# row CRATE PEER PEER_MEDIAN SIMKIT_MEDIAN UNIT KIND TARGET: KIND "ratio" (simkit / peer, target
+# "x") or "percent" (100 simkit / peer, target "%").
+row() {
+  awk -v c="$1" -v p="$2" -v a="$3" -v b="$4" -v u="$5" -v k="$6" -v t="$7" 'BEGIN {
+    if (!(a + 0 > 0) || !(b + 0 > 0)) { r = "n/a"; m = "no figure" }
+    else if (k == "percent") { v = 100 * b / a; r = sprintf("%.0f %% of peer", v) }
+    else { v = b / a; r = sprintf("%.2fx", v) }
+    if (r != "n/a") {
+      if (t == "") { tt = "-"; m = "-" }
+      else if (k == "percent") { tt = ">= " t " %"; m = (v >= t) ? "met" : "not met" }
+      else { tt = ">= " t "x"; m = (v >= t) ? "met" : "not met" }
+    } else { tt = (t == "") ? "-" : ((k == "percent") ? ">= " t " %" : ">= " t "x") }
+    printf "| %s | %s | %.4g | %.4g | %s | %s | %s | %s |\n", c, p, a, b, u, r, tt, m }' >>"$ROWS"
+}
+note() { echo "- $*" >>"$NOTES"; }
+
+say "side_by_side: rounds=$ROUNDS quick=$QUICK only=$ONLY peers=${PEERS:-none}"
+LOAD0=$(uptime | sed 's/.*load average: //')
+
+# ---- build simkit's side -------------------------------------------------------------------
+SK=target/release/examples/peer_rates
+# build EXAMPLE: cargo build --release --example EXAMPLE (skipped with --no-build).
+build() {
+  if [ "$NOBUILD" -eq 1 ]; then [ -x "target/release/examples/$1" ]; return; fi
+  _blog=$(mktemp)
+  if cargo build --release --example "$1" >"$_blog" 2>&1; then rm -f "$_blog"; return 0; fi
+  say "cargo build --release --example $1 failed:"; grep -A6 '^error' "$_blog" | head -n 20 >&2
+  rm -f "$_blog"; return 1
+}
+say "building simkit examples (release)..."
+build peer_rates || { say "no simkit figures without peer_rates"; exit 1; }
+if want dem; then build dem_box_timer || DEM_BUILD=fail; fi
+if want md; then build lj_fluid || MD_BUILD=fail; fi
+
+# ---- build / find the peers ----------------------------------------------------------------
+need_peers() { [ -n "$PEERS" ] && [ -f "$PEERS/$1" ]; }
+# where FILE: where the peer FILE was looked for, for a skip line.
+where() { if [ -n "$PEERS" ]; then echo "$PEERS/$1 not found"; else echo "peers directory $PEERS_ARG not found"; fi; }
+# cc_peer SRC OUT COMPILER: compiles $PEERS/SRC to $PB/OUT (-O3 -march=native -fopenmp).
+cc_peer() {
+  need_peers "$1" || { where "$1"; return 1; }
+  command -v "$3" >/dev/null 2>&1 || { echo "$3 not found"; return 1; }
+  "$3" -O3 -march=native -fopenmp "$PEERS/$1" -o "$PB/$2" -lm >/dev/null 2>&1 ||
+    { echo "$3 failed on $1"; return 1; }
+}
+
+PYPDE=""
+if want rd; then
+  if ! need_peers pypde_grayscott.py; then
+    skip "py-pde" "$(where pypde_grayscott.py)"
+  else
+    V=target/pypde
+    if ! "$V/bin/python" -c 'import pde' >/dev/null 2>&1; then
+      say "py-pde: installing into $V (pip install py-pde)..."
+      { python3 -m venv "$V" && "$V/bin/pip" install -q py-pde; } >/dev/null 2>&1
+    fi
+    if "$V/bin/python" -c 'import pde' >/dev/null 2>&1; then PYPDE="$V/bin/python"
+    else skip "py-pde" "no venv at $V and python3 -m venv / pip install py-pde failed"; fi
+  fi
+fi
+
+KIDDO=""
+if want neighbor; then
+  if ! need_peers kiddo_bench/Cargo.toml; then
+    skip "kiddo" "$(where kiddo_bench/Cargo.toml)"
+  else
+    say "kiddo: cargo build --release (target/peers/kiddo)..."
+    if cargo build --release --manifest-path "$PEERS/kiddo_bench/Cargo.toml" \
+      --target-dir "$PB/kiddo" >/dev/null 2>&1; then KIDDO="$PB/kiddo/release/kiddo_bench"
+    else skip "kiddo" "cargo build of kiddo_bench failed"; fi
+  fi
+fi
+
+LMP=0
+if want dem || want md; then
+  if lammps_ensure 2>/dev/null; then LMP=1
+  else skip "LAMMPS (dem, md rows)" "lmp not found and apt-get install -y lammps not possible or failed"; fi
+fi
+MPI=0
+if have_mpirun; then MPI=1; fi
+
+TRIAD="" FHP="" FMA="" PPL=""
+if want lattice-gas; then
+  if why=$(cc_peer triad.c triad gcc); then TRIAD="$PB/triad"; else skip "triad" "$why"; fi
+  if why=$(cc_peer fhp_bench.cpp fhp g++); then FHP="$PB/fhp"; else skip "fhp_bench" "$why"; fi
+fi
+if want pp-coulomb; then
+  if why=$(cc_peer fma.c fma gcc); then FMA="$PB/fma"; else skip "fma" "$why"; fi
+  if why=$(cc_peer ppl_nompi.cpp ppl g++); then PPL="$PB/ppl"; else skip "ppl_nompi" "$why"; fi
+fi
+
+# ---- one measurement each: prints one rate (or nothing when it failed) ----------------------
+# sk ARGS: runs peer_rates, keeping its line for the table's list of backends.
+sk() { "$SK" "$@" 2>/dev/null | tee -a "$SKLOG"; }
+m_pypde() {
+  NUMBA_NUM_THREADS=2 "$PYPDE" "$PEERS/pypde_grayscott.py" "$RD_N" "$RD_PEER_STEPS" 1 stepper \
+    2>/dev/null | sed -n 's/.*cell_updates_per_s=\([^ ]*\).*/\1/p' | head -n 1
+}
+m_sk_rd() { sk rd --n "$RD_N" --steps "$RD_STEPS" --threads 2 | rate_of; }
+# kiddo: unordered pairs / (median build time + median tree-order parallel query time).
+m_kiddo() {
+  "$KIDDO" "$NB_N" 2 "$KIDDO_REPS" build,tord 2>/dev/null | awk '
+    /^build/ { split($0, a, "= "); split(a[2], t, "/"); build = t[2] / 1e3 }
+    /^tree-order par_iter/ { for (i = 1; i <= NF; i++) if ($i ~ /^pairs=/) p = substr($i, 7)
+      split($0, a, "= "); split(a[2], t, "/"); q = t[2] + 0 }
+    END { if (p > 0 && build + q > 0) printf "%.6g\n", p / (build + q) }'
+}
+m_sk_nb() { sk neighbor --n "$NB_N" --threads 2 --reps "$NB_REPS" | rate_of; }
+m_lmp_dem2() { lammps_rate "$DEM_DECK" "$DEM_N" "$DEM_STEPS" 2; }
+m_sk_dem2() { dem_timer_rate 2 "$DEM_STEPS"; }
+m_lmp_md1() { lammps_rate "$MD_DECK" "$MD_N" "$MD_STEPS" 1; }
+m_lmp_md2() { lammps_rate "$MD_DECK" "$MD_N" "$MD_STEPS" 2; }
+m_sk_md1() { lj_fluid_rate 1 "$MD_STEPS"; }
+m_sk_md2() { lj_fluid_rate 2 "$MD_STEPS"; }
+m_triad() {
+  OMP_NUM_THREADS=2 "$TRIAD" "$TRIAD_REPS" 2>/dev/null |
+    sed -n 's/^triad GB\/s:.*median \([^ ]*\).*/\1/p'
+}
+# simkit lattice-gas, lookup table: GB/s at 2 bytes per site update.
+m_sk_lut() {
+  sk lattice-gas --n "$LG_N" --steps "$LG_STEPS" --method lut --threads 2 |
+    field gb_per_s_at_2_bytes
+}
+m_fhp() { "$FHP" "$FHP_N" "$FHP_STEPS" 1 2>/dev/null | sed -n 's/.*site_updates_per_s=\([^ ]*\).*/\1/p'; }
+m_sk_fhp() {
+  sk lattice-gas --n "$FHP_N" --steps "$FHP_STEPS" --method auto --threads 2 | rate_of
+}
+# fma prints "SP GFLOP/s (fma=2 flops): min A median B max C" and the same for DP; both on
+# one line here: "SP DP".
+m_fma() {
+  OMP_NUM_THREADS=2 "$FMA" "$FMA_ITERS" 2>/dev/null |
+    awk '/^SP GFLOP/ {for (i = 1; i <= NF; i++) if ($i == "median") s = $(i + 1)}
+         /^DP GFLOP/ {for (i = 1; i <= NF; i++) if ($i == "median") d = $(i + 1)}
+         END {if (s != "" && d != "") print s, d}'
+}
+m_sk_pp() {
+  sk pp-coulomb --n "$PP_N" --steps "$PP_STEPS" --precision "$1" --threads 2 |
+    field gflops_at_20
+}
+m_sk_pp_rate() {
+  sk pp-coulomb --n "$PP_N" --steps "$PP_STEPS" --precision f64 --threads 2 | rate_of
+}
+m_ppl() {
+  OMP_NUM_THREADS=2 "$PPL" "$PP_N" 1 2>/dev/null | sed -n 's/.*pairs_per_s=\([^ ]*\).*/\1/p'
+}
+
+# ---- rounds --------------------------------------------------------------------------------
+# Sample lists, one variable per measurement: S_<name> = " r1 r2 ...".
+add() { eval "S_$1=\"\${S_$1:-} $2\""; }
+# pair NAME_A FUNC_A NAME_B FUNC_B ROUND: runs A then B (B then A on even rounds).
+pair() {
+  if [ $(($5 % 2)) -eq 1 ]; then add "$1" "$($2)"; add "$3" "$($4)"
+  else add "$3" "$($4)"; add "$1" "$($2)"; fi
+}
+r=1
+while [ "$r" -le "$ROUNDS" ]; do
+  say "round $r/$ROUNDS"
+  if want rd && [ -n "$PYPDE" ]; then say "  rd"; pair pypde m_pypde skrd m_sk_rd "$r"; fi
+  if want neighbor && [ -n "$KIDDO" ]; then say "  neighbor"; pair kiddo m_kiddo sknb m_sk_nb "$r"; fi
+  if want dem && [ "$LMP" -eq 1 ] && [ "$MPI" -eq 1 ] && [ -z "${DEM_BUILD:-}" ]; then
+    say "  dem"; pair lmpdem2 m_lmp_dem2 skdem2 m_sk_dem2 "$r"
+  fi
+  if want md && [ "$LMP" -eq 1 ] && [ -z "${MD_BUILD:-}" ]; then
+    say "  md"; pair lmpmd1 m_lmp_md1 skmd1 m_sk_md1 "$r"
+    if [ "$MPI" -eq 1 ]; then pair lmpmd2 m_lmp_md2 skmd2 m_sk_md2 "$r"; fi
+  fi
+  if want lattice-gas; then
+    say "  lattice-gas"
+    if [ -n "$TRIAD" ]; then pair triad m_triad sklut m_sk_lut "$r"; fi
+    if [ -n "$FHP" ]; then pair fhp m_fhp skfhp m_sk_fhp "$r"; fi
+  fi
+  if want pp-coulomb; then
+    say "  pp-coulomb"
+    if [ -n "$FMA" ]; then
+      if [ $((r % 2)) -eq 0 ]; then add skpp32 "$(m_sk_pp f32)"; add skpp64 "$(m_sk_pp f64)"; fi
+      fs=$(m_fma)
+      add fmasp "${fs% *}"; add fmadp "${fs#* }"
+      if [ $((r % 2)) -eq 1 ]; then add skpp32 "$(m_sk_pp f32)"; add skpp64 "$(m_sk_pp f64)"; fi
+    fi
+    if [ -n "$PPL" ]; then pair ppl m_ppl skpprate m_sk_pp_rate "$r"; fi
+  fi
+  r=$((r + 1))
+done
+LOAD1=$(uptime | sed 's/.*load average: //')
+
+# ---- table ---------------------------------------------------------------------------------
+med() { eval "echo \"\${S_$1:-}\"" | median; }
+samples() { eval "echo \"\${S_$1:-}\"" | sed 's/^ *//'; }
+if want rd; then
+  if [ -n "$PYPDE" ]; then
+    row rd "py-pde Gray-Scott f64 ${RD_N}^2 (numba stepper)" "$(med pypde)" "$(med skrd)" \
+      "cell updates/s" ratio 10
+    note "rd: py-pde $RD_PEER_STEPS steps per run: $(samples pypde); simkit $RD_STEPS steps: $(samples skrd)"
+  fi
+fi
+if want neighbor && [ -n "$KIDDO" ]; then
+  row neighbor "kiddo 6 k-d tree, build + tree-order queries, N=$NB_N, 2 threads" \
+    "$(med kiddo)" "$(med sknb)" "pairs/s (build + all pairs)" ratio 12
+  note "neighbor: kiddo (pairs / (median build + median query time) of $KIDDO_REPS reps per run): $(samples kiddo); simkit sorted cells (median of $NB_REPS build + count runs per run): $(samples sknb)"
+fi
+if want dem && [ "$LMP" -eq 1 ]; then
+  if [ "$MPI" -eq 0 ]; then skip "dem" "mpirun not found (the target is on 2 cores)"
+  elif [ -n "${DEM_BUILD:-}" ]; then skip "dem" "cargo build --example dem_box_timer failed"
+  else
+    row dem "LAMMPS gran/hooke, 2 MPI ranks vs 2 threads, N=$DEM_N, $DEM_STEPS steps" \
+      "$(med lmpdem2)" "$(med skdem2)" "particle-steps/s" ratio 2
+    note "dem: LAMMPS: $(samples lmpdem2); simkit: $(samples skdem2)"
+  fi
+fi
+if want md && [ "$LMP" -eq 1 ]; then
+  if [ -n "${MD_BUILD:-}" ]; then skip "md" "cargo build --example lj_fluid failed"
+  else
+    row md "LAMMPS lj/cut in.lj, 1 core, N=$MD_N, $MD_STEPS steps" "$(med lmpmd1)" \
+      "$(med skmd1)" "atom-steps/s" ratio 2
+    note "md 1 core: LAMMPS: $(samples lmpmd1); simkit: $(samples skmd1)"
+    if [ "$MPI" -eq 1 ]; then
+      row md "LAMMPS lj/cut in.lj, 2 MPI ranks vs 2 threads" "$(med lmpmd2)" "$(med skmd2)" \
+        "atom-steps/s" ratio 2
+      note "md 2 cores: LAMMPS: $(samples lmpmd2); simkit: $(samples skmd2)"
+    else skip "md (2 cores)" "mpirun not found"; fi
+  fi
+fi
+if want lattice-gas; then
+  if [ -n "$TRIAD" ]; then
+    row lattice-gas "triad memory bandwidth (2 threads) vs lookup table ${LG_N}^2 at 2 B/site" \
+      "$(med triad)" "$(med sklut)" "GB/s" percent 80
+    note "lattice-gas: triad GB/s: $(samples triad); simkit lookup table GB/s (site updates/s x 2 B): $(samples sklut)"
+  fi
+  if [ -n "$FHP" ]; then
+    row lattice-gas "source FHP program (serial) vs simkit auto method (2 threads), ${FHP_N}^2" \
+      "$(med fhp)" "$(med skfhp)" "site updates/s" ratio ""
+    note "lattice-gas ${FHP_N}^2: source program: $(samples fhp); simkit: $(samples skfhp)"
+  fi
+fi
+if want pp-coulomb; then
+  if [ -n "$FMA" ]; then
+    row pp-coulomb "FMA peak f32 (2 threads) vs direct sum f32, N=$PP_N, 20 flop/interaction" \
+      "$(med fmasp)" "$(med skpp32)" "GFLOP/s" percent 70
+    row pp-coulomb "FMA peak f64 (2 threads) vs direct sum f64, N=$PP_N, 20 flop/interaction" \
+      "$(med fmadp)" "$(med skpp64)" "GFLOP/s" percent 50
+    note "pp-coulomb: FMA SP: $(samples fmasp); simkit f32 GFLOP/s: $(samples skpp32); FMA DP: $(samples fmadp); simkit f64: $(samples skpp64)"
+  fi
+  if [ -n "$PPL" ]; then
+    row pp-coulomb "source OpenMP direct sum f64 (2 threads), N=$PP_N" "$(med ppl)" \
+      "$(med skpprate)" "interactions/s" ratio ""
+    note "pp-coulomb N=$PP_N: source program: $(samples ppl); simkit f64: $(samples skpprate)"
+  fi
+fi
+
+CPU=$(sed -n 's/^model name[[:space:]]*: //p' /proc/cpuinfo 2>/dev/null | head -n 1)
+OUT="$OUTDIR/$STAMP.md"
+{
+  echo "## Side-by-side speed, $(date -u '+%Y-%m-%d %H:%M UTC')"
+  echo
+  if [ "$QUICK" -eq 1 ]; then
+    echo "**QUICK MODE: tiny sizes to check that the script runs. These figures are not comparable"
+    echo "with anything; quote only a run without --quick.**"
+    echo
+  fi
+  echo "- machine: $(uname -m), ${CPU:-unknown CPU}, $(nproc) cores"
+  echo "- load average (1, 5, 15 min) before: $LOAD0; after: $LOAD1"
+  if [ "$NOBUILD" -eq 1 ]; then
+    echo "- --no-build: the simkit examples were not rebuilt (they may predate the working tree)"
+  fi
+  echo "- rounds: $ROUNDS, peer and simkit alternating (order swapped every other round); medians"
+  echo
+  echo "| crate | peer (vs simkit) | peer | simkit | unit | simkit / peer | target | |"
+  echo "|---|---|---|---|---|---|---|---|"
+  cat "$ROWS"
+  echo
+  if [ -s "$SKIPS" ]; then echo "Skipped:"; echo; cat "$SKIPS"; echo; fi
+  echo "Samples per round:"
+  echo
+  cat "$NOTES"
+  if [ -s "$SKLOG" ]; then
+    echo
+    echo "simkit runs (examples/peer_rates): $(awk '{w = ""; b = ""
+      for (i = 1; i <= NF; i++) { if ($i ~ /^workload=/) w = substr($i, 10)
+        if ($i ~ /^backend=/) b = " on " substr($i, 9) }
+      if (!seen[w b]++) printf "%s%s%s", (n++ ? "; " : ""), w, b }' "$SKLOG" | tr '_' ' ')"
+  fi
+} | tee "$OUT"
+say "written to $OUT"

@@ -1,0 +1,148 @@
+//! Strong-scaling driver for the distributed runs: one problem, timed on however many ranks
+//! `mpirun` starts (also runs as a single process). Rank 0 prints one line per run:
+//! `crate=rd ranks=2 size=4096 steps=100 seconds=1.234 rate=2.7e9 unit=cell-updates/s`.
+//!
+//! ```text
+//! cargo build --release --features mpi --example mpi_scaling
+//! RAYON_NUM_THREADS=1 mpirun -np 2 -x RAYON_NUM_THREADS target/release/examples/mpi_scaling rd
+//! RAYON_NUM_THREADS=1 mpirun -np 2 -x RAYON_NUM_THREADS target/release/examples/mpi_scaling lattice-gas
+//! RAYON_NUM_THREADS=1 mpirun -np 2 -x RAYON_NUM_THREADS target/release/examples/mpi_scaling pp-coulomb
+//! ```
+//! `benches/peers/mpi_scaling.sh` alternates 1 and 2 ranks and prints the efficiencies.
+//! Problems: `rd` — Gray–Scott f64 (`F = 0.04`, `k = 0.06`, `Du = 1`, `Dv = 0.5`, explicit
+//! Euler `dt = 0.2`) on a periodic `size x size` grid seeded with a centre square;
+//! `lattice-gas` — FHP-I on a periodic `size x size` lattice at 30 % fill; `pp-coulomb` —
+//! the source's electron plasma (normalised units, exclusion law at the Debye length), `n`
+//! electrons, f64, symplectic Euler, replicated data (`n (n - 1)` interactions per step).
+//! Each run takes a few warm-up steps, then times `steps` steps between barriers.
+
+use std::process::ExitCode;
+use std::time::Instant;
+
+use clap::{Parser, Subcommand};
+use simkit::backend::Result;
+use simkit::backend::Simulation;
+use simkit::backend::comm::Comm;
+use simkit::lattice_gas::{Config as LgConfig, DistributedLatticeGas, Lattice};
+use simkit::pp_coulomb::scenes::plasma_box;
+use simkit::pp_coulomb::units::PhysicalInputs;
+use simkit::pp_coulomb::{Config as PpConfig, DistributedCoulomb, Integrator};
+use simkit::rd::scenes::gray_scott_square;
+use simkit::rd::{Config as RdConfig, DistributedRd, GrayScott, Stepping};
+
+/// Times one distributed run on the ranks mpirun started.
+#[derive(Parser, Debug)]
+#[command(version)]
+struct Args {
+    /// Which crate's distributed run
+    #[command(subcommand)]
+    problem: Problem,
+    /// Timed steps
+    #[arg(long, value_name = "N", default_value_t = 100, global = true)]
+    steps: u32,
+    /// Untimed steps before the timing
+    #[arg(long, value_name = "N", default_value_t = 5, global = true)]
+    warmup: u32,
+}
+
+/// The problems.
+#[derive(Subcommand, Debug)]
+enum Problem {
+    /// Gray–Scott f64 on a periodic size^2 grid
+    Rd {
+        /// Cells per side
+        #[arg(long, default_value_t = 4096)]
+        size: usize,
+    },
+    /// FHP-I lattice gas on a periodic size^2 lattice
+    LatticeGas {
+        /// Sites per side (even: periodic in y)
+        #[arg(long, default_value_t = 4096)]
+        size: usize,
+    },
+    /// Direct-sum Coulomb (f64) of the source's plasma, replicated data
+    PpCoulomb {
+        /// Electrons
+        #[arg(long, default_value_t = 50_000)]
+        n: usize,
+    },
+}
+
+fn main() -> ExitCode {
+    simkit::cli::exit_code(run(&Args::parse()))
+}
+
+/// Runs `warmup` steps, then times `steps` steps between barriers with `step`; prints the
+/// line on rank 0.
+fn time(
+    comm: &Comm,
+    args: &Args,
+    what: &str,
+    size: usize,
+    per_step: f64,
+    unit: &str,
+    mut step: impl FnMut(u32) -> Result<()>,
+) -> Result<()> {
+    step(args.warmup)?;
+    comm.barrier();
+    let t = Instant::now();
+    step(args.steps)?;
+    comm.barrier();
+    let seconds = t.elapsed().as_secs_f64();
+    if comm.is_root() {
+        let rate = per_step * f64::from(args.steps) / seconds;
+        println!(
+            "crate={what} ranks={} size={size} steps={} seconds={seconds:.4} rate={rate:.4e} \
+             unit={unit}",
+            comm.size(),
+            args.steps
+        );
+    }
+    Ok(())
+}
+
+fn run(args: &Args) -> Result<()> {
+    let comm = Comm::mpi()?;
+    match args.problem {
+        Problem::Rd { size } => {
+            let grid = gray_scott_square::<f64>(size, 1.0, size / 8, 1)?;
+            let model = GrayScott::new(1.0, 0.5, 0.04, 0.06)?;
+            let config = RdConfig::new(Stepping::euler(0.2));
+            let mut run = DistributedRd::new(&grid, model, &config, comm.clone())?;
+            drop(grid);
+            let cells = (size * size) as f64;
+            time(&comm, args, "rd", size, cells, "cell-updates/s", |n| {
+                run.step(n)
+            })
+        }
+        Problem::LatticeGas { size } => {
+            let mut lattice = Lattice::new(size, size)?;
+            lattice.fill_random(0.3, 7)?;
+            let mut run = DistributedLatticeGas::new(&lattice, &LgConfig::default(), comm.clone())?;
+            drop(lattice);
+            let sites = (size * size) as f64;
+            time(
+                &comm,
+                args,
+                "lattice-gas",
+                size,
+                sites,
+                "site-updates/s",
+                |n| run.step(n),
+            )
+        }
+        Problem::PpCoulomb { n } => {
+            let inputs = PhysicalInputs {
+                particles: n,
+                ..PhysicalInputs::source_plasma()
+            };
+            let (particles, law, _) = plasma_box(&inputs, 1)?;
+            let config = PpConfig::new(1.0, law).with_integrator(Integrator::SymplecticEuler);
+            let mut run = DistributedCoulomb::new(particles, &config, comm.clone())?;
+            let pairs = run.interactions_per_step();
+            time(&comm, args, "pp-coulomb", n, pairs, "interactions/s", |k| {
+                run.step(k)
+            })
+        }
+    }
+}
