@@ -292,7 +292,8 @@ fn blocks_depend_only_on_the_particle_count() {
         (0, 256, 1),
         (256, 256, 1),
         (257, 256, 2),
-        (40_000, 1250, 32),
+        (40_000, 2500, 16),
+        (1_000_000, 4096, 245),
     ] {
         let list = BlockedHalfList::<f32, 3>::new([0.0; 3], [50.0; 3], [true; 3], 1.0, n).unwrap();
         assert_eq!(list.block_size(), size);

@@ -132,15 +132,17 @@ pub(crate) unsafe fn block_f64(
         let ha = _mm512_mul_pd(half, arg);
         let mut yk = _mm512_rsqrt14_pd(arg);
         for _ in 0..2 {
-            let h = _mm512_mul_pd(ha, _mm512_mul_pd(yk, yk));
-            yk = _mm512_mul_pd(yk, _mm512_sub_pd(three_halves, h));
+            // y = y (1.5 - (0.5 arg y) y), the bracket in one fused step.
+            let hy = _mm512_mul_pd(ha, yk);
+            yk = _mm512_mul_pd(yk, _mm512_fnmadd_pd(hy, yk, three_halves));
         }
-        let w = _mm512_mul_pd(_mm512_mul_pd(yk, yk), _mm512_mul_pd(yk, sq));
-        let w = match kind {
-            LawKind::Plummer => w,
-            LawKind::Exact => _mm512_maskz_mov_pd(_mm512_cmp_pd_mask::<_CMP_GT_OQ>(r2, zero), w),
-            LawKind::Exclusion => _mm512_maskz_mov_pd(_mm512_cmp_pd_mask::<_CMP_GT_OQ>(r2, vp), w),
+        // w = y^3 q, the pair mask applied by the last multiply.
+        let keep = match kind {
+            LawKind::Plummer => !0,
+            LawKind::Exact => _mm512_cmp_pd_mask::<_CMP_GT_OQ>(r2, zero),
+            LawKind::Exclusion => _mm512_cmp_pd_mask::<_CMP_GT_OQ>(r2, vp),
         };
+        let w = _mm512_maskz_mul_pd(keep, _mm512_mul_pd(yk, yk), _mm512_mul_pd(yk, sq));
         ax = _mm512_fmadd_pd(w, dx, ax);
         ay = _mm512_fmadd_pd(w, dy, ay);
         az = _mm512_fmadd_pd(w, dz, az);
