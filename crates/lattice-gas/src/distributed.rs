@@ -252,7 +252,7 @@ impl DistributedLatticeGas {
     /// Writes [`DistributedLatticeGas::checkpoint`] to `path` from rank 0, atomically
     /// (parent directories are created); the other ranks write nothing. Collective: returns
     /// on every rank once the file is complete. If rank 0 fails, it returns its error and
-    /// the other ranks an [`Error::Io`] naming the path.
+    /// the other ranks an [`Error::Io`](simkit_backend::Error::Io) naming the path.
     pub fn write_checkpoint(&self, path: impl AsRef<Path>) -> Result<()> {
         let bytes = self.checkpoint()?;
         self.comm.write_from_root(path.as_ref(), bytes.as_deref())

@@ -34,7 +34,7 @@ use crate::stepper::{
 ///
 /// The blow-up checks of [`crate::Rd`] run on every rank at the same steps and are reduced
 /// over the ranks before anything is decided, so all ranks roll back together and return
-/// the same [`Error::BlowUp`] (naming the same first bad cell, in global coordinates) as
+/// the same [`Error::BlowUp`](simkit_backend::Error::BlowUp) (naming the same first bad cell, in global coordinates) as
 /// the single-process run.
 ///
 /// Checkpoints are those of [`crate::Rd`]: [`DistributedRd::checkpoint`] gathers the grid on
@@ -211,7 +211,7 @@ impl<T: Real, M: Model> DistributedRd<T, M> {
 
     /// Writes [`DistributedRd::checkpoint`] to `path` from rank 0, atomically (parent
     /// directories created); collective: every rank returns once the file is complete, with
-    /// rank 0's error if it failed (the other ranks get an [`Error::Io`] naming the path).
+    /// rank 0's error if it failed (the other ranks get an [`Error::Io`](simkit_backend::Error::Io) naming the path).
     pub fn write_checkpoint(&self, path: impl AsRef<Path>) -> Result<()> {
         let bytes = self.checkpoint()?;
         self.comm.write_from_root(path.as_ref(), bytes.as_deref())

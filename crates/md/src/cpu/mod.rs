@@ -527,7 +527,7 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
     fn move_particles(&mut self, kick: Option<T>) -> f64 {
         if self.langevin.is_some() {
             if let Some(h) = kick {
-                kick_slice(&mut self.vel, &self.acc, h);
+                self::kick(&mut self.vel, &self.acc, h);
             }
             self.drift_langevin();
             self.max_displacement2()
