@@ -269,7 +269,7 @@ fn pp_coulomb(args: &Args, n: usize, steps: u32, precision: Prec) -> Result<()> 
         .with_precision(prec);
     let mut sim = PpCoulomb::new(p, &config, Backend::Cpu)?;
     let secs = median_time(args.reps, || sim.step(steps))?;
-    let rate = (n * (n - 1)) as f64 * f64::from(steps) / secs;
+    let rate = sim.interactions_per_step() * f64::from(steps) / secs;
     let gflops = rate * 20.0 / 1e9;
     let backend = sim.backend_name().replace(' ', "_");
     report(
