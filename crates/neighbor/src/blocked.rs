@@ -408,11 +408,14 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
         let nc = self.start.len() - 1;
         let mut cell_of = std::mem::take(&mut self.cell_of);
         cell_of.clear();
-        cell_of.par_extend(
-            pos.par_iter()
-                .with_min_len(SORT_MIN_LEN)
-                .map(|x| self.linear(self.cell_coords(x)) as u32),
-        );
+        // Small systems stay off the rayon pool (a hand-over costs more than the work).
+        let parallel = pos.len() >= 2 * SORT_MIN_LEN;
+        let cell = |x: &[T; D]| self.linear(self.cell_coords(x)) as u32;
+        if parallel {
+            cell_of.par_extend(pos.par_iter().with_min_len(SORT_MIN_LEN).map(cell));
+        } else {
+            cell_of.extend(pos.iter().map(cell));
+        }
         self.cell_of = cell_of;
         self.start.iter_mut().for_each(|s| *s = 0);
         for &c in &self.cell_of {
@@ -430,7 +433,12 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
         }
         // Within a cell by the first coordinate (stable: ties keep their current order), so
         // that `build` finds the candidates of a particle in a slice of each cell; the cells
-        // are sorted on the rayon pool (the same order either way).
+        // are sorted on the rayon pool in large systems (the same order either way).
+        let by_x = |cell: &mut &mut [u32]| {
+            if cell.len() > 1 {
+                cell.sort_by_key(|&p| x_key(pos[p as usize][0].to_f64()));
+            }
+        };
         let mut cells: Vec<&mut [u32]> = Vec::with_capacity(nc);
         let mut rest = &mut order[..];
         for c in 0..nc {
@@ -438,11 +446,14 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
             cells.push(cell);
             rest = tail;
         }
-        cells
-            .par_iter_mut()
-            .with_min_len(SORT_MIN_LEN / 16)
-            .filter(|cell| cell.len() > 1)
-            .for_each(|cell| cell.sort_by_key(|&p| x_key(pos[p as usize][0].to_f64())));
+        if parallel {
+            cells
+                .par_iter_mut()
+                .with_min_len(SORT_MIN_LEN / 16)
+                .for_each(by_x);
+        } else {
+            cells.iter_mut().for_each(by_x);
+        }
         Ok(order)
     }
 
