@@ -7,13 +7,17 @@
 //! RAYON_NUM_THREADS=1 mpirun -np 2 -x RAYON_NUM_THREADS target/release/examples/mpi_scaling rd
 //! RAYON_NUM_THREADS=1 mpirun -np 2 -x RAYON_NUM_THREADS target/release/examples/mpi_scaling lattice-gas
 //! RAYON_NUM_THREADS=1 mpirun -np 2 -x RAYON_NUM_THREADS target/release/examples/mpi_scaling pp-coulomb
+//! RAYON_NUM_THREADS=1 mpirun -np 2 -x RAYON_NUM_THREADS target/release/examples/mpi_scaling dem
 //! ```
 //! `benches/peers/mpi_scaling.sh` alternates 1 and 2 ranks and prints the efficiencies.
 //! Problems: `rd` — Gray–Scott f64 (`F = 0.04`, `k = 0.06`, `Du = 1`, `Dv = 0.5`, explicit
 //! Euler `dt = 0.2`) on a periodic `size x size` grid seeded with a centre square;
 //! `lattice-gas` — FHP-I on a periodic `size x size` lattice at 30 % fill; `pp-coulomb` —
 //! the source's electron plasma (normalised units, exclusion law at the Debye length), `n`
-//! electrons, f64, symplectic Euler, replicated data (`n (n - 1)` interactions per step).
+//! electrons, f64, symplectic Euler, replicated data (`n (n - 1)` interactions per step);
+//! `dem` — the granular pile of the LAMMPS deck (`nx x ny x nz` grains on a lattice of
+//! spacing 1.05, periodic x and y, a floor, gravity, friction, `dt = 1e-4`; default
+//! 200,000 grains), spatial decomposition along x and y.
 //! Each run takes a few warm-up steps, then times `steps` steps between barriers.
 
 use std::process::ExitCode;
@@ -23,6 +27,8 @@ use clap::{Parser, Subcommand};
 use simkit::backend::Result;
 use simkit::backend::Simulation;
 use simkit::backend::comm::Comm;
+use simkit::dem::scenes::granular_box;
+use simkit::dem::{Config as DemConfig, DistributedDem};
 use simkit::lattice_gas::{Config as LgConfig, DistributedLatticeGas, Lattice};
 use simkit::pp_coulomb::scenes::plasma_box;
 use simkit::pp_coulomb::units::PhysicalInputs;
@@ -59,6 +65,19 @@ enum Problem {
         /// Sites per side (even: periodic in y)
         #[arg(long, default_value_t = 4096)]
         size: usize,
+    },
+    /// Granular pile of the LAMMPS deck (3D, periodic x and y, floor, gravity, friction),
+    /// spatial decomposition
+    Dem {
+        /// Lattice sites along x
+        #[arg(long, default_value_t = 100)]
+        nx: usize,
+        /// Lattice sites along y
+        #[arg(long, default_value_t = 100)]
+        ny: usize,
+        /// Lattice sites along z (layers)
+        #[arg(long, default_value_t = 20)]
+        nz: usize,
     },
     /// Direct-sum Coulomb (f64) of the source's plasma, replicated data
     PpCoulomb {
@@ -130,6 +149,18 @@ fn run(args: &Args) -> Result<()> {
                 "site-updates/s",
                 |n| run.step(n),
             )
+        }
+        Problem::Dem { nx, ny, nz } => {
+            let scene = granular_box(nx, ny, nz, 1)?;
+            let config = DemConfig {
+                dt: Some(1e-4),
+                ..DemConfig::default()
+            };
+            let mut run = DistributedDem::new(&scene, &config, comm.clone())?;
+            let n = scene.particles().len();
+            time(&comm, args, "dem", n, n as f64, "particle-steps/s", |k| {
+                run.step(k)
+            })
         }
         Problem::PpCoulomb { n } => {
             let inputs = PhysicalInputs {

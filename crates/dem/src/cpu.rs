@@ -44,7 +44,7 @@ struct BlockWork<T, const D: usize> {
 }
 
 #[derive(Clone, Copy)]
-struct WallT<T> {
+pub(crate) struct WallT<T> {
     cylinder: bool,
     normal: [T; 3],
     offset: T,
@@ -54,7 +54,7 @@ struct WallT<T> {
     vibrating: bool,
     /// Whether the wall depends on a periodic coordinate (then the particle position is
     /// wrapped before the wall test: positions are wrapped only at list builds).
-    wrap: bool,
+    pub wrap: bool,
 }
 
 /// Per-particle data in sorted order (permuted at every list rebuild).
@@ -96,7 +96,7 @@ enum Contact {
     Wall(usize),
 }
 
-const AXES: [&str; 3] = ["x", "y", "z"];
+pub(crate) const AXES: [&str; 3] = ["x", "y", "z"];
 
 /// The CPU engine for dimension `D` and precision `T`.
 pub(crate) struct CpuEngine<const D: usize, T: Real> {
@@ -133,30 +133,34 @@ pub(crate) struct CpuEngine<const D: usize, T: Real> {
 }
 
 /// Read-only inputs of the force pass.
-struct ForceInput<'a, T, const D: usize> {
-    pos: &'a [[T; D]],
-    vel: &'a [[T; D]],
-    radius: &'a [T],
-    mass: &'a [T],
-    species: &'a [u32],
-    n_species: usize,
-    coeff: &'a [ContactCoefficients<T>],
-    walls: &'a [WallT<T>],
-    gravity: [T; D],
-    zw: T,
-    vw: T,
-    vert: usize,
-    periodic: [bool; D],
-    lo: [T; D],
-    len: [T; D],
+pub(crate) struct ForceInput<'a, T, const D: usize> {
+    pub pos: &'a [[T; D]],
+    /// The velocities the dashpots read (velocity Verlet: predicted at the force time).
+    pub vel: &'a [[T; D]],
+    pub radius: &'a [T],
+    pub mass: &'a [T],
+    pub species: &'a [u32],
+    pub n_species: usize,
+    pub coeff: &'a [ContactCoefficients<T>],
+    pub walls: &'a [WallT<T>],
+    pub gravity: [T; D],
+    /// Vertical displacement and velocity of the vibrating walls.
+    pub zw: T,
+    pub vw: T,
+    /// The vertical axis.
+    pub vert: usize,
+    pub periodic: [bool; D],
+    pub lo: [T; D],
+    pub len: [T; D],
     /// Square of the largest contact distance (twice the largest radius).
-    cut2: T,
-    block: usize,
+    pub cut2: T,
+    /// Particles per block of the half list (the block of a reaction's target).
+    pub block: usize,
 }
 
 /// The force of wall `w` on particle `i` (if they touch) added to `f`.
 #[inline(always)]
-fn wall_force<T: Real, const D: usize, const FRICTION: bool>(
+pub(crate) fn wall_force<T: Real, const D: usize, const FRICTION: bool>(
     inp: &ForceInput<'_, T, D>,
     w: &WallT<T>,
     i: usize,
@@ -209,22 +213,17 @@ fn wall_force<T: Real, const D: usize, const FRICTION: bool>(
     }
 }
 
-/// The force of the contact of particles `i` and `j` at separation `sep = x_i - x_j`: added
-/// to `fi`, its reaction to `j` (in `f` when `j` is in block `b`, else queued in `b.ghosts`).
-/// Pairs farther apart than their radii do nothing.
+/// The force on particle `i` of its contact with particle `j` at separation
+/// `sep = x_i - x_j` (normal spring–dashpot plus, with `FRICTION`, the capped tangential
+/// force), or `None` when they are farther apart than their radii. One statement of the
+/// pair contact for every CPU force loop (the blocked half list here, the distributed run).
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn pair_contact<T: Real, const D: usize, const FRICTION: bool>(
+pub(crate) fn contact_force<T: Real, const D: usize, const FRICTION: bool>(
     inp: &ForceInput<'_, T, D>,
     i: usize,
     j: usize,
     sep: [T; D],
-    fi: &mut [T; D],
-    b_start: usize,
-    b_end: usize,
-    f: &mut [[T; D]],
-    ghosts: &mut [Vec<(u32, [T; D])>],
-) {
+) -> Option<[T; D]> {
     let mut r2 = T::ZERO;
     for s in sep {
         r2 += s * s;
@@ -232,11 +231,11 @@ fn pair_contact<T: Real, const D: usize, const FRICTION: bool>(
     // Most list entries are not in contact: test against the largest contact distance
     // before loading the partner's radius.
     if r2 >= inp.cut2 {
-        return;
+        return None;
     }
     let rsum = inp.radius[i] + inp.radius[j];
     if r2 >= rsum * rsum {
-        return;
+        return None;
     }
     let dist = r2.sqrt();
     let delta = rsum - dist;
@@ -263,6 +262,28 @@ fn pair_contact<T: Real, const D: usize, const FRICTION: bool>(
             fp[d] += ft[d];
         }
     }
+    Some(fp)
+}
+
+/// The force of the contact of particles `i` and `j` at separation `sep = x_i - x_j`
+/// ([`contact_force`]): added to `fi`, its reaction to `j` (in `f` when `j` is in block
+/// `b`, else queued in `b.ghosts`).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn pair_contact<T: Real, const D: usize, const FRICTION: bool>(
+    inp: &ForceInput<'_, T, D>,
+    i: usize,
+    j: usize,
+    sep: [T; D],
+    fi: &mut [T; D],
+    b_start: usize,
+    b_end: usize,
+    f: &mut [[T; D]],
+    ghosts: &mut [Vec<(u32, [T; D])>],
+) {
+    let Some(fp) = contact_force::<T, D, FRICTION>(inp, i, j, sep) else {
+        return;
+    };
     for d in 0..D {
         fi[d] += fp[d];
     }
@@ -377,6 +398,28 @@ where
     }
 }
 
+/// The scene's walls in the force loop's form and precision.
+pub(crate) fn walls_of<T: Real, const D: usize>(prep: &Prepared) -> Vec<WallT<T>> {
+    let periodic = &prep.periodic;
+    prep.walls
+        .iter()
+        .map(|w| WallT {
+            cylinder: w.cylinder,
+            normal: w.normal.map(T::from_f64),
+            offset: T::from_f64(w.offset),
+            center: w.center.map(T::from_f64),
+            radius: T::from_f64(w.radius),
+            coeff: w.coeff.to_real(),
+            vibrating: w.vibrating,
+            wrap: if w.cylinder {
+                (0..D.min(2)).any(|d| periodic[d])
+            } else {
+                (0..D).any(|d| periodic[d] && w.normal[d] != 0.0)
+            },
+        })
+        .collect()
+}
+
 impl<T: Real, const D: usize> Particles<T, D> {
     /// Reorders every per-particle array but `reference` into `order` (slot `k` takes the
     /// particle at `order[k]`).
@@ -440,24 +483,7 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
             .radius
             .iter()
             .fold(T::ZERO, |m, &r| if r > m { r } else { m });
-        let walls = prep
-            .walls
-            .iter()
-            .map(|w| WallT {
-                cylinder: w.cylinder,
-                normal: w.normal.map(T::from_f64),
-                offset: T::from_f64(w.offset),
-                center: w.center.map(T::from_f64),
-                radius: T::from_f64(w.radius),
-                coeff: w.coeff.to_real(),
-                vibrating: w.vibrating,
-                wrap: if w.cylinder {
-                    (0..D.min(2)).any(|d| periodic[d])
-                } else {
-                    (0..D).any(|d| periodic[d] && w.normal[d] != 0.0)
-                },
-            })
-            .collect();
+        let walls = walls_of::<T, D>(&prep);
         let mut e = Self {
             p,
             n_species: prep.n_species,
@@ -1049,7 +1075,14 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
     targets("x86_64+avx512f+avx512vl+avx2+fma", "x86_64+avx2+fma"),
     dispatcher = "direct"
 )]
-fn drift_velocity_verlet<T: Real>(x: &mut [T], v: &mut [T], vp: &mut [T], a: &[T], h: T, dt: T) {
+pub(crate) fn drift_velocity_verlet<T: Real>(
+    x: &mut [T],
+    v: &mut [T],
+    vp: &mut [T],
+    a: &[T],
+    h: T,
+    dt: T,
+) {
     let n = x.len().min(v.len()).min(vp.len()).min(a.len());
     let (x, v, vp, a) = (&mut x[..n], &mut v[..n], &mut vp[..n], &a[..n]);
     for k in 0..n {
@@ -1095,7 +1128,7 @@ fn drift_position_verlet<T: Real>(
     targets("x86_64+avx512f+avx512vl+avx2+fma", "x86_64+avx2+fma"),
     dispatcher = "direct"
 )]
-fn max_displacement2<T: Real, const D: usize>(x: &[[T; D]], r: &[[T; D]]) -> T {
+pub(crate) fn max_displacement2<T: Real, const D: usize>(x: &[[T; D]], r: &[[T; D]]) -> T {
     let mut m2 = T::ZERO;
     for (x, r) in x.iter().zip(r) {
         let mut s2 = T::ZERO;
@@ -1109,7 +1142,12 @@ fn max_displacement2<T: Real, const D: usize>(x: &[[T; D]], r: &[[T; D]]) -> T {
 }
 
 /// Wraps the periodic coordinates of `x` into `[lo, lo + len)`.
-fn wrap<T: Real, const D: usize>(x: &mut [T; D], per: [bool; D], lo: [T; D], len: [T; D]) {
+pub(crate) fn wrap<T: Real, const D: usize>(
+    x: &mut [T; D],
+    per: [bool; D],
+    lo: [T; D],
+    len: [T; D],
+) {
     for d in 0..D {
         if per[d] {
             if x[d] < lo[d] {

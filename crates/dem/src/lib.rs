@@ -89,6 +89,7 @@ mod config;
 mod contact;
 mod cpu;
 mod diagnostics;
+mod distributed;
 mod engine;
 #[cfg(feature = "gpu")]
 mod gpu;
@@ -105,6 +106,7 @@ pub use config::{
 pub use contact::{ContactCoefficients, friction_force, normal_force, reduced_mass, spring_energy};
 pub use diagnostics::Diagnostics;
 pub use diagnostics::MAX_INITIAL_OVERLAP;
+pub use distributed::DistributedDem;
 pub use input::{Dim, Material, Particle, Scene, Vibration, Wall, WallShape, pair_index};
 pub use sim::{Dem, State};
 pub use simkit_backend::Precision;

@@ -231,36 +231,70 @@ impl Simulation for Dem {
 impl Restart for Dem {
     fn checkpoint(&mut self) -> Result<Vec<u8>> {
         let engine = self.engine.save()?;
-        let payload = Payload {
-            scene: self.scene.to_record(),
-            config: ConfigRecord::from(&self.config),
-            engine,
-        };
-        checkpoint::encode(
-            env!("CARGO_PKG_NAME"),
-            env!("CARGO_PKG_VERSION"),
-            &self.engine.model(),
-            &payload,
-        )
+        encode(&self.scene, &self.config, &self.engine.model(), engine)
     }
 
     fn resume(bytes: &[u8], backend: Backend<'_>) -> Result<Self> {
-        let (written, payload): (String, Payload) =
-            checkpoint::decode_any_model(bytes, env!("CARGO_PKG_NAME"), env!("CARGO_PKG_VERSION"))?;
-        let fail = |reason: String| Error::checkpoint(reason);
-        let scene = Scene::from_record(payload.scene)
-            .map_err(|e| fail(format!("the stored scene is not valid: {e}")))?;
-        let config = Config::from(payload.config);
-        let want = model_name(backend.is_gpu(), config.precision, scene.dim().axes());
-        if written != want {
-            return Err(fail(format!(
+        let saved = decode(bytes)?;
+        let want = model_name(
+            backend.is_gpu(),
+            saved.config.precision,
+            saved.scene.dim().axes(),
+        );
+        if saved.model != want {
+            return Err(Error::checkpoint(format!(
                 "holds a {} run, and {} on this backend would be a {want} run; resume it on \
                  the backend that wrote it (or start a new run there from Dem::state with \
                  Scene::set_kinematics)",
-                written,
+                saved.model,
                 backend.name()
             )));
         }
-        Self::build(&scene, &config, backend, Some(&payload.engine))
+        Self::build(&saved.scene, &saved.config, backend, Some(&saved.engine))
     }
+}
+
+/// What a checkpoint holds, decoded: the model that wrote it, the scene and settings
+/// (validated as builders would), and the engine's dynamic state (validated by the engine
+/// that loads it).
+pub(crate) struct Saved {
+    /// The model string of the engine that wrote it ([`model_name`]).
+    pub model: String,
+    pub scene: Scene,
+    pub config: Config,
+    pub engine: EngineState,
+}
+
+/// A checkpoint of `engine`'s state for `scene` and `config`, written by `model`.
+pub(crate) fn encode(
+    scene: &Scene,
+    config: &Config,
+    model: &str,
+    engine: EngineState,
+) -> Result<Vec<u8>> {
+    let payload = Payload {
+        scene: scene.to_record(),
+        config: ConfigRecord::from(config),
+        engine,
+    };
+    checkpoint::encode(
+        env!("CARGO_PKG_NAME"),
+        env!("CARGO_PKG_VERSION"),
+        model,
+        &payload,
+    )
+}
+
+/// The contents of a dem checkpoint (any model).
+pub(crate) fn decode(bytes: &[u8]) -> Result<Saved> {
+    let (model, payload): (String, Payload) =
+        checkpoint::decode_any_model(bytes, env!("CARGO_PKG_NAME"), env!("CARGO_PKG_VERSION"))?;
+    let scene = Scene::from_record(payload.scene)
+        .map_err(|e| Error::checkpoint(format!("the stored scene is not valid: {e}")))?;
+    Ok(Saved {
+        model,
+        scene,
+        config: Config::from(payload.config),
+        engine: payload.engine,
+    })
 }

@@ -9,6 +9,10 @@
 //!   with neighbour ranks (periodic wrap where asked), halo exchange in the shift pattern
 //!   ([`CartDecomposition::exchange_halo`]) and gather of the blocks to rank 0
 //!   ([`CartDecomposition::gather`]).
+//! - [`ParticleDomain`]: a particle box cut along x and y into one region per rank (at least
+//!   a ghost halo wide), with ownership, migration of particles to their owners
+//!   ([`ParticleDomain::migrate`]) and ghost copies of the particles near a region's faces
+//!   ([`ParticleDomain::ghosts`], [`GhostPlan::refresh`]), in the same shift pattern.
 //!
 //! Every operation here is collective unless its documentation says otherwise: all ranks
 //! must call it, in the same order. Reductions are bitwise deterministic: [`Comm::all_max`]
@@ -40,8 +44,10 @@
 //! ```
 
 mod cart;
+mod domain;
 
 pub use cart::{Block, CartDecomposition, Neighbors, split};
+pub use domain::{GhostPlan, ParticleDomain};
 
 use crate::{Error, Result, max_or_nan};
 use bytemuck::Pod;
@@ -299,6 +305,39 @@ impl Comm {
     /// Whether any rank passes `true`, on every rank.
     pub fn all_any(&self, x: bool) -> Result<bool> {
         Ok(self.all_gather(&[u8::from(x)])?.contains(&1))
+    }
+
+    /// `local` on every rank if it is `Ok` on every rank; else this rank's error, or on the
+    /// ranks that had none an error naming the first rank that failed, so that no rank goes
+    /// on to wait for the others in a collective call (e.g. after validating inputs that
+    /// every rank checks on its own). Collective.
+    pub fn agree<T>(&self, local: Result<T>) -> Result<T> {
+        let failed = self.all_gather(&[u8::from(local.is_err())])?;
+        match (local, failed.iter().position(|f| *f == 1)) {
+            (Err(e), _) => Err(e),
+            (Ok(_), Some(r)) => Err(Error::invalid(
+                format!("the inputs of rank {r}"),
+                "rejected there",
+                "see that rank's error; every rank must pass the same particles and \
+                 configuration (or checkpoint)",
+            )),
+            (Ok(v), None) => Ok(v),
+        }
+    }
+
+    /// `Ok` when every rank passes the same `digest` (e.g. a hash of its inputs); else, on
+    /// every rank, an error naming `what` and the first rank that differs from rank 0, with
+    /// `fix` as the remedy. Collective.
+    pub fn check_same(&self, digest: u64, what: &str, fix: &str) -> Result<()> {
+        let all = self.all_gather(&[digest])?;
+        match all.iter().position(|d| *d != all[0]) {
+            Some(r) => Err(Error::invalid(
+                what,
+                format!("rank {r} differs from rank 0"),
+                fix,
+            )),
+            None => Ok(()),
+        }
     }
 
     /// Rank 0's `data` on every rank (`MPI_Bcast` of the length, then of the values): rank 0

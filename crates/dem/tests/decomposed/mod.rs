@@ -1,0 +1,211 @@
+//! The cases `DistributedDem` must pass on any communicator (one process in
+//! `tests/distributed.rs`, 2-4 MPI ranks in `tests/mpi.rs`): every rank count gives the bits
+//! of the one-process run (state, diagnostics and checkpoint bytes), checkpoints move
+//! between rank counts, and a blow-up stops every rank with the same error.
+
+use simkit_backend::comm::Comm;
+use simkit_backend::{Error, Simulation};
+use simkit_dem::scenes::{BedParams, granular_box, vibrating_bed};
+use simkit_dem::{Config, Dim, DistributedDem, Material, Particle, Scene, State};
+
+/// A periodic gas of `n_side^D` grains of radius 0.5 on a lattice of spacing `spacing`,
+/// masses 1 and 2, pseudo-random velocities of about `speed`, Coulomb friction.
+pub fn gas(dim: Dim, n_side: usize, spacing: f64, speed: f64) -> Scene {
+    let l = n_side as f64 * spacing;
+    let three = dim == Dim::Three;
+    let hi = [l, l, if three { l } else { 0.0 }];
+    let m = Material::new(0.8, 0.05).with_friction(0.4, 20.0);
+    let mut s = Scene::new(dim, [0.0; 3], hi, m).unwrap();
+    s.set_periodic([true; 3]);
+    let nz = if three { n_side } else { 1 };
+    let mut k = 0u32;
+    for z in 0..nz {
+        for y in 0..n_side {
+            for x in 0..n_side {
+                k += 1;
+                let h = |a: u32| speed * (simkit_backend::rng::rng_uniform(11, a, k) as f64 - 0.5);
+                let p = [
+                    (x as f64 + 0.5) * spacing,
+                    (y as f64 + 0.5) * spacing,
+                    if three {
+                        (z as f64 + 0.5) * spacing
+                    } else {
+                        0.0
+                    },
+                ];
+                let v = [h(0), h(1), if three { h(2) } else { 0.0 }];
+                let mass = if k.is_multiple_of(3) { 2.0 } else { 1.0 };
+                s.add_particle(Particle::new(p, 0.5, mass).with_velocity(v))
+                    .unwrap();
+            }
+        }
+    }
+    s
+}
+
+/// The scenes, their settings and step counts: a vibrated 2D bed in a closed box (walls,
+/// a vibrating floor, friction), periodic 2D and 3D gases (particles crossing the periodic
+/// faces and the region borders), and the 3D pile on a floor of the LAMMPS deck (periodic
+/// x and y).
+pub fn cases() -> Vec<(&'static str, Scene, Config, u32)> {
+    let bed = BedParams {
+        n: 240,
+        width: 24,
+        ..BedParams::default()
+    };
+    let (bed, _) = vibrating_bed(&bed).unwrap();
+    let pile = granular_box(10, 9, 3, 5).unwrap();
+    let pile_config = Config {
+        dt: Some(1e-4),
+        ..Config::default()
+    };
+    vec![
+        ("vibrated 2D bed", bed, Config::default(), 1500),
+        (
+            "periodic 2D gas",
+            gas(Dim::Two, 20, 1.1, 4.0),
+            Config::default(),
+            600,
+        ),
+        (
+            "periodic 3D gas",
+            gas(Dim::Three, 9, 1.15, 4.0),
+            Config::default(),
+            400,
+        ),
+        ("3D pile on a floor", pile, pile_config, 400),
+    ]
+}
+
+/// The bits of positions and velocities (so -0.0 differs from 0.0).
+pub fn state_bits(s: &State) -> Vec<u64> {
+    s.positions
+        .iter()
+        .chain(&s.velocities)
+        .flatten()
+        .chain([&s.time])
+        .map(|c| c.to_bits())
+        .collect()
+}
+
+/// `Err` naming `what` when `a != b`.
+fn same<T: PartialEq>(a: T, b: T, what: &str) -> Result<(), String> {
+    if a == b {
+        Ok(())
+    } else {
+        Err(format!("{what} differs from the one-process run"))
+    }
+}
+
+fn err(e: Error) -> String {
+    e.to_string()
+}
+
+/// Every case on `comm` against one process (`Comm::serial`, run on every rank), bit for
+/// bit: the state after a first stretch, the checkpoint bytes, the state after a second
+/// stretch, a one-process checkpoint resumed on `comm` and a `comm` checkpoint resumed on
+/// one process. Returns the number of checks.
+pub fn check_all(comm: &Comm) -> Result<usize, String> {
+    let mut checks = 0;
+    for (name, scene, config, steps) in cases() {
+        let serial = Comm::serial();
+        let mut one = DistributedDem::new(&scene, &config, serial.clone()).map_err(err)?;
+        let mut many = DistributedDem::new(&scene, &config, comm.clone()).map_err(err)?;
+        let half = steps / 2;
+        one.step(half).map_err(err)?;
+        many.step(half).map_err(err)?;
+        let s1 = one.state().map_err(err)?;
+        let sm = many.state().map_err(err)?;
+        same(
+            state_bits(&s1),
+            state_bits(&sm),
+            &format!("{name}: state after {half} steps"),
+        )?;
+        let c1 = one.checkpoint().map_err(err)?;
+        same(
+            &c1,
+            &many.checkpoint().map_err(err)?,
+            &format!("{name}: checkpoint"),
+        )?;
+        // Swap: the one-process checkpoint goes on on `comm`, and `comm`'s on one process.
+        let mut many_resumed = DistributedDem::resume(&c1, comm.clone()).map_err(err)?;
+        let mut one_resumed = DistributedDem::resume(&c1, serial).map_err(err)?;
+        for sim in [&mut one, &mut many, &mut many_resumed, &mut one_resumed] {
+            sim.step(steps - half).map_err(err)?;
+        }
+        let want = state_bits(&one.state().map_err(err)?);
+        same(
+            &want,
+            &state_bits(&many.state().map_err(err)?),
+            &format!("{name}: state after {steps} steps"),
+        )?;
+        same(
+            &want,
+            &state_bits(&many_resumed.state().map_err(err)?),
+            &format!("{name}: state after a resume on {} ranks", comm.size()),
+        )?;
+        same(
+            &want,
+            &state_bits(&one_resumed.state().map_err(err)?),
+            &format!("{name}: state after a resume on one process"),
+        )?;
+        let (d1, dm) = (
+            one.diagnostics().map_err(err)?,
+            many.diagnostics().map_err(err)?,
+        );
+        same(
+            format!("{d1:?}"),
+            format!("{dm:?}"),
+            &format!("{name}: diagnostics"),
+        )?;
+        // Every rank owns its share: the owned counts add up to all particles.
+        let owned = comm.all_sum(many.owned() as f64).map_err(err)?;
+        same(
+            owned,
+            scene.particles().len() as f64,
+            &format!("{name}: owned total"),
+        )?;
+        checks += 6;
+    }
+    checks += blow_up(comm)?;
+    Ok(checks)
+}
+
+/// Two grains thrown at each other far too fast for their contact time: the overlap check
+/// stops the run on every rank with the one-process error, rolled back to the same step.
+pub fn blow_up(comm: &Comm) -> Result<usize, String> {
+    let m = Material::new(0.9, 0.5);
+    let mut scene = Scene::new(Dim::Two, [0.0; 3], [12.0, 4.0, 0.0], m).unwrap();
+    scene.set_periodic([true, false, false]);
+    for k in 0..6 {
+        let x = 1.0 + 2.0 * k as f64;
+        let v = if k % 2 == 0 { 40.0 } else { -40.0 };
+        scene
+            .add_particle(Particle::new([x, 2.0, 0.0], 0.4, 1.0).with_velocity([v, 0.0, 0.0]))
+            .unwrap();
+    }
+    let config = Config {
+        check_every: 10,
+        ..Config::default()
+    };
+    let run = |c: Comm| -> Result<(String, u64, Vec<u64>), String> {
+        let mut sim = DistributedDem::new(&scene, &config, c).map_err(err)?;
+        let e = match sim.step(2000) {
+            Err(e @ Error::BlowUp { .. }) => e.to_string(),
+            other => return Err(format!("expected a blow-up, got {other:?}")),
+        };
+        let s = sim.state().map_err(err)?;
+        Ok((e, sim.steps_done(), state_bits(&s)))
+    };
+    let one = run(Comm::serial())?;
+    let many = run(comm.clone())?;
+    same(
+        &one,
+        &many,
+        "the blow-up (message, step rolled back to, state)",
+    )?;
+    if !one.0.contains("overlaps") {
+        return Err(format!("the blow-up names no overlap: {}", one.0));
+    }
+    Ok(1)
+}
