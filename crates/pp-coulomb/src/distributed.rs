@@ -5,7 +5,7 @@ use std::hash::{Hash, Hasher};
 use std::ops::Range;
 
 use simkit_backend::comm::Comm;
-use simkit_backend::{Error, Precision, Result, Simulation};
+use simkit_backend::{Precision, Result, Simulation};
 
 use crate::config::Config;
 use crate::cpu::{CpuEngine, Ranks, Share};
@@ -34,7 +34,7 @@ use crate::run::Run;
 /// The energy guard's potential energy is computed per particle by the owning rank and
 /// summed over the gathered terms in particle order, so it too has the bits of one
 /// process, and every blow-up check ([`Config::check_every`]) stops every rank at the same
-/// step with the same [`Error::BlowUp`] (each rank decides from the same replicated values).
+/// step with the same [`simkit_backend::Error::BlowUp`] (each rank decides from the same replicated values).
 /// [`DistributedCoulomb::diagnostics`] is bit-identical to [`crate::PpCoulomb::diagnostics`]
 /// on the CPU as well (the potential rows are gathered and summed in particle order).
 ///
@@ -75,7 +75,7 @@ pub struct DistributedCoulomb {
     run: Run,
 }
 
-/// The CPU engine in the configured precision.
+/// The CPU engine in the configured state precision (f64 for the mixed mode).
 enum Engines {
     F32(CpuEngine<f32>),
     F64(CpuEngine<f64>),
@@ -126,23 +126,6 @@ fn fingerprint(run: &Run, kernel: &str) -> u64 {
     h.finish()
 }
 
-/// `local` on every rank if it is `Ok` on every rank; else this rank's error, or on the
-/// ranks that had none an error naming the first rank that failed (so no rank goes on to
-/// wait for the others in a collective call). Collective.
-fn agree<T>(comm: &Comm, local: Result<T>) -> Result<T> {
-    let failed = comm.all_gather(&[u8::from(local.is_err())])?;
-    match (local, failed.iter().position(|f| *f == 1)) {
-        (Err(e), _) => Err(e),
-        (Ok(_), Some(r)) => Err(Error::invalid(
-            format!("the inputs of rank {r}"),
-            "rejected there",
-            "see that rank's error; every rank must pass the same particles and \
-             configuration (or checkpoint)",
-        )),
-        (Ok(v), None) => Ok(v),
-    }
-}
-
 impl DistributedCoulomb {
     /// Validates the particles and the configuration as [`crate::PpCoulomb::new`] does (the
     /// same errors, on every rank) and builds this rank's CPU engine. Collective; every rank
@@ -152,7 +135,7 @@ impl DistributedCoulomb {
     /// configuration or CPU kernel (AVX-512 or portable) differ. An error on one rank is an
     /// error on every rank (the others name the rank that failed).
     pub fn new(particles: Particles, config: &Config, comm: Comm) -> Result<Self> {
-        let run = agree(&comm, Run::new(particles, config))?;
+        let run = comm.agree(Run::new(particles, config))?;
         Self::build(run, comm, None, None)
     }
 
@@ -166,7 +149,7 @@ impl DistributedCoulomb {
     /// truncated, corrupt or inconsistent one); ranks that pass different checkpoints. An
     /// error on one rank is an error on every rank.
     pub fn resume(bytes: &[u8], comm: Comm) -> Result<Self> {
-        let saved = agree(&comm, Run::resume(bytes))?;
+        let saved = comm.agree(Run::resume(bytes))?;
         Self::build(
             saved.run,
             comm,
@@ -182,23 +165,19 @@ impl DistributedCoulomb {
         energy_ref: Option<Option<Energy>>,
     ) -> Result<Self> {
         let (p, c) = (&run.particles, &run.config);
-        let engine = match c.precision {
+        let engine = match c.mode().state() {
             Precision::F32 => Engines::F32(CpuEngine::new(p, c, accelerations)),
             Precision::F64 => Engines::F64(CpuEngine::new(p, c, accelerations)),
         };
         let mut sim = Self { comm, engine, run };
         let kernel = with_engine!(&sim.engine, e => Engine::name(e));
-        let mine = fingerprint(&sim.run, &kernel);
-        let all = sim.comm.all_gather(&[mine])?;
-        if let Some(r) = all.iter().position(|f| *f != all[0]) {
-            return Err(Error::invalid(
-                "DistributedCoulomb inputs",
-                format!("rank {r} differs from rank 0"),
-                "every rank must pass the same particles and configuration (or checkpoint), \
-                 and run on CPUs with the same SIMD kernel (set Config::rsqrt = false on \
-                 mixed machines)",
-            ));
-        }
+        sim.comm.check_same(
+            fingerprint(&sim.run, &kernel),
+            "DistributedCoulomb inputs",
+            "every rank must pass the same particles and configuration (or checkpoint), and \
+             run on CPUs with the same SIMD kernel (set Config::rsqrt = false on mixed \
+             machines)",
+        )?;
         let (engine, share) = (&mut sim.engine, Ranks(&sim.comm));
         sim.run.set_energy_ref(
             energy_ref,

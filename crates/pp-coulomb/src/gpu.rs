@@ -38,6 +38,14 @@ pub(crate) fn engine(
     c: &Config,
     accelerations: Option<&[[f64; 3]]>,
 ) -> Result<Box<dyn Engine>> {
+    if c.mixed {
+        return Err(Error::Unsupported(format!(
+            "mixed precision (Config::mixed) on adapter '{}': the GPU backend computes and sums \
+             in one precision; use Backend::Cpu for the mixed mode, or Config::with_mixed(false) \
+             for f32 or f64 on the GPU",
+            ctx.adapter_info().name
+        )));
+    }
     let max = gpu_max_particles(ctx);
     if p.len() > max {
         return Err(Error::Unsupported(format!(

@@ -15,6 +15,9 @@
 //!   else a portable kernel compiled for AVX-512/AVX2 with runtime dispatch) or
 //!   [`Backend::Gpu`] (tiled all-pairs WGSL kernel, all steps on the device, f32, or f64 where
 //!   the adapter has `SHADER_F64`).
+//! - Mixed precision on the CPU ([`Config::mixed`], with [`Precision::F32`]): the f32 pair
+//!   kernel on separations formed from f64 positions, with f64 sums, state and integrator;
+//!   a force error about 20x below f32's in about 1.3x f32's time.
 //! - [`DistributedCoulomb`]: the CPU run over the ranks of a `simkit_backend::comm::Comm`
 //!   (MPI with the `mpi` feature) with replicated data, bit-identical to one process.
 //! - Blow-up checks inside `step(n)` ([`Config::check_every`], default every 100 steps, and

@@ -6,7 +6,7 @@
 use serde::{Deserialize, Serialize};
 use simkit_backend::{Error, Precision, Result, checkpoint};
 
-use crate::config::{Config, ForceLaw};
+use crate::config::{Config, ForceLaw, Mode};
 use crate::engine::PositionsVelocities;
 use crate::guard::{Checks, Energy};
 use crate::particles::Particles;
@@ -45,32 +45,41 @@ pub(crate) struct Resumed {
 }
 
 /// Checks that every position, velocity, charge, mass and charge-to-mass ratio stays finite
-/// in the run's precision (f32 ends at 3.4e38; `q / m` can overflow in either).
-fn representable(p: &Particles, precision: Precision) -> Result<()> {
-    let fits = |v: f64| match precision {
+/// where the run's mode stores or reads it (f32 ends at 3.4e38; `q / m` can overflow in
+/// either): all in f32 for [`Mode::F32`]; the positions and charges (the pair kernel's
+/// inputs) in f32 and the rest in f64 for [`Mode::Mixed`].
+fn representable(p: &Particles, mode: Mode) -> Result<()> {
+    let fits = |v: f64, precision: Precision| match precision {
         Precision::F32 => (v as f32).is_finite(),
         Precision::F64 => v.is_finite(),
     };
-    let name = match precision {
+    let kernel = match mode {
+        Mode::F64 => Precision::F64,
+        Mode::F32 | Mode::Mixed => Precision::F32,
+    };
+    let state = mode.state();
+    let name = |precision| match precision {
         Precision::F32 => "f32",
         Precision::F64 => "f64",
     };
     for i in 0..p.len() {
         let values = [
-            ("position", p.position[i].to_vec()),
-            ("velocity", p.velocity[i].to_vec()),
-            ("charge", vec![p.charge[i]]),
-            ("mass", vec![p.mass[i]]),
-            ("charge / mass", vec![p.charge[i] / p.mass[i]]),
+            ("position", p.position[i].to_vec(), kernel),
+            ("velocity", p.velocity[i].to_vec(), state),
+            ("charge", vec![p.charge[i]], kernel),
+            ("mass", vec![p.mass[i]], state),
+            ("charge / mass", vec![p.charge[i] / p.mass[i]], state),
         ];
-        for (what, v) in values {
-            if let Some(bad) = v.iter().find(|v| !fits(**v)) {
+        for (what, v, precision) in values {
+            if let Some(bad) = v.iter().find(|v| !fits(**v, precision)) {
                 return Err(Error::invalid(
                     format!("{what} of particle {i}"),
                     bad,
                     format!(
-                        "overflows the run's precision ({name}); use values of physical \
-                         magnitude, or Precision::F64"
+                        "overflows the run's precision ({} in the {} mode); use values of \
+                         physical magnitude, or Precision::F64",
+                        name(precision),
+                        mode.name()
                     ),
                 ));
             }
@@ -79,13 +88,10 @@ fn representable(p: &Particles, precision: Precision) -> Result<()> {
     Ok(())
 }
 
-/// The checkpoint model string of a precision.
-fn model(precision: Precision) -> String {
-    let p = match precision {
-        Precision::F32 => "f32",
-        Precision::F64 => "f64",
-    };
-    format!("PpCoulomb<{p}>")
+/// The checkpoint model string of a mode: `PpCoulomb<f64>`, `PpCoulomb<f32>` or
+/// `PpCoulomb<mixed>`.
+fn model(mode: Mode) -> String {
+    format!("PpCoulomb<{}>", mode.name())
 }
 
 impl Run {
@@ -94,7 +100,7 @@ impl Run {
     pub fn new(particles: Particles, config: &Config) -> Result<Self> {
         particles.validate()?;
         config.validate()?;
-        representable(&particles, config.precision)?;
+        representable(&particles, config.mode())?;
         Ok(Self {
             particles,
             config: *config,
@@ -230,7 +236,7 @@ impl Run {
         checkpoint::encode(
             env!("CARGO_PKG_NAME"),
             env!("CARGO_PKG_VERSION"),
-            &model(self.config.precision),
+            &model(self.config.mode()),
             &saved,
         )
     }
@@ -239,22 +245,22 @@ impl Run {
     /// and configuration are validated as by [`Run::new`].
     pub fn resume(bytes: &[u8]) -> Result<Resumed> {
         let header = checkpoint::header(bytes)?;
-        let precision = [Precision::F32, Precision::F64]
+        let mode = Mode::ALL
             .into_iter()
-            .find(|p| model(*p) == header.model)
-            .unwrap_or(Precision::F64);
+            .find(|m| model(*m) == header.model)
+            .unwrap_or(Mode::F64);
         let saved: Saved = checkpoint::decode(
             bytes,
             env!("CARGO_PKG_NAME"),
             env!("CARGO_PKG_VERSION"),
-            &model(precision),
+            &model(mode),
         )?;
-        if saved.config.precision != precision {
+        if saved.config.mode() != mode {
             return Err(Error::checkpoint(format!(
                 "the header says {} but the state is {}; the file is \
                      inconsistent",
-                model(precision),
-                model(saved.config.precision)
+                model(mode),
+                model(saved.config.mode())
             )));
         }
         let n = saved.particles.len();

@@ -40,8 +40,9 @@ impl PpCoulomb {
     ///
     /// Errors: NaN/infinite positions, velocities or charges, zero or negative masses, values
     /// (or a charge-to-mass ratio) that overflow the configured precision, a bad time step,
-    /// force parameter or energy tolerance, a GPU without `SHADER_F64` for
-    /// [`crate::Precision::F64`].
+    /// force parameter or energy tolerance, [`Config::mixed`] with [`crate::Precision::F64`],
+    /// a GPU without `SHADER_F64` for [`crate::Precision::F64`], the mixed mode on the GPU
+    /// (`Error::Unsupported`).
     /// Zero or one particle is fine (no force).
     pub fn new(particles: Particles, config: &Config, backend: Backend<'_>) -> Result<Self> {
         Self::build(Run::new(particles, config)?, backend, None, None)
@@ -100,7 +101,8 @@ impl PpCoulomb {
         self.run.set_dt(dt)
     }
 
-    /// Accelerations at the current positions (in the backend's precision, returned as f64).
+    /// Accelerations at the current positions (in the backend's precision, returned as f64;
+    /// the mixed mode keeps them in f64).
     pub fn accelerations(&mut self) -> Result<Vec<[f64; 3]>> {
         self.engine.accelerations()
     }

@@ -1,5 +1,5 @@
 //! `DistributedCoulomb` on one process (`Comm::serial`): bit for bit the single-process CPU
-//! run in every case of `tests/replicated` (three laws, both integrators, f64 and f32,
+//! run in every case of `tests/replicated` (three laws, both integrators, f64, f32 and mixed,
 //! checkpoints both ways, a blow-up), plus its errors and accessors. The splitting of the
 //! targets into blocks is checked without MPI by the crate's unit tests (`cpu::tests`: 2, 3
 //! and 7 blocks on threads against one engine) and over MPI by `tests/mpi.rs`.
@@ -12,7 +12,7 @@ use simkit_pp_coulomb::{Config, DistributedCoulomb, ForceLaw, Particles, PpCoulo
 
 #[test]
 fn one_process_matches_the_cpu_run_bit_for_bit() {
-    assert_eq!(replicated::check_all(&Comm::serial()), Ok(8));
+    assert_eq!(replicated::check_all(&Comm::serial()), Ok(12));
 }
 
 #[test]

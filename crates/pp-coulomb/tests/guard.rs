@@ -152,6 +152,51 @@ fn exact_law_with_a_huge_step_is_a_blow_up() {
     }
 }
 
+/// The mixed mode (`Config::mixed`, CPU only) has the same guard: the reported run (exact
+/// law, dt = 10 and 0.01, 400 opposite charges) is a blow-up rolled back bit-identically,
+/// and a Plummer run whose separations overflow the f32 pair kernel (dt = 4e8, as f32)
+/// stops at the next interval check naming the non-finite particle.
+#[test]
+fn mixed_mode_blow_ups_are_caught_and_rolled_back() {
+    let mixed = |dt, law| {
+        Config::new(dt, law)
+            .with_precision(Precision::F32)
+            .with_mixed(true)
+            .with_check_every(10)
+    };
+    for dt in [10.0, 0.01] {
+        let config = mixed(dt, ForceLaw::Exact);
+        let make = || PpCoulomb::new(opposite_charges(400, 3), &config, Backend::Cpu).unwrap();
+        let mut sim = make();
+        let (step, rolled, msg) = expect_blow_up(&mut sim, 1000);
+        println!("{} dt {dt}: {msg}", sim.backend_name());
+        assert!(sim.backend_name().contains("mixed"));
+        assert!(
+            msg.contains("close approach under the exact law") || msg.contains("NaN"),
+            "{msg}"
+        );
+        assert!(step > rolled && step.is_multiple_of(10), "{step} {rolled}");
+        if dt < 1.0 {
+            assert!(rolled > 0, "the small step should pass its first check");
+        }
+        check_rollback(&mut sim, make, rolled);
+    }
+    // As `non_finite_state_is_a_blow_up_rolled_back_to_the_last_check` in f32: the f32
+    // pair kernel's r^2 overflows once separations pass 1.8e19.
+    let config = mixed(4e8, ForceLaw::Plummer { epsilon: 1.0 });
+    let make = || PpCoulomb::new(opposite_charges(64, 9), &config, Backend::Cpu).unwrap();
+    let mut sim = make();
+    let (step, rolled, msg) = expect_blow_up(&mut sim, 1000);
+    println!("{}: {msg}", sim.backend_name());
+    assert!(
+        msg.contains("particle") && msg.contains("is too large"),
+        "{msg}"
+    );
+    assert!(msg.contains("inf") || msg.contains("NaN"), "{msg}");
+    assert!(rolled > 0 && step == rolled + 10, "{step} {rolled}");
+    check_rollback(&mut sim, make, rolled);
+}
+
 /// A step so large that positions overflow to infinity after about a hundred steps (Plummer
 /// softening: the force stays bounded, the drift does not): the finite check catches it at
 /// the next interval check, names the particle, and the run is back at the last interval

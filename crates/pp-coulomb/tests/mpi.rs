@@ -1,6 +1,6 @@
 //! `DistributedCoulomb` under `mpirun -np P` (P = 2, 3, 4) against the single-process CPU
 //! run, bit for bit (the cases of `tests/replicated`: 203 particles, which no P divides,
-//! three laws, both integrators, f64 and f32, a single-process checkpoint resumed on P
+//! three laws, both integrators, f64, f32 and mixed, a single-process checkpoint resumed on P
 //! ranks, a blow-up stopping every rank), ranks that pass different particles refused on
 //! every rank, and a bad input on one rank an error on all. Built only with the `mpi`
 //! feature.
@@ -52,7 +52,7 @@ fn ranks_2_3_4_match_one_process_bit_for_bit() {
     check_on_ranks(
         "ranks_2_3_4_match_one_process_bit_for_bit",
         &[2, 3, 4],
-        10,
+        14,
         cases,
     );
 }

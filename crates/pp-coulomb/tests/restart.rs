@@ -87,6 +87,69 @@ fn restart_is_bit_exact() {
     }
 }
 
+/// The mixed mode (`Config::mixed`, CPU only) restarts bit for bit in a new process too,
+/// in the cases of `restart_is_bit_exact`; its checkpoint is model `PpCoulomb<mixed>`, and
+/// the same state relabelled as f32 (or an f32 one as mixed) is refused.
+#[test]
+fn mixed_restart_is_bit_exact() {
+    let name = "mixed_restart_is_bit_exact";
+    let cases = [
+        ("exact leapfrog", ForceLaw::Exact, Integrator::Leapfrog),
+        (
+            "plummer euler",
+            ForceLaw::Plummer { epsilon: 0.3 },
+            Integrator::SymplecticEuler,
+        ),
+        (
+            "exclusion leapfrog set_dt",
+            ForceLaw::Exclusion { radius: 0.5 },
+            Integrator::Leapfrog,
+        ),
+    ];
+    let config = |law, integrator| {
+        Config::new(0.02, law)
+            .with_integrator(integrator)
+            .with_precision(Precision::F32)
+            .with_mixed(true)
+            .with_check_every(10)
+    };
+    for (label, law, integrator) in cases {
+        check_restart(name, label, Backend::Cpu, 35, |b| {
+            let p = match law {
+                ForceLaw::Exact => simkit_pp_coulomb::scenes::cold_sphere(200, 1.0, 5)?,
+                _ => plasma(),
+            };
+            let mut sim = PpCoulomb::new(p, &config(law, integrator), b)?;
+            if matches!(law, ForceLaw::Exclusion { .. }) {
+                sim.step(3)?;
+                sim.set_dt(0.015)?;
+            }
+            Ok(sim)
+        });
+    }
+    let c = config(ForceLaw::Plummer { epsilon: 0.3 }, Integrator::Leapfrog);
+    let mut sim = PpCoulomb::new(plasma(), &c, Backend::Cpu).unwrap();
+    sim.step(4).unwrap();
+    let bytes = sim.checkpoint().unwrap();
+    assert_eq!(
+        checkpoint::header(&bytes).unwrap().model,
+        "PpCoulomb<mixed>"
+    );
+    let back = PpCoulomb::resume(&bytes, Backend::Cpu).unwrap();
+    assert_eq!(back.config(), sim.config());
+    let e = checkpoint_error(&relabel(&bytes, "PpCoulomb<f32>"));
+    assert!(
+        e.contains("PpCoulomb<f32>") && e.contains("PpCoulomb<mixed>"),
+        "{e}"
+    );
+    let mut f32_run = PpCoulomb::new(plasma(), &c.with_mixed(false), Backend::Cpu).unwrap();
+    let e = checkpoint_error(&relabel(&f32_run.checkpoint().unwrap(), "PpCoulomb<mixed>"));
+    assert!(
+        e.contains("PpCoulomb<f32>") && e.contains("PpCoulomb<mixed>"),
+        "{e}"
+    );
+}
+
 /// The resumed run has the step counter, the simulated time (after a `set_dt`), the
 /// configuration and the state of the original.
 #[test]

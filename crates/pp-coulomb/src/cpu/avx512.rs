@@ -1,5 +1,7 @@
 //! AVX-512 fast path of the field kernel: `vrsqrt14` (14-bit reciprocal square root)
-//! refined by Newton–Raphson steps instead of a square root and a division.
+//! refined by Newton–Raphson steps instead of a square root and a division. With
+//! `SPLIT`, the separations come from coordinates split into high and low parts, as
+//! `kernel::Split` forms them (the mixed mode).
 //!
 //! One Newton step takes the estimate to about 2e-8 relative (below f32 rounding, ~6e-8);
 //! two steps take it to a few f64 ulps. The tests compare both against a plain f64 reference.
@@ -21,22 +23,24 @@ pub(crate) fn available() -> bool {
 /// # Safety
 /// The CPU must support AVX-512F ([`available`]).
 #[target_feature(enable = "avx512f")]
-pub(crate) unsafe fn block_f32(
+pub(crate) unsafe fn block_f32<const SPLIT: bool>(
     kind: LawKind,
-    xi: f32,
-    yi: f32,
-    zi: f32,
+    [xi, yi, zi]: [f32; 3],
+    li: [f32; 3],
     s: &Sources<'_, f32>,
     p: f32,
 ) -> [f32; 3] {
     let n = s.x.len() / 16 * 16;
     let (x, y, z, q) = (&s.x[..n], &s.y[..n], &s.z[..n], &s.q[..n]);
+    // Plain coordinates: the low parts are never read (any slices of the right length).
+    let [lx, ly, lz] = s.lo.unwrap_or([s.x, s.y, s.z]).map(|l| &l[..n]);
     let (vx, vy, vz, vp) = (
         _mm512_set1_ps(xi),
         _mm512_set1_ps(yi),
         _mm512_set1_ps(zi),
         _mm512_set1_ps(p),
     );
+    let vl = li.map(|l| _mm512_set1_ps(l));
     let (half, three_halves, zero) = (
         _mm512_set1_ps(0.5),
         _mm512_set1_ps(1.5),
@@ -53,9 +57,25 @@ pub(crate) unsafe fn block_f32(
                 _mm512_loadu_ps(q.as_ptr().add(c)),
             )
         };
-        let dx = _mm512_sub_ps(vx, sx);
-        let dy = _mm512_sub_ps(vy, sy);
-        let dz = _mm512_sub_ps(vz, sz);
+        let (mut dx, mut dy, mut dz) = (
+            _mm512_sub_ps(vx, sx),
+            _mm512_sub_ps(vy, sy),
+            _mm512_sub_ps(vz, sz),
+        );
+        if SPLIT {
+            // (xi - xj) + (li - lj), as `Split::of` in the portable kernel.
+            // SAFETY: c + 16 <= n, the length of every slice.
+            let (sl0, sl1, sl2) = unsafe {
+                (
+                    _mm512_loadu_ps(lx.as_ptr().add(c)),
+                    _mm512_loadu_ps(ly.as_ptr().add(c)),
+                    _mm512_loadu_ps(lz.as_ptr().add(c)),
+                )
+            };
+            dx = _mm512_add_ps(dx, _mm512_sub_ps(vl[0], sl0));
+            dy = _mm512_add_ps(dy, _mm512_sub_ps(vl[1], sl1));
+            dz = _mm512_add_ps(dz, _mm512_sub_ps(vl[2], sl2));
+        }
         let r2 = _mm512_fmadd_ps(dx, dx, _mm512_fmadd_ps(dy, dy, _mm512_mul_ps(dz, dz)));
         let arg = if kind == LawKind::Plummer {
             _mm512_add_ps(r2, vp)
@@ -88,22 +108,24 @@ pub(crate) unsafe fn block_f32(
 /// # Safety
 /// The CPU must support AVX-512F ([`available`]).
 #[target_feature(enable = "avx512f")]
-pub(crate) unsafe fn block_f64(
+pub(crate) unsafe fn block_f64<const SPLIT: bool>(
     kind: LawKind,
-    xi: f64,
-    yi: f64,
-    zi: f64,
+    [xi, yi, zi]: [f64; 3],
+    li: [f64; 3],
     s: &Sources<'_, f64>,
     p: f64,
 ) -> [f64; 3] {
     let n = s.x.len() / 8 * 8;
     let (x, y, z, q) = (&s.x[..n], &s.y[..n], &s.z[..n], &s.q[..n]);
+    // Plain coordinates: the low parts are never read (any slices of the right length).
+    let [lx, ly, lz] = s.lo.unwrap_or([s.x, s.y, s.z]).map(|l| &l[..n]);
     let (vx, vy, vz, vp) = (
         _mm512_set1_pd(xi),
         _mm512_set1_pd(yi),
         _mm512_set1_pd(zi),
         _mm512_set1_pd(p),
     );
+    let vl = li.map(|l| _mm512_set1_pd(l));
     let (half, three_halves, zero) = (
         _mm512_set1_pd(0.5),
         _mm512_set1_pd(1.5),
@@ -120,9 +142,25 @@ pub(crate) unsafe fn block_f64(
                 _mm512_loadu_pd(q.as_ptr().add(c)),
             )
         };
-        let dx = _mm512_sub_pd(vx, sx);
-        let dy = _mm512_sub_pd(vy, sy);
-        let dz = _mm512_sub_pd(vz, sz);
+        let (mut dx, mut dy, mut dz) = (
+            _mm512_sub_pd(vx, sx),
+            _mm512_sub_pd(vy, sy),
+            _mm512_sub_pd(vz, sz),
+        );
+        if SPLIT {
+            // (xi - xj) + (li - lj), as `Split::of` in the portable kernel.
+            // SAFETY: c + 8 <= n, the length of every slice.
+            let (sl0, sl1, sl2) = unsafe {
+                (
+                    _mm512_loadu_pd(lx.as_ptr().add(c)),
+                    _mm512_loadu_pd(ly.as_ptr().add(c)),
+                    _mm512_loadu_pd(lz.as_ptr().add(c)),
+                )
+            };
+            dx = _mm512_add_pd(dx, _mm512_sub_pd(vl[0], sl0));
+            dy = _mm512_add_pd(dy, _mm512_sub_pd(vl[1], sl1));
+            dz = _mm512_add_pd(dz, _mm512_sub_pd(vl[2], sl2));
+        }
         let r2 = _mm512_fmadd_pd(dx, dx, _mm512_fmadd_pd(dy, dy, _mm512_mul_pd(dz, dz)));
         let arg = if kind == LawKind::Plummer {
             _mm512_add_pd(r2, vp)

@@ -28,12 +28,12 @@ const TARGET_CHUNK: usize = 32;
 
 /// A float type the CPU kernel runs in: the shared [`Real`] plus its block kernel.
 pub(crate) trait CpuReal: Real {
-    /// Field of one target from a block of sources: the AVX-512 rsqrt path when `fast`
-    /// (the caller checked [`avx512::available`]), else the portable multiversioned kernel.
-    fn block<L: Law>(
-        xi: Self,
-        yi: Self,
-        zi: Self,
+    /// Field of one target at `xi` (low parts `li` when `S` splits the coordinates, else
+    /// unused) from a block of sources: the AVX-512 rsqrt path when `fast` (the caller
+    /// checked [`avx512::available`]), else the portable multiversioned kernel.
+    fn block<L: Law, S: Separation>(
+        xi: [Self; 3],
+        li: [Self; 3],
         s: &Sources<'_, Self>,
         p: Self,
         fast: bool,
@@ -45,10 +45,9 @@ macro_rules! impl_cpu_real {
     ($t:ty, $simd:ident) => {
         impl CpuReal for $t {
             #[inline(always)]
-            fn block<L: Law>(
-                xi: Self,
-                yi: Self,
-                zi: Self,
+            fn block<L: Law, S: Separation>(
+                xi: [Self; 3],
+                li: [Self; 3],
                 s: &Sources<'_, Self>,
                 p: Self,
                 fast: bool,
@@ -56,10 +55,16 @@ macro_rules! impl_cpu_real {
                 #[cfg(target_arch = "x86_64")]
                 if fast {
                     // SAFETY: `fast` is only set when avx512::available() returned true.
-                    return unsafe { avx512::$simd(L::KIND, xi, yi, zi, s, p) };
+                    return unsafe {
+                        if S::SPLIT {
+                            avx512::$simd::<true>(L::KIND, xi, li, s, p)
+                        } else {
+                            avx512::$simd::<false>(L::KIND, xi, li, s, p)
+                        }
+                    };
                 }
                 let _ = fast;
-                block_field::<Self, L>(xi, yi, zi, s, p)
+                block_field::<Self, L, S>(xi, li, s, p)
             }
         }
     };
@@ -67,6 +72,40 @@ macro_rules! impl_cpu_real {
 
 impl_cpu_real!(f32, block_f32);
 impl_cpu_real!(f64, block_f64);
+
+/// How a kernel forms the separation `r_i - r_j`, one coordinate at a time (a type, so
+/// that each choice is its own compiled kernel, like the laws).
+pub(crate) trait Separation: Send + Sync {
+    /// Whether the coordinates come split into high and low parts ([`Sources::lo`]).
+    const SPLIT: bool;
+    /// `x_i - x_j` from the high parts `xi`, `xj` and the low parts `li`, `lj`.
+    fn of<T: Real>(xi: T, li: T, xj: T, lj: T) -> T;
+}
+
+/// Plain coordinates: `xi - xj` (the low parts are not read).
+pub(crate) struct Plain;
+/// Coordinates split into `x + l` (the mixed mode): `(xi - xj) + (li - lj)`. For the f64
+/// coordinates of the mixed mode, `x` rounded to f32 and `l` the f32 rounding of the rest,
+/// this is the f64 separation rounded to f32 within about two f32 ulps, whatever the
+/// size of the coordinates: `xi - xj` is exact for close pairs (Sterbenz), and the low
+/// parts carry the 24 bits the f32 coordinates lost.
+pub(crate) struct Split;
+
+impl Separation for Plain {
+    const SPLIT: bool = false;
+    #[inline(always)]
+    fn of<T: Real>(xi: T, _li: T, xj: T, _lj: T) -> T {
+        xi - xj
+    }
+}
+
+impl Separation for Split {
+    const SPLIT: bool = true;
+    #[inline(always)]
+    fn of<T: Real>(xi: T, li: T, xj: T, lj: T) -> T {
+        (xi - xj) + (li - lj)
+    }
+}
 
 /// A pair law as a type (one compiled kernel per law): the weight `w(r^2)` of
 /// [`crate::laws`], with force `q_j w r`; `p` is the squared parameter.
@@ -108,19 +147,30 @@ impl Law for PlummerLaw {
 
 /// Field `E_i = sum_j q_j w(r_ij) r_ij` of one target from a block of sources.
 #[multiversion(targets("x86_64+avx512f+avx512vl+avx512dq+avx2+fma", "x86_64+avx2+fma"))]
-fn block_field<T: CpuReal, L: Law>(xi: T, yi: T, zi: T, s: &Sources<'_, T>, p: T) -> [T; 3] {
+fn block_field<T: CpuReal, L: Law, S: Separation>(
+    xi: [T; 3],
+    li: [T; 3],
+    s: &Sources<'_, T>,
+    p: T,
+) -> [T; 3] {
     let mut ax = [T::ZERO; LANES];
     let mut ay = [T::ZERO; LANES];
     let mut az = [T::ZERO; LANES];
+    // Plain coordinates: the low parts are never read (any slices of the right length).
+    let [lx, ly, lz] = s.lo.unwrap_or([s.x, s.y, s.z]);
     let chunks =
         s.x.chunks_exact(LANES)
             .zip(s.y.chunks_exact(LANES))
-            .zip(s.z.chunks_exact(LANES).zip(s.q.chunks_exact(LANES)));
-    for ((cx, cy), (cz, cq)) in chunks {
+            .zip(s.z.chunks_exact(LANES).zip(s.q.chunks_exact(LANES)))
+            .zip(
+                lx.chunks_exact(LANES)
+                    .zip(ly.chunks_exact(LANES).zip(lz.chunks_exact(LANES))),
+            );
+    for (((cx, cy), (cz, cq)), (clx, (cly, clz))) in chunks {
         for l in 0..LANES {
-            let dx = xi - cx[l];
-            let dy = yi - cy[l];
-            let dz = zi - cz[l];
+            let dx = S::of(xi[0], li[0], cx[l], clx[l]);
+            let dy = S::of(xi[1], li[1], cy[l], cly[l]);
+            let dz = S::of(xi[2], li[2], cz[l], clz[l]);
             let r2 = dx.mul_add(dx, dy.mul_add(dy, dz * dz));
             let w = L::weight(r2, p) * cq[l];
             ax[l] = w.mul_add(dx, ax[l]);
@@ -137,40 +187,52 @@ fn block_field<T: CpuReal, L: Law>(xi: T, yi: T, zi: T, s: &Sources<'_, T>, p: T
     out
 }
 
-/// Fields at sources `first..first + ex.len()` (the targets), written to `ex, ey, ez`;
-/// `fast` selects the AVX-512 rsqrt path (only pass `true` when [`avx512::available`]).
+/// Fields at sources `first..first + ex.len()` (the targets), written to `ex, ey, ez` in
+/// the output type `O` (the kernel's type, or f64 in the mixed mode: the f64 block sums
+/// are then kept unrounded); `fast` selects the AVX-512 rsqrt path (only pass `true` when
+/// [`avx512::available`]). Sources with low parts ([`Sources::lo`]) run the [`Split`]
+/// kernel, others the [`Plain`] one.
 ///
 /// Each target's field is summed in an order that depends only on the sources (lanes,
 /// then j-blocks), never on which other targets are computed with it: the field of a
 /// range of targets has the bits of the same targets in a pass over all of them.
-pub(crate) fn field<T: CpuReal>(
+pub(crate) fn field<T: CpuReal, O: Real>(
     law: ForceLaw,
     fast: bool,
     s: &Sources<'_, T>,
     first: usize,
-    ex: &mut [T],
-    ey: &mut [T],
-    ez: &mut [T],
+    ex: &mut [O],
+    ey: &mut [O],
+    ez: &mut [O],
 ) {
     let p = T::from_f64(law.squared_parameter());
-    match law {
-        ForceLaw::Exact => field_with::<T, ExactLaw>(s, p, fast, first, ex, ey, ez),
-        ForceLaw::Exclusion { .. } => field_with::<T, ExclusionLaw>(s, p, fast, first, ex, ey, ez),
-        ForceLaw::Plummer { .. } => field_with::<T, PlummerLaw>(s, p, fast, first, ex, ey, ez),
+    let out = (first, ex, ey, ez);
+    match (law, s.lo.is_some()) {
+        (ForceLaw::Exact, false) => field_with::<T, O, ExactLaw, Plain>(s, p, fast, out),
+        (ForceLaw::Exact, true) => field_with::<T, O, ExactLaw, Split>(s, p, fast, out),
+        (ForceLaw::Exclusion { .. }, false) => {
+            field_with::<T, O, ExclusionLaw, Plain>(s, p, fast, out)
+        }
+        (ForceLaw::Exclusion { .. }, true) => {
+            field_with::<T, O, ExclusionLaw, Split>(s, p, fast, out)
+        }
+        (ForceLaw::Plummer { .. }, false) => field_with::<T, O, PlummerLaw, Plain>(s, p, fast, out),
+        (ForceLaw::Plummer { .. }, true) => field_with::<T, O, PlummerLaw, Split>(s, p, fast, out),
     }
 }
 
-fn field_with<T: CpuReal, L: Law>(
+/// The targets and outputs of [`field_with`]: the first target and the three components.
+type Out<'a, O> = (usize, &'a mut [O], &'a mut [O], &'a mut [O]);
+
+fn field_with<T: CpuReal, O: Real, L: Law, S: Separation>(
     s: &Sources<'_, T>,
     p: T,
     fast: bool,
-    first: usize,
-    ex: &mut [T],
-    ey: &mut [T],
-    ez: &mut [T],
+    (first, ex, ey, ez): Out<'_, O>,
 ) {
     let npad = s.x.len();
     debug_assert!(npad.is_multiple_of(LANES) && first + ex.len() <= npad);
+    debug_assert!(s.lo.is_none_or(|lo| lo.iter().all(|l| l.len() == npad)));
     ex.par_chunks_mut(TARGET_CHUNK)
         .zip(ey.par_chunks_mut(TARGET_CHUNK))
         .zip(ez.par_chunks_mut(TARGET_CHUNK))
@@ -187,19 +249,21 @@ fn field_with<T: CpuReal, L: Law>(
                     y: &s.y[j0..j1],
                     z: &s.z[j0..j1],
                     q: &s.q[j0..j1],
+                    lo: s.lo.map(|lo| lo.map(|l| &l[j0..j1])),
                 };
                 for (t, acc) in sum.iter_mut().take(ex.len()).enumerate() {
                     let i = i0 + t;
-                    let f = T::block::<L>(s.x[i], s.y[i], s.z[i], &block, p, fast);
+                    let li = s.lo.map_or([T::ZERO; 3], |lo| lo.map(|l| l[i]));
+                    let f = T::block::<L, S>([s.x[i], s.y[i], s.z[i]], li, &block, p, fast);
                     for k in 0..3 {
                         acc[k] += f[k].to_f64();
                     }
                 }
             }
             for (t, acc) in sum.iter().take(ex.len()).enumerate() {
-                ex[t] = T::from_f64(acc[0]);
-                ey[t] = T::from_f64(acc[1]);
-                ez[t] = T::from_f64(acc[2]);
+                ex[t] = O::from_f64(acc[0]);
+                ey[t] = O::from_f64(acc[1]);
+                ez[t] = O::from_f64(acc[2]);
             }
         });
 }

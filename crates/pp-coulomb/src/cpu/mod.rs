@@ -18,7 +18,7 @@ use std::ops::Range;
 use simkit_backend::guard::{chunks, first_non_finite};
 use simkit_backend::{Error, Precision, Result};
 
-use crate::config::{Config, ForceLaw, Integrator, coincident_error};
+use crate::config::{Config, ForceLaw, Integrator, Mode, coincident_error};
 use crate::engine::{Engine, PositionsVelocities, pad_coordinate};
 use crate::guard::{
     Checks, Energy, coincident_blow_up, energy_blow_up, energy_jump, jump_fails, non_finite_blow_up,
@@ -27,7 +27,8 @@ use crate::particles::Particles;
 
 /// CPU state in precision `T`. Positions are double-buffered: the force pass reads `x`, the
 /// drift writes `x_next`, then the two swap, so no position is written while it is read.
-/// `kept` is the state of the last blow-up check that passed.
+/// `kept` is the state of the last blow-up check that passed. The mixed mode is a
+/// `CpuEngine<f64>` whose force pass runs the f32 kernel on `split`.
 ///
 /// Every pass takes a [`Share`]: the process computes accelerations for, and integrates,
 /// only its own targets (`Share::own`), and gathers the positions of the others after each
@@ -50,6 +51,59 @@ pub(crate) struct CpuEngine<T: CpuReal> {
     /// Whether `a` holds the accelerations at the current `x`.
     a_valid: bool,
     kept: Kept<T>,
+    /// The mixed mode's f32 kernel inputs (`None` in f32 and f64).
+    split: Option<Split32>,
+}
+
+/// The mixed mode's input to the f32 pair kernel, refreshed from the f64 positions before
+/// each force evaluation: every coordinate `x` as `hi = x` rounded to f32 plus
+/// `lo = x - hi` rounded to f32 (`hi + lo` is exact in f64 and within `2^-48 |x|` of `x`),
+/// and the charges in f32. Padded as the state is (`hi` far away, `lo` and `q` zero).
+struct Split32 {
+    hi: [Vec<f32>; 3],
+    lo: [Vec<f32>; 3],
+    q: Vec<f32>,
+}
+
+impl Split32 {
+    /// The buffers for `p` (the coordinates are split by [`Split32::update`]).
+    fn new(p: &Particles) -> Self {
+        let n = p.len();
+        let far = || padded(std::iter::empty(), n, pad_coordinate::<f32>());
+        let zeros = || padded(std::iter::empty(), n, 0.0f32);
+        Self {
+            hi: [far(), far(), far()],
+            lo: [zeros(), zeros(), zeros()],
+            q: padded(p.charge.iter().map(|&q| q as f32), n, 0.0),
+        }
+    }
+
+    /// Splits the first `n` coordinates of `x` (O(N), before each force evaluation).
+    fn update<T: CpuReal>(&mut self, x: &[Vec<T>; 3], n: usize) {
+        for k in 0..3 {
+            let (hi, lo) = (&mut self.hi[k][..n], &mut self.lo[k][..n]);
+            for ((h, l), x) in hi.iter_mut().zip(lo.iter_mut()).zip(&x[k][..n]) {
+                let x = x.to_f64();
+                *h = x as f32;
+                *l = (x - f64::from(*h)) as f32;
+            }
+        }
+    }
+
+    /// The coordinate the kernel sees, `hi + lo` (exact in f64).
+    fn seen(&self, k: usize, i: usize) -> f64 {
+        f64::from(self.hi[k][i]) + f64::from(self.lo[k][i])
+    }
+
+    fn sources(&self) -> Sources<'_, f32> {
+        Sources {
+            x: &self.hi[0],
+            y: &self.hi[1],
+            z: &self.hi[2],
+            q: &self.q,
+            lo: Some([&self.lo[0], &self.lo[1], &self.lo[2]]),
+        }
+    }
 }
 
 /// A copy of the state (positions, velocities, kept accelerations).
@@ -67,7 +121,7 @@ pub(crate) fn engine(
     c: &Config,
     accelerations: Option<&[[f64; 3]]>,
 ) -> Box<dyn Engine> {
-    match c.precision {
+    match c.mode().state() {
         Precision::F32 => Box::new(CpuEngine::<f32>::new(p, c, accelerations)),
         Precision::F64 => Box::new(CpuEngine::<f64>::new(p, c, accelerations)),
     }
@@ -108,6 +162,7 @@ fn copy3<T: Copy>(to: &mut [Vec<T>; 3], from: &[Vec<T>; 3]) {
 
 impl<T: CpuReal> CpuEngine<T> {
     /// The engine of `p` under `c`, with the kept accelerations of a resumed run, if any.
+    /// `T` is the state precision of `c` (`c.mode().state()`; f64 for the mixed mode).
     pub(crate) fn new(p: &Particles, c: &Config, accelerations: Option<&[[f64; 3]]>) -> Self {
         let n = p.len();
         let coord = |k: usize| {
@@ -152,10 +207,13 @@ impl<T: CpuReal> CpuEngine<T> {
             integrator: c.integrator,
             dt: T::from_f64(c.dt),
             a_valid,
+            split: (c.mode() == Mode::Mixed).then(|| Split32::new(p)),
         }
     }
 
-    /// Under the exact law, the first two particles at the same position, if any.
+    /// Under the exact law, the first two particles at the same position, if any: the
+    /// same position as the kernel sees it (mixed mode: `hi + lo` of the split
+    /// coordinates, refreshed by the caller, reported as the first one's f64 position).
     fn coincident(&self) -> Option<(usize, usize, [f64; 3])> {
         if self.law != ForceLaw::Exact {
             return None;
@@ -163,9 +221,16 @@ impl<T: CpuReal> CpuEngine<T> {
         let mut seen: HashMap<[u64; 3], usize> = HashMap::with_capacity(self.n);
         for i in 0..self.n {
             // `+ 0.0` maps -0.0 to +0.0 so that equal coordinates have equal bits.
-            let c = [0, 1, 2].map(|k| self.x[k][i].to_f64() + 0.0);
+            let c = [0, 1, 2].map(|k| match &self.split {
+                Some(split) => split.seen(k, i) + 0.0,
+                None => self.x[k][i].to_f64() + 0.0,
+            });
             if let Some(&j) = seen.get(&c.map(f64::to_bits)) {
-                return Some((j, i, c));
+                let at = match self.split {
+                    Some(_) => [0, 1, 2].map(|k| self.x[k][j].to_f64()),
+                    None => c,
+                };
+                return Some((j, i, at));
             }
             seen.insert(c.map(f64::to_bits), i);
         }
@@ -179,19 +244,29 @@ impl<T: CpuReal> CpuEngine<T> {
         &mut self,
         own: Range<usize>,
     ) -> std::result::Result<(), (usize, usize, [f64; 3])> {
+        if let Some(split) = &mut self.split {
+            split.update(&self.x, self.n);
+        }
         if let Some(pair) = self.coincident() {
             return Err(pair);
         }
-        let s = Sources {
-            x: &self.x[0],
-            y: &self.x[1],
-            z: &self.x[2],
-            q: &self.q,
-        };
         let [ax, ay, az] = &mut self.a;
         let first = own.start;
         let (ax, ay, az) = (&mut ax[own.clone()], &mut ay[own.clone()], &mut az[own]);
-        kernel::field(self.law, self.fast, &s, first, ax, ay, az);
+        match &self.split {
+            // Mixed: the f32 kernel on the split coordinates, its f64 sums kept in `T`.
+            Some(split) => kernel::field(self.law, self.fast, &split.sources(), first, ax, ay, az),
+            None => {
+                let s = Sources {
+                    x: &self.x[0],
+                    y: &self.x[1],
+                    z: &self.x[2],
+                    q: &self.q,
+                    lo: None,
+                };
+                kernel::field(self.law, self.fast, &s, first, ax, ay, az);
+            }
+        }
         for (t, qm) in self.qm[first..first + ax.len()].iter().enumerate() {
             ax[t] = ax[t] * *qm;
             ay[t] = ay[t] * *qm;
@@ -365,6 +440,7 @@ impl<T: CpuReal> CpuEngine<T> {
             y: &self.x[1],
             z: &self.x[2],
             q: &self.q,
+            lo: None,
         };
         let mut phi = vec![0.0; self.n];
         kernel::exact_potentials(&s, share.own(self.n), &mut phi);
@@ -448,6 +524,10 @@ impl<T: CpuReal> Engine for CpuEngine<T> {
         } else {
             "portable"
         };
-        format!("cpu-{} ({path})", std::any::type_name::<T>())
+        let precision = match self.split {
+            Some(_) => "mixed f32/f64",
+            None => std::any::type_name::<T>(),
+        };
+        format!("cpu-{precision} ({path})")
     }
 }

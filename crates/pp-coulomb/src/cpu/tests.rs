@@ -143,7 +143,7 @@ fn split_run<T: CpuReal>(p: &Particles, c: &Config, steps: u32, size: usize) -> 
     })
 }
 
-fn blocks_match_one_engine<T: CpuReal>(precision: Precision) {
+fn blocks_match_one_engine<T: CpuReal>(precision: Precision, mixed: bool) {
     let p = plasma();
     // The exact law at dt = 0.02 blows up at the check of step 21 (a close ion-electron
     // pair) and rolls back to step 14: the blocks must agree on that too.
@@ -172,6 +172,7 @@ fn blocks_match_one_engine<T: CpuReal>(precision: Precision) {
         let c = Config::new(dt, law)
             .with_integrator(integrator)
             .with_precision(precision)
+            .with_mixed(mixed)
             .with_check_every(7);
         let one = advance(CpuEngine::<T>::new(&p, &c, None), &p, &c, 23, &Alone);
         assert!(one.0.0.iter().flatten().all(|x| x.is_finite()));
@@ -182,8 +183,8 @@ fn blocks_match_one_engine<T: CpuReal>(precision: Precision) {
                 assert_eq!(got.3, one_result, "{law:?} block {rank} of {size}");
                 assert!(
                     bits(got) == one,
-                    "{law:?} {integrator:?} {precision:?}: block {rank} of {size} differs \
-                     from the single engine"
+                    "{law:?} {integrator:?} {precision:?} (mixed: {mixed}): block {rank} of \
+                     {size} differs from the single engine"
                 );
             }
         }
@@ -192,10 +193,16 @@ fn blocks_match_one_engine<T: CpuReal>(precision: Precision) {
 
 #[test]
 fn blocks_on_threads_match_one_engine_f64() {
-    blocks_match_one_engine::<f64>(Precision::F64);
+    blocks_match_one_engine::<f64>(Precision::F64, false);
 }
 
 #[test]
 fn blocks_on_threads_match_one_engine_f32() {
-    blocks_match_one_engine::<f32>(Precision::F32);
+    blocks_match_one_engine::<f32>(Precision::F32, false);
+}
+
+/// The mixed mode (an f64 engine running the f32 kernel on split coordinates).
+#[test]
+fn blocks_on_threads_match_one_engine_mixed() {
+    blocks_match_one_engine::<f64>(Precision::F32, true);
 }

@@ -1,6 +1,6 @@
 //! The cases `DistributedCoulomb` must pass on any communicator (one process in
 //! `tests/distributed.rs`, 2-4 MPI ranks in `tests/mpi.rs`): against `PpCoulomb` on the
-//! CPU, bit for bit, with 203 particles (203 = 12 x 16 + 11: no rank count 2-4 and no SIMD
+//! CPU, bit for bit, in f64, f32 and the mixed mode, with 203 particles (203 = 12 x 16 + 11: no rank count 2-4 and no SIMD
 //! width divides it).
 
 use simkit_backend::comm::Comm;
@@ -133,12 +133,18 @@ pub fn check_all(comm: &Comm) -> Result<usize, String> {
         ),
     ];
     let mut count = 0;
-    for precision in [Precision::F64, Precision::F32] {
+    let modes = [
+        ("f64", Precision::F64, false),
+        ("f32", Precision::F32, false),
+        ("mixed", Precision::F32, true),
+    ];
+    for (mode, precision, mixed) in modes {
         for (name, law, integrator, dt) in cases {
-            let case = format!("{name} {precision:?}");
+            let case = format!("{name} {mode}");
             let c = Config::new(dt, law)
                 .with_integrator(integrator)
                 .with_precision(precision)
+                .with_mixed(mixed)
                 .with_check_every(10);
             let e = |err: simkit_backend::Error| format!("{case}: {err}");
             let p = plasma(5);
@@ -174,8 +180,9 @@ pub fn check_all(comm: &Comm) -> Result<usize, String> {
         // same check with the error of one process, and all roll back alike.
         let c = Config::new(0.05, ForceLaw::Exact)
             .with_precision(precision)
+            .with_mixed(mixed)
             .with_check_every(5);
-        let case = format!("exact blow-up {precision:?}");
+        let case = format!("exact blow-up {mode}");
         let e = |err: simkit_backend::Error| format!("{case}: {err}");
         let mut d = DistributedCoulomb::new(plasma(5), &c, comm.clone()).map_err(e)?;
         let mut one = PpCoulomb::new(plasma(5), &c, Backend::Cpu).map_err(e)?;
