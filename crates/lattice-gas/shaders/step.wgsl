@@ -1,6 +1,6 @@
 // One FHP step (pull streaming + collision + optional force, inflow, outflow) for 4 sites
 // packed in one u32 word. Include after the backend's rng.wgsl and dispatch.wgsl and this
-// crate's params.wgsl and random.wgsl.
+// crate's params.wgsl, random.wgsl and site.wgsl (the update of one site).
 // FLAGS (override): bit 0 periodic x, 1 periodic y, 2 inflow, 3 outflow, 4 body force.
 
 override FLAGS: u32 = 0u;
@@ -51,24 +51,7 @@ fn fhp_step(@builtin(local_invocation_id) lid: vec3<u32>,
         if (s >= P.n_sites) { break; }
         let i = i32(s % P.width);
         let j = i32(s / P.width);
-        let own = (src[s >> 2u] >> (b * 8u)) & 0xffu;
-        var n = (own & 128u) | (site_byte(i - 1, j) & 1u) | (site_byte(i + 1, j) & 8u);
-        if ((j & 1) == 1) {
-            n |= (site_byte(i, j + 1) & 2u) | (site_byte(i + 1, j + 1) & 4u)
-               | (site_byte(i + 1, j - 1) & 16u) | (site_byte(i, j - 1) & 32u);
-        } else {
-            n |= (site_byte(i - 1, j + 1) & 2u) | (site_byte(i, j + 1) & 4u)
-               | (site_byte(i, j - 1) & 16u) | (site_byte(i - 1, j - 1) & 32u);
-        }
-        let r = fhp_chirality(key, s);
-        var v = lut[(n << 1u) | r];
-        if ((FLAGS & 16u) != 0u) {
-            if ((v & 137u) == 8u && fhp_force_hit(fkey, s, P.threshold)) {
-                v = v ^ 9u;
-            }
-        }
-        if ((FLAGS & 4u) != 0u && i == 0 && (v & 128u) == 0u) { v = 1u; }
-        if ((FLAGS & 8u) != 0u && i == i32(P.width) - 1 && (v & 128u) == 0u) { v = 0u; }
+        let v = fhp_site(i, j, (j & 1) == 1, s, i, i32(P.width) - 1, key, fkey, P.threshold);
         out |= v << (b * 8u);
     }
     dst[word] = out;

@@ -4,8 +4,8 @@
 use std::path::Path;
 
 use rayon::prelude::*;
-use simkit_backend::Result;
 use simkit_backend::comm::{Block, CartDecomposition, Comm};
+use simkit_backend::{Backend, Result};
 
 use crate::cpu::lut::LutRule;
 use crate::sim::{decode_checkpoint, encode_checkpoint};
@@ -60,11 +60,15 @@ pub struct DistributedLatticeGas {
     config: Config,
     rule: LutRule,
     /// This rank's block with one ghost layer: `(len_x + 2) x (len_y + 2)` site bytes,
-    /// row-major, the block's site `(0, 0)` at padded `(1, 1)`.
+    /// row-major, the block's site `(0, 0)` at padded `(1, 1)` (with a GPU stepper only
+    /// its edge sites and ghosts are kept current here: the state lives on the device).
     cur: Vec<u8>,
     /// The buffer the next step writes (same layout; its ghosts on the lattice's
-    /// non-periodic edges stay 0).
+    /// non-periodic edges stay 0; unused with a GPU stepper).
     next: Vec<u8>,
+    /// With `Backend::Gpu`: the block on this rank's GPU.
+    #[cfg(feature = "gpu")]
+    gpu: Option<Box<crate::gpu_block::GpuBlock>>,
     steps: u64,
 }
 
@@ -89,7 +93,26 @@ impl DistributedLatticeGas {
     /// Errors: invalid settings, or a lattice too small for `comm.size()` blocks of at
     /// least one site.
     pub fn new(lattice: &Lattice, config: &Config, comm: Comm) -> Result<Self> {
-        Self::at_step(lattice, config, comm, 0)
+        Self::at_step(lattice, config, comm, 0, Backend::Cpu)
+    }
+
+    /// [`DistributedLatticeGas::new`] on `backend`: `Backend::Cpu` as `new`, or
+    /// `Backend::Gpu(ctx)` for this rank's GPU (pick it with
+    /// `GpuContext::for_local_rank(comm.local_rank().0)`, so the ranks of a machine share
+    /// its GPUs). On the GPU each rank steps its block with the byte rule of the
+    /// single-process GPU kernel (the same site update) and exchanges the halo through the
+    /// host every step (edge sites packed on the device and downloaded, ghosts uploaded):
+    /// bit-identical to the CPU for every rank count, as the single-process GPU run is.
+    /// Collective.
+    ///
+    /// Errors: those of `new`, and any GPU failure (on every rank).
+    pub fn with_backend(
+        lattice: &Lattice,
+        config: &Config,
+        comm: Comm,
+        backend: Backend<'_>,
+    ) -> Result<Self> {
+        Self::at_step(lattice, config, comm, 0, backend)
     }
 
     /// Resumes from checkpoint bytes of [`crate::LatticeGas`] (`Restart::checkpoint`) or of
@@ -100,14 +123,28 @@ impl DistributedLatticeGas {
     /// Errors: those of `LatticeGas::resume` (corrupt bytes, another crate, version or
     /// model, invalid settings) and of [`DistributedLatticeGas::new`].
     pub fn resume(bytes: &[u8], comm: Comm) -> Result<Self> {
-        let (config, lattice, steps) = decode_checkpoint(bytes)?;
-        Self::at_step(&lattice, &config, comm, steps)
+        Self::resume_with_backend(bytes, comm, Backend::Cpu)
+    }
+
+    /// [`DistributedLatticeGas::resume`] on `backend` (see
+    /// [`DistributedLatticeGas::with_backend`]). Collective.
+    ///
+    /// Errors: those of `resume` and of `with_backend`.
+    pub fn resume_with_backend(bytes: &[u8], comm: Comm, backend: Backend<'_>) -> Result<Self> {
+        let (config, lattice, steps) = comm.agree(decode_checkpoint(bytes))?;
+        Self::at_step(&lattice, &config, comm, steps, backend)
     }
 
     /// [`DistributedLatticeGas::new`] with `steps` steps already done (the step counter keys
     /// the random bits).
-    fn at_step(lattice: &Lattice, config: &Config, comm: Comm, steps: u64) -> Result<Self> {
-        config.validate_for(lattice)?;
+    fn at_step(
+        lattice: &Lattice,
+        config: &Config,
+        comm: Comm,
+        steps: u64,
+        backend: Backend<'_>,
+    ) -> Result<Self> {
+        comm.agree(config.validate_for(lattice))?;
         let (gw, gh) = (lattice.width(), lattice.height());
         let decomposition = CartDecomposition::new(
             [gw, gh],
@@ -124,6 +161,15 @@ impl DistributedLatticeGas {
             row[1..=nx].copy_from_slice(&lattice.cells()[at..at + nx]);
         }
         decomposition.exchange_halo(&comm, &mut cur, 1)?;
+        #[cfg(feature = "gpu")]
+        let gpu = match backend {
+            Backend::Cpu => None,
+            Backend::Gpu(ctx) => Some(Box::new(comm.agree(crate::gpu_block::GpuBlock::new(
+                ctx, config, block, gw, &cur,
+            ))?)),
+        };
+        #[cfg(not(feature = "gpu"))]
+        let Backend::Cpu = backend;
         Ok(Self {
             comm,
             decomposition,
@@ -132,8 +178,19 @@ impl DistributedLatticeGas {
             config: config.clone(),
             next: vec![0u8; cur.len()],
             cur,
+            #[cfg(feature = "gpu")]
+            gpu,
             steps,
         })
+    }
+
+    /// `"cpu lookup table"` or `"gpu bytes (<adapter>)"`: how this rank steps its block.
+    pub fn backend_name(&self) -> String {
+        #[cfg(feature = "gpu")]
+        if let Some(g) = &self.gpu {
+            return format!("gpu bytes ({})", g.adapter());
+        }
+        "cpu lookup table".into()
     }
 
     /// The communicator.
@@ -167,6 +224,18 @@ impl DistributedLatticeGas {
     pub fn step(&mut self, steps: u32) -> Result<()> {
         simkit_backend::guard::end_step(self.steps, steps)?;
         for _ in 0..steps {
+            #[cfg(feature = "gpu")]
+            if let Some(g) = &mut self.gpu {
+                // The single-process run keys its random bits with the step count as u32.
+                let stepped = g.step_and_read_edges(&mut self.cur, self.steps as u32);
+                // A GPU failure on one rank stops every rank before the exchange.
+                self.comm.agree(stepped)?;
+                self.decomposition
+                    .exchange_halo(&self.comm, &mut self.cur, 1)?;
+                self.comm.agree(g.write_ghosts(&self.cur))?;
+                self.steps += 1;
+                continue;
+            }
             self.step_block();
             std::mem::swap(&mut self.cur, &mut self.next);
             self.decomposition
@@ -204,11 +273,22 @@ impl DistributedLatticeGas {
             });
     }
 
-    /// This rank's sites without ghosts, row-major `len_x x len_y`.
-    fn interior(&self) -> Vec<u8> {
+    /// This rank's sites without ghosts, row-major `len_x x len_y` (downloaded from the
+    /// GPU stepper).
+    fn interior(&self) -> Result<Vec<u8>> {
+        #[cfg(feature = "gpu")]
+        if let Some(g) = &self.gpu {
+            let padded = self.comm.agree(g.padded())?;
+            return Ok(self.interior_of(&padded));
+        }
+        Ok(self.interior_of(&self.cur))
+    }
+
+    /// The interior sites of a padded block.
+    fn interior_of(&self, padded: &[u8]) -> Vec<u8> {
         let [nx, ny] = self.block.len;
         let pw = nx + 2;
-        self.cur
+        padded
             .chunks(pw)
             .skip(1)
             .take(ny)
@@ -221,7 +301,7 @@ impl DistributedLatticeGas {
     /// single-process run has after the same steps, for pictures and observables written
     /// on rank 0. Collective.
     pub fn gather(&self) -> Result<Option<Lattice>> {
-        let Some(cells) = self.decomposition.gather(&self.comm, &self.interior())? else {
+        let Some(cells) = self.decomposition.gather(&self.comm, &self.interior()?)? else {
             return Ok(None);
         };
         let [w, h] = self.decomposition.global();
@@ -231,7 +311,7 @@ impl DistributedLatticeGas {
     /// Total number of particles over all ranks, on every rank (no gather). Collective.
     pub fn particle_count(&self) -> Result<u64> {
         let mine: u64 = self
-            .interior()
+            .interior()?
             .iter()
             .map(|c| u64::from((c & 0x3f).count_ones()))
             .sum();
@@ -303,6 +383,8 @@ mod tests {
             rule: LutRule::new(config),
             next: vec![0u8; cur.len()],
             cur,
+            #[cfg(feature = "gpu")]
+            gpu: None,
             steps,
         }
     }
@@ -358,7 +440,7 @@ mod tests {
                         std::mem::swap(&mut b.cur, &mut b.next);
                         let [nx, _] = b.block.len;
                         let [x0, y0] = b.block.start;
-                        for (jl, row) in b.interior().chunks(nx).enumerate() {
+                        for (jl, row) in b.interior().unwrap().chunks(nx).enumerate() {
                             let at = (y0 + jl) * w + x0;
                             cells[at..at + nx].copy_from_slice(row);
                         }

@@ -22,6 +22,8 @@ use crate::{CollisionTable, Config, GpuLayout, Lattice, RuleSet, WALL};
 /// The `Params` struct of both step kernels (mirrored by [`GpuParams`]).
 const PARAMS_WGSL: &str = simkit_backend::wgsl!("params.wgsl");
 const STEP_WGSL: &str = simkit_backend::wgsl!("step.wgsl");
+/// The update of one site of the byte layout (both byte kernels).
+pub(crate) const SITE_WGSL: &str = simkit_backend::wgsl!("site.wgsl");
 const PLANES_WGSL: &str = simkit_backend::wgsl!("planes.wgsl");
 const COUNTER_WGSL: &str = simkit_backend::wgsl!("counter.wgsl");
 
@@ -130,7 +132,14 @@ impl GpuLattice {
                 ctx,
                 &KernelDesc {
                     label: "fhp_step",
-                    sources: &[RNG_WGSL, DISPATCH_WGSL, PARAMS_WGSL, RANDOM_WGSL, STEP_WGSL],
+                    sources: &[
+                        RNG_WGSL,
+                        DISPATCH_WGSL,
+                        PARAMS_WGSL,
+                        RANDOM_WGSL,
+                        SITE_WGSL,
+                        STEP_WGSL,
+                    ],
                     entry: "fhp_step",
                     workgroup_size: 64,
                     constants: &[("FLAGS", flags)],

@@ -53,6 +53,8 @@ mod engine;
 pub mod field;
 #[cfg(feature = "gpu")]
 pub mod gpu;
+#[cfg(feature = "gpu")]
+mod gpu_block;
 pub mod lattice;
 pub mod observables;
 pub mod poiseuille;

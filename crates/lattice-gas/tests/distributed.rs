@@ -68,3 +68,15 @@ fn a_checkpoint_file_resumes_on_one_process_and_on_the_distributed_run() {
         "{e}"
     );
 }
+
+/// One process stepping its (only) block on the GPU with the halo through the host: the
+/// bits of the single-process CPU run.
+#[cfg(feature = "gpu")]
+#[test]
+fn gpu_stepper_on_one_rank_matches_one_process() {
+    if simkit_backend::testing::shared_gpu("gpu_stepper_on_one_rank_matches_one_process").is_none()
+    {
+        return;
+    }
+    assert_eq!(common::check_gpu(&Comm::serial()), Ok(3));
+}

@@ -1,7 +1,7 @@
 //! `DistributedLatticeGas` under `mpirun -np P` (P = 2, 3, 4) against the single-process
 //! run, bit for bit: lattices that split unevenly along x, y and both, every boundary
 //! setting, obstacles, body force, and checkpoints moved between rank counts (the cases of
-//! `tests/common`). Built only with the `mpi` feature.
+//! `tests/common`), and with a GPU per rank on 2 ranks. Built only with the `mpi` feature.
 //!
 //! The test launches its own test binary under `mpirun` with `SIMKIT_MPI_CHILD` set; in the
 //! child the same test function runs the cases over `Comm::mpi()`. Without `mpirun` on the
@@ -11,6 +11,8 @@
 mod common;
 
 use simkit_backend::testing::check_on_ranks;
+#[cfg(feature = "gpu")]
+use simkit_backend::testing::{is_mpi_child, shared_gpu};
 
 #[test]
 fn ranks_2_3_4_match_one_process_bit_for_bit() {
@@ -20,4 +22,17 @@ fn ranks_2_3_4_match_one_process_bit_for_bit() {
         9,
         common::check_all,
     );
+}
+
+/// Two ranks, each stepping its block on its own GPU (lavapipe in CI), the halo through the
+/// host: bit for bit the single-process CPU run. Without an adapter: a printed skip, or a
+/// failure under `SIMKIT_REQUIRE_GPU=1`.
+#[cfg(feature = "gpu")]
+#[test]
+fn gpu_per_rank_on_2_ranks_matches_one_process() {
+    const NAME: &str = "gpu_per_rank_on_2_ranks_matches_one_process";
+    if !is_mpi_child() && shared_gpu(NAME).is_none() {
+        return;
+    }
+    check_on_ranks(NAME, &[2], 3, common::check_gpu);
 }

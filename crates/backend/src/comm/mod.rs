@@ -189,6 +189,22 @@ impl Comm {
         }
     }
 
+    /// This process's place among the ranks on the same machine: `(local rank, ranks on
+    /// this machine)` (`MPI_Comm_split_type` with `MPI_COMM_TYPE_SHARED`; one process:
+    /// `(0, 1)`). For picking one of the machine's GPUs per rank
+    /// (`GpuContext::for_local_rank`). Collective.
+    pub fn local_rank(&self) -> (usize, usize) {
+        match &self.kind {
+            Kind::Serial => (0, 1),
+            #[cfg(feature = "mpi")]
+            Kind::Mpi(m) => {
+                use mpi::traits::Communicator;
+                let node = m.world.split_shared(m.world.rank());
+                (node.rank() as usize, node.size() as usize)
+            }
+        }
+    }
+
     /// Waits until every rank has called it.
     pub fn barrier(&self) {
         match &self.kind {

@@ -152,6 +152,36 @@ impl GpuContext {
         Self::with_adapter_name(wanted.as_deref())
     }
 
+    /// Opens the adapter for the process with local rank `local_rank` on its machine
+    /// (`Comm::local_rank`), so that the ranks of a distributed run share the machine's
+    /// GPUs round-robin: with `SIMKIT_ADAPTER=<substring>` set, that adapter (every rank
+    /// alike); else the adapters of the best kind present (real GPUs before CPU drivers
+    /// such as lavapipe) through the preferred API, the `local_rank % count`-th of them.
+    ///
+    /// Errors: no compute-capable adapter, no adapter matching `SIMKIT_ADAPTER`, or a
+    /// device the adapter refuses.
+    pub fn for_local_rank(local_rank: usize) -> Result<Self> {
+        if let Some(name) = std::env::var(ADAPTER_ENV).ok().filter(|s| !s.is_empty()) {
+            return Self::with_adapter_name(Some(&name));
+        }
+        let adapters = Self::sorted_adapters();
+        // One entry per device: the best kind, through the best API (a GPU listed under
+        // two APIs counts once).
+        let kind = |a: &wgpu::Adapter| {
+            let info = a.get_info();
+            (preference(info.device_type), info.backend)
+        };
+        let Some(best) = adapters.first().map(kind) else {
+            return Err(Error::NoAdapter(
+                "wgpu found no compute-capable adapter".into(),
+            ));
+        };
+        let mut same: Vec<wgpu::Adapter> =
+            adapters.into_iter().filter(|a| kind(a) == best).collect();
+        let k = local_rank % same.len();
+        Self::open(same.swap_remove(k))
+    }
+
     /// Opens the best adapter whose name contains `name` (case-insensitive), or the best
     /// adapter overall with `None`.
     pub fn with_adapter_name(name: Option<&str>) -> Result<Self> {

@@ -49,16 +49,29 @@ fn case(
     config: &Config,
     steps: u32,
 ) -> Result<[usize; 2], String> {
+    case_on(comm, Backend::Cpu, label, lattice, config, steps)
+}
+
+/// [`case`] with the distributed run stepping its blocks on `backend`.
+fn case_on(
+    comm: &Comm,
+    backend: Backend<'_>,
+    label: &str,
+    lattice: &Lattice,
+    config: &Config,
+    steps: u32,
+) -> Result<[usize; 2], String> {
     let label = format!(
-        "{label}, {} x {}, on {} rank(s)",
+        "{label}, {} x {}, on {} rank(s), {}",
         lattice.width(),
         lattice.height(),
-        comm.size()
+        comm.size(),
+        backend.name()
     );
     let mut dist = named(
         &label,
         "building the distributed run",
-        DistributedLatticeGas::new(lattice, config, comm.clone()),
+        DistributedLatticeGas::with_backend(lattice, config, comm.clone(), backend),
     )?;
     // In two calls: the step counter carries over between them.
     named(&label, "step", dist.step(steps / 2))?;
@@ -316,4 +329,79 @@ pub fn check_all(comm: &Comm) -> Result<usize, String> {
         ));
     }
     Ok(cuts.len() + 1)
+}
+
+/// Cases of [`check_all`] with every rank stepping its block on its own GPU
+/// (`GpuContext::for_local_rank`), the halo through the host: the same bits as the
+/// single-process CPU run. Returns how many were compared.
+///
+/// Errors (on every rank): a rank without an adapter, or any difference.
+#[cfg(feature = "gpu")]
+pub fn check_gpu(comm: &Comm) -> Result<usize, String> {
+    use simkit_backend::GpuContext;
+    let (local, _) = comm.local_rank();
+    let ctx = comm
+        .agree(GpuContext::for_local_rank(local))
+        .map_err(|e| format!("rank {}: no GPU for local rank {local}: {e}", comm.rank()))?;
+    let gpu = Backend::Gpu(&ctx);
+    let (w, h) = (37, 22);
+    let forced = Config {
+        rules: RuleSet::Full,
+        body_force: 0.05,
+        seed: 6,
+        ..Config::default()
+    };
+    case_on(
+        comm,
+        gpu,
+        "periodic box, full rules, body force",
+        &random(w, h, 0.3, 1),
+        &forced,
+        16,
+    )?;
+    let mut open = random(w, h + 1, 0.2, 3);
+    open.add_wall_rows();
+    open.add_obstacle(&Obstacle::Rect {
+        x0: 20,
+        x1: 22,
+        y0: 6,
+        y1: 15,
+    })
+    .expect("a plate inside");
+    let inflow = Config {
+        periodic_x: false,
+        periodic_y: false,
+        inflow: true,
+        outflow: true,
+        body_force: 0.01,
+        seed: 11,
+        ..Config::default()
+    };
+    case_on(
+        comm,
+        gpu,
+        "inflow/outflow channel with a plate",
+        &open,
+        &inflow,
+        16,
+    )?;
+    // Resumed from a single-process checkpoint onto the GPUs.
+    let mut first =
+        LatticeGas::new(open.clone(), &inflow, Backend::Cpu).map_err(|e| e.to_string())?;
+    first.step(7).map_err(|e| e.to_string())?;
+    let saved = first.checkpoint().map_err(|e| e.to_string())?;
+    let mut dist = DistributedLatticeGas::resume_with_backend(&saved, comm.clone(), gpu)
+        .map_err(|e| format!("resume on the GPUs: {e}"))?;
+    dist.step(9).map_err(|e| e.to_string())?;
+    first.step(9).map_err(|e| e.to_string())?;
+    if let Some(got) = dist.gather().map_err(|e| e.to_string())? {
+        let want = first.state().map_err(|e| e.to_string())?;
+        if let Some(d) = first_difference(&want, &got) {
+            return Err(format!("resumed on the GPUs: after 16 steps {d}"));
+        }
+    }
+    if !dist.backend_name().starts_with("gpu") {
+        return Err(format!("stepped on {}", dist.backend_name()));
+    }
+    Ok(3)
 }
