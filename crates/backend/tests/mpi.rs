@@ -1,7 +1,8 @@
 //! The communication layer under `mpirun -np P` (P = 2, 3, 4): halo exchange at depths 1
 //! to 3 with and without periodic axes (every ghost cell, corners included, checked against
-//! the global field), gather to rank 0, the reductions and the broadcast from rank 0. Built only with the `mpi`
-//! feature; the test launches its own binary under `mpirun` (skipped with a message when
+//! the global field), gather to rank 0, the reductions and the broadcast from rank 0, and
+//! the particle domain (owners, ghosts against every image within the halo, refresh,
+//! migration). Built only with the `mpi` feature; the test launches its own binary under `mpirun` (skipped with a message when
 //! `mpirun` is missing, unless `SIMKIT_REQUIRE_MPI=1`).
 #![cfg(feature = "mpi")]
 
@@ -122,4 +123,135 @@ fn child(comm: &Comm) -> Result<usize, String> {
 #[test]
 fn halo_gather_and_reductions_across_ranks() {
     check_on_ranks(NAME, &[2, 3, 4], 1, child);
+}
+
+/// 300 particles `[x, y, id]` in a 10 x 7 box, pseudo-random and the same on every rank.
+fn particles() -> Vec<[f64; 3]> {
+    (0..300u32)
+        .map(|k| {
+            let u = |s: u32| f64::from(simkit_backend::rng::rng_uniform(3, s, k));
+            [10.0 * u(0), 7.0 * u(1), f64::from(k)]
+        })
+        .collect()
+}
+
+fn shift(p: &mut [f64; 3], s: [f64; 2]) {
+    p[0] += s[0];
+    p[1] += s[1];
+}
+
+/// `ParticleDomain` on P ranks: owners tile the particles, the ghosts are exactly every
+/// particle and periodic image within the halo of an owned particle's region (none
+/// missing, each with the shifted coordinates its sender computes), a refresh moves them
+/// with their owners, and migration after a move gives every particle to its new owner.
+fn domain_child(comm: &Comm) -> Result<usize, String> {
+    use simkit_backend::comm::ParticleDomain;
+    let (len, halo) = ([10.0, 7.0], 1.3);
+    let mut checked = 0;
+    for periodic in [[true, true], [false, true], [true, false], [false, false]] {
+        let d = ParticleDomain::new([0.0; 2], len, periodic, halo, None, comm.size())
+            .map_err(|e| e.to_string())?;
+        let all = particles();
+        let mut local: Vec<[f64; 3]> = all
+            .iter()
+            .filter(|p| d.owner([p[0], p[1]]) == comm.rank())
+            .copied()
+            .collect();
+        let owned = local.len();
+        let total = comm.all_sum(owned as f64).map_err(|e| e.to_string())?;
+        if total != 300.0 {
+            return Err(format!(
+                "{periodic:?}: the regions own {total} of 300 particles"
+            ));
+        }
+        let plan = d
+            .ghosts(comm, &mut local, |p| [p[0], p[1]], shift)
+            .map_err(|e| e.to_string())?;
+        // Every image of every particle within the halo of the region: present.
+        let (lo, hi) = d.region(comm.rank());
+        let images = |p: &[f64; 3]| -> Vec<[f64; 3]> {
+            let mut out = Vec::new();
+            for sx in [-1.0, 0.0, 1.0] {
+                for sy in [-1.0, 0.0, 1.0] {
+                    if (sx != 0.0 && !periodic[0]) || (sy != 0.0 && !periodic[1]) {
+                        continue;
+                    }
+                    let mut q = *p;
+                    shift(&mut q, [sx * len[0], sy * len[1]]);
+                    out.push(q);
+                }
+            }
+            out
+        };
+        // In the region grown by the halo on every side.
+        let near = |q: &[f64; 3]| (0..2).all(|a| q[a] >= lo[a] - halo && q[a] < hi[a] + halo);
+        for p in &all {
+            for q in images(p) {
+                let inside = (0..2).all(|a| q[a] >= lo[a] && q[a] < hi[a]);
+                // Needed: within the halo of the region but not an owned particle.
+                let needed = near(&q) && !inside;
+                if needed && !local[owned..].contains(&q) && !local[..owned].contains(&q) {
+                    return Err(format!(
+                        "{periodic:?} rank {}: particle {} at ({}, {}) within the halo of \
+                         [{lo:?}, {hi:?}) is missing",
+                        comm.rank(),
+                        q[2],
+                        q[0],
+                        q[1]
+                    ));
+                }
+            }
+        }
+        if local[owned..].iter().any(|q| !near(q)) {
+            return Err(format!("{periodic:?}: a ghost outside the halo"));
+        }
+        // A refresh sends the same entries into the same slots: mark every owned particle
+        // (id + 1000) and every ghost must come back marked, in place.
+        let before = local.clone();
+        for p in &mut local[..owned] {
+            p[2] += 1000.0;
+        }
+        plan.refresh(comm, &mut local, shift)
+            .map_err(|e| e.to_string())?;
+        for (g, b) in local[owned..].iter().zip(&before[owned..]) {
+            if *g != [b[0], b[1], b[2] + 1000.0] {
+                return Err(format!("{periodic:?}: ghost {b:?} refreshed as {g:?}"));
+            }
+        }
+        // Move every owned particle by less than half the halo and migrate.
+        let mut mine: Vec<[f64; 3]> = all
+            .iter()
+            .filter(|p| d.owner([p[0], p[1]]) == comm.rank())
+            .map(|p| {
+                let k = p[2] as u32;
+                let u = |s: u32| f64::from(simkit_backend::rng::rng_uniform(4, s, k)) - 0.5;
+                let mut q = [p[0] + 0.6 * halo * u(0), p[1] + 0.6 * halo * u(1), p[2]];
+                for a in 0..2 {
+                    if periodic[a] {
+                        q[a] = q[a].rem_euclid(len[a]);
+                    }
+                }
+                q
+            })
+            .collect();
+        mine = d
+            .migrate(comm, mine, |p| [p[0], p[1]])
+            .map_err(|e| e.to_string())?;
+        if mine.iter().any(|p| d.owner([p[0], p[1]]) != comm.rank()) {
+            return Err(format!(
+                "{periodic:?}: a migrated particle is not this rank's"
+            ));
+        }
+        let total = comm.all_sum(mine.len() as f64).map_err(|e| e.to_string())?;
+        if total != 300.0 {
+            return Err(format!("{periodic:?}: {total} particles after migration"));
+        }
+        checked += 1;
+    }
+    Ok(checked)
+}
+
+#[test]
+fn particle_domain_across_ranks() {
+    check_on_ranks("particle_domain_across_ranks", &[2, 3, 4], 4, domain_child);
 }
