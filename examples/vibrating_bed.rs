@@ -25,13 +25,13 @@ use std::time::Instant;
 use clap::Parser;
 use simkit::backend::{Backend, GpuContext, Result, Simulation};
 use simkit::dem::scenes::{BedParams, vibrating_bed};
-use simkit::dem::{Config, Dem, Scene, State};
-use simkit::output::RgbImage;
+use simkit::dem::{Config, Dem};
 use simkit::output::gif::GifWriter;
-use simkit::output::particles::ParticleFrame;
 use simkit::output::png::write_png;
 use simkit::output::vtk::{Particles, write_pvd};
 
+#[path = "common/bed_frame.rs"]
+mod bed_frame;
 #[path = "common/checkpoint.rs"]
 mod checkpoint;
 #[path = "common/progress.rs"]
@@ -74,31 +74,6 @@ struct Args {
     gpu: bool,
     #[command(flatten)]
     checkpoint: checkpoint::CheckpointArgs,
-}
-
-/// Discs coloured by speed, the vibrating plates in grey; `zw` is the plate displacement.
-/// Lengths in grain diameters d, time in 1/ω.
-fn draw(scene: &Scene, s: &State, zw: f64, vmax: f64, gamma: f64) -> Result<RgbImage> {
-    let (lo, hi) = (scene.lo(), scene.hi());
-    let a = scene.vibration().map_or(0.0, |v| v.amplitude);
-    let pos: Vec<[f64; 2]> = s.positions.iter().map(|x| [x[0], x[1]]).collect();
-    let radii: Vec<f64> = scene.particles().iter().map(|p| p.radius).collect();
-    let speed: Vec<f64> = s.velocities.iter().map(|v| v[0].hypot(v[1])).collect();
-    ParticleFrame::new(&pos, &radii)
-        .bounds(lo[0], hi[0], lo[1] - a, hi[1] + a)
-        .by_value(&speed, "|v| (d ω)")
-        .range(0.0, vmax)
-        .line((lo[0], lo[1] + zw), (hi[0], lo[1] + zw))
-        .line((lo[0], hi[1] + zw), (hi[0], hi[1] + zw))
-        .title(format!("vibrated bed, Γ = {gamma}"))
-        .subtitle(format!(
-            "t = {:.2} / ω ({:.2} cycles)",
-            s.time,
-            s.time / (2.0 * std::f64::consts::PI)
-        ))
-        .x_label("x (grain diameters d)")
-        .y_label("z (d)")
-        .render()
 }
 
 fn main() -> ExitCode {
@@ -169,7 +144,7 @@ fn run(args: &Args) -> Result<()> {
         let s = sim.state()?;
         let d = sim.diagnostics_of(&s)?;
         let zw = sim.wall_displacement(s.time);
-        let img = draw(&scene, &s, zw, vmax, params.gamma)?;
+        let img = bed_frame::draw(&scene, &s, zw, vmax, params.gamma)?;
         write_png(out.join(format!("frame_{frame:03}.png")), &img)?;
         gif.push(&img)?;
         let name = format!("bed_{frame:03}.vtp");

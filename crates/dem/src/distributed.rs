@@ -262,7 +262,28 @@ impl DistributedDem {
     /// Errors: a failed exchange.
     pub fn diagnostics(&mut self) -> Result<Diagnostics> {
         let s = self.state()?;
-        with_engine!(&self.engine, e => diagnostics::compute(&e.prep, s.time, &s.positions, &s.velocities))
+        self.diagnostics_of(&s)
+    }
+
+    /// Diagnostics of a state of this run's scene (e.g. the one [`Simulation::state`]
+    /// returned); not collective.
+    ///
+    /// Errors: a state of another particle count.
+    pub fn diagnostics_of(&self, state: &State) -> Result<Diagnostics> {
+        let n = self.len();
+        if state.positions.len() != n || state.velocities.len() != n {
+            return Err(Error::invalid(
+                "state length",
+                state.positions.len(),
+                format!("must equal the particle count {n}"),
+            ));
+        }
+        with_engine!(&self.engine, e => diagnostics::compute(&e.prep, state.time, &state.positions, &state.velocities))
+    }
+
+    /// Vertical displacement of the vibrating walls at time `t`.
+    pub fn wall_displacement(&self, t: f64) -> f64 {
+        with_engine!(&self.engine, e => e.prep.wall_motion(t).0)
     }
 
     /// The complete state in the single-process checkpoint format (the particles in scene
