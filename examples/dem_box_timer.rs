@@ -7,7 +7,9 @@
 //! ```text
 //! RAYON_NUM_THREADS=2 cargo run --release --example dem_box_timer -- --steps 30000
 //! ```
-//! Options: `--steps N` (steps to time, 2000). Prints particle-steps/s.
+//! Options: `--steps N` (steps to time, 2000), `--nx`, `--ny`, `--nz` (the lattice, 25 x 25 x
+//! 32 as the deck; `dem_gran3d.lmp -var nx X -var ny Y -var nz Z` is the same box). Prints
+//! particle-steps/s.
 //! `benches/peers/dem_vs_lammps.sh STEPS` runs it next to LAMMPS.
 
 use std::process::ExitCode;
@@ -29,6 +31,15 @@ struct Args {
     /// Steps to time, from the initial state
     #[arg(long, value_name = "N", default_value_t = 2000)]
     steps: u32,
+    /// Lattice sites along x (the deck's `-var nx`)
+    #[arg(long, default_value_t = 25)]
+    nx: usize,
+    /// Lattice sites along y (the deck's `-var ny`)
+    #[arg(long, default_value_t = 25)]
+    ny: usize,
+    /// Lattice sites along z, layers (the deck's `-var nz`)
+    #[arg(long, default_value_t = 32)]
+    nz: usize,
 }
 
 fn main() -> ExitCode {
@@ -37,7 +48,7 @@ fn main() -> ExitCode {
 
 fn run(args: &Args) -> Result<()> {
     let steps = args.steps;
-    let scene = granular_box(25, 25, 32, 4_928_459)?;
+    let scene = granular_box(args.nx, args.ny, args.nz, 4_928_459)?;
     let n = scene.particles().len();
     let mut sim = Dem::new(&scene, &Config::default(), Backend::Cpu)?;
     // The bar advances in pieces of at least 100 steps (one `step` call each, aligned with

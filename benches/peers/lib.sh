@@ -34,24 +34,29 @@ have_mpirun() {
   command -v mpirun >/dev/null 2>&1
 }
 
-# lammps_rate DECK ATOMS STEPS RANKS: runs LAMMPS on DECK (`-var steps STEPS`) with RANKS MPI
-# ranks (1 = no mpirun); prints ATOMS * STEPS / (the "Loop time" seconds): atom-steps/s.
+# lammps_rate DECK ATOMS STEPS RANKS [ARGS...]: runs LAMMPS on DECK (`-var steps STEPS`, then
+# ARGS, e.g. `-var nx 100`) with RANKS MPI ranks (1 = no mpirun); prints ATOMS * STEPS / (the
+# "Loop time" seconds): atom-steps/s.
 lammps_rate() {
   _log=$(mktemp)
-  if [ "$4" -eq 1 ]; then
-    lmp -in "$1" -var steps "$3" -log none -screen "$_log" >/dev/null 2>&1
+  _deck=$1 _n=$2 _steps=$3 _np=$4
+  shift 4
+  if [ "$_np" -eq 1 ]; then
+    lmp -in "$_deck" -var steps "$_steps" "$@" -log none -screen "$_log" >/dev/null 2>&1
   else
-    mpirun --allow-run-as-root --oversubscribe -np "$4" lmp -in "$1" -var steps "$3" \
-      -log none -screen "$_log" >/dev/null 2>&1
+    mpirun --allow-run-as-root --oversubscribe -np "$_np" lmp -in "$_deck" -var steps "$_steps" \
+      "$@" -log none -screen "$_log" >/dev/null 2>&1
   fi
-  awk -v n="$2" -v s="$3" '/^Loop time/ {printf "%.6g\n", n * s / $4}' "$_log"
+  awk -v n="$_n" -v s="$_steps" '/^Loop time/ {printf "%.6g\n", n * s / $4}' "$_log"
   rm -f "$_log"
 }
 
-# dem_timer_rate THREADS STEPS: simkit dem on the LAMMPS comparison box (examples/dem_box_timer,
-# built), CPU f64; prints particle-steps/s.
+# dem_timer_rate THREADS STEPS [ARGS...]: simkit dem on the LAMMPS comparison box
+# (examples/dem_box_timer, built; ARGS e.g. `--nx 100`), CPU f64; prints particle-steps/s.
 dem_timer_rate() {
-  RAYON_NUM_THREADS=$1 target/release/examples/dem_box_timer --steps "$2" 2>/dev/null |
+  _threads=$1 _steps=$2
+  shift 2
+  RAYON_NUM_THREADS=$_threads target/release/examples/dem_box_timer --steps "$_steps" "$@" 2>/dev/null |
     awk '{for (i = 2; i <= NF; i++) if ($i == "particle-steps/s") print $(i - 1)}'
 }
 

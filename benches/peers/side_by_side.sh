@@ -20,7 +20,9 @@
 #                queries in tree order, rayon, 2 threads) vs simkit sorted cells (build + count
 #                every pair, 2 threads), N = 1e6 uniform points at density 1, cutoff 2.5; pairs/s
 #   dem          LAMMPS gran/hooke (mpirun -np 2) vs simkit dem (2 threads) on
-#                benches/peers/dem_gran3d.lmp, 20,000 spheres; particle-steps/s
+#                benches/peers/dem_gran3d.lmp, 20,000 spheres, the first 4000 steps and the
+#                first 30,000 (the pile settles: dense contacts), and 1,000,000 spheres (100^3
+#                lattice, 200 steps); particle-steps/s
 #   md           LAMMPS lj/cut vs simkit md (examples/lj_fluid, f64) on benches/peers/in.lj,
 #                32,000 atoms, 1 core and 2 cores; atom-steps/s
 #   lattice-gas  STREAM-like triad (2 OpenMP threads) vs simkit lattice-gas lookup table at
@@ -70,7 +72,7 @@ PEERS=$(cd "$PEERS" 2>/dev/null && pwd) || PEERS=""
 if [ "$QUICK" -eq 1 ]; then
   RD_N=64 RD_PEER_STEPS=50 RD_STEPS=200
   NB_N=20000 NB_REPS=3 KIDDO_REPS=1
-  DEM_STEPS=50
+  DEM_STEPS=50 DEM_LONG_STEPS=100 DEM_BIG=10 DEM_BIG_STEPS=10
   MD_STEPS=10
   LG_N=1024 LG_STEPS=4 TRIAD_REPS=3
   FHP_N=128 FHP_STEPS=20
@@ -78,7 +80,7 @@ if [ "$QUICK" -eq 1 ]; then
 else
   RD_N=512 RD_PEER_STEPS=1000 RD_STEPS=8000
   NB_N=1000000 NB_REPS=15 KIDDO_REPS=3
-  DEM_STEPS=4000
+  DEM_STEPS=4000 DEM_LONG_STEPS=30000 DEM_BIG=100 DEM_BIG_STEPS=200
   MD_STEPS=500
   LG_N=16384 LG_STEPS=60 TRIAD_REPS=20
   FHP_N=1024 FHP_STEPS=100
@@ -212,6 +214,16 @@ m_kiddo() {
 m_sk_nb() { sk neighbor --n "$NB_N" --threads 2 --reps "$NB_REPS" | rate_of; }
 m_lmp_dem2() { lammps_rate "$DEM_DECK" "$DEM_N" "$DEM_STEPS" 2; }
 m_sk_dem2() { dem_timer_rate 2 "$DEM_STEPS"; }
+m_lmp_dem_long() { lammps_rate "$DEM_DECK" "$DEM_N" "$DEM_LONG_STEPS" 2; }
+m_sk_dem_long() { dem_timer_rate 2 "$DEM_LONG_STEPS"; }
+DEM_BIG_N=$((DEM_BIG * DEM_BIG * DEM_BIG))
+m_lmp_dem_big() {
+  lammps_rate "$DEM_DECK" "$DEM_BIG_N" "$DEM_BIG_STEPS" 2 -var nx "$DEM_BIG" -var ny "$DEM_BIG" \
+    -var nz "$DEM_BIG"
+}
+m_sk_dem_big() {
+  dem_timer_rate 2 "$DEM_BIG_STEPS" --nx "$DEM_BIG" --ny "$DEM_BIG" --nz "$DEM_BIG"
+}
 m_lmp_md1() { lammps_rate "$MD_DECK" "$MD_N" "$MD_STEPS" 1; }
 m_lmp_md2() { lammps_rate "$MD_DECK" "$MD_N" "$MD_STEPS" 2; }
 m_sk_md1() { lj_fluid_rate 1 "$MD_STEPS"; }
@@ -263,6 +275,8 @@ while [ "$r" -le "$ROUNDS" ]; do
   if want neighbor && [ -n "$KIDDO" ]; then say "  neighbor"; pair kiddo m_kiddo sknb m_sk_nb "$r"; fi
   if want dem && [ "$LMP" -eq 1 ] && [ "$MPI" -eq 1 ] && [ -z "${DEM_BUILD:-}" ]; then
     say "  dem"; pair lmpdem2 m_lmp_dem2 skdem2 m_sk_dem2 "$r"
+    pair lmpdemlong m_lmp_dem_long skdemlong m_sk_dem_long "$r"
+    pair lmpdembig m_lmp_dem_big skdembig m_sk_dem_big "$r"
   fi
   if want md && [ "$LMP" -eq 1 ] && [ -z "${MD_BUILD:-}" ]; then
     say "  md"; pair lmpmd1 m_lmp_md1 skmd1 m_sk_md1 "$r"
@@ -309,6 +323,12 @@ if want dem && [ "$LMP" -eq 1 ]; then
     row dem "LAMMPS gran/hooke, 2 MPI ranks vs 2 threads, N=$DEM_N, $DEM_STEPS steps" \
       "$(med lmpdem2)" "$(med skdem2)" "particle-steps/s" ratio 2
     note "dem: LAMMPS: $(samples lmpdem2); simkit: $(samples skdem2)"
+    row dem "LAMMPS gran/hooke, 2 MPI ranks vs 2 threads, N=$DEM_N, $DEM_LONG_STEPS steps (settled pile)" \
+      "$(med lmpdemlong)" "$(med skdemlong)" "particle-steps/s" ratio 2
+    note "dem long window: LAMMPS: $(samples lmpdemlong); simkit: $(samples skdemlong)"
+    row dem "LAMMPS gran/hooke, 2 MPI ranks vs 2 threads, N=$DEM_BIG_N, $DEM_BIG_STEPS steps" \
+      "$(med lmpdembig)" "$(med skdembig)" "particle-steps/s" ratio 2
+    note "dem N=$DEM_BIG_N: LAMMPS: $(samples lmpdembig); simkit: $(samples skdembig)"
   fi
 fi
 if want md && [ "$LMP" -eq 1 ]; then
