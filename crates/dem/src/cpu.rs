@@ -17,7 +17,7 @@ use multiversion::multiversion;
 use rayon::prelude::*;
 
 use simkit_backend::guard::{blow_up, chunks, first_non_finite};
-use simkit_backend::{Error, Real, Result};
+use simkit_backend::{Real, Result};
 
 use simkit_neighbor::{BlockedHalfList, HalfListBlock};
 
@@ -556,51 +556,18 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
     /// Sets the state from a checkpoint (validated: lengths, a permutation of the
     /// particles).
     fn load(&mut self, s: &EngineState) -> Result<()> {
-        let n = self.prep.n;
-        let bad = |what: String| {
-            Error::checkpoint(format!("{what}; the file does not belong to this scene"))
-        };
-        if s.width as usize != D {
-            return Err(bad(format!(
-                "{} values per particle, expected {D}",
-                s.width
-            )));
-        }
-        let mut seen = vec![false; n];
-        if s.id.len() != n {
-            return Err(bad(format!(
-                "{} particle slots for {n} particles",
-                s.id.len()
-            )));
-        }
-        for &i in &s.id {
-            match seen.get_mut(i as usize) {
-                Some(f) if !*f => *f = true,
-                _ => {
-                    return Err(bad(format!(
-                        "particle order lists {i} twice or out of range"
-                    )));
-                }
-            }
-        }
-        let arrays = |v: &[f64], name: &str| -> Result<Vec<[T; D]>> {
-            if v.len() != n * D {
-                return Err(bad(format!(
-                    "{name} holds {} values, expected {}",
-                    v.len(),
-                    n * D
-                )));
-            }
-            Ok(v.chunks_exact(D)
+        s.check(self.prep.n, D)?;
+        let arrays = |v: &[f64]| -> Vec<[T; D]> {
+            v.chunks_exact(D)
                 .map(|c| std::array::from_fn(|d| T::from_f64(c[d])))
-                .collect())
+                .collect()
         };
         let p = &mut self.p;
-        p.pos = arrays(&s.pos, "positions")?;
-        p.vel = arrays(&s.vel, "velocities")?;
-        p.acc = arrays(&s.acc, "accelerations")?;
-        p.aux = arrays(&s.aux, "half-step velocities")?;
-        p.reference = arrays(&s.reference, "list-build positions")?;
+        p.pos = arrays(&s.pos);
+        p.vel = arrays(&s.vel);
+        p.acc = arrays(&s.acc);
+        p.aux = arrays(&s.aux);
+        p.reference = arrays(&s.reference);
         p.id.clone_from(&s.id);
         (self.time, self.started, self.steps) = (s.time, s.started, s.steps);
         self.relist()

@@ -571,47 +571,7 @@ where
     /// in its region (where the run that wrote it had them).
     fn load(&mut self, comm: &Comm, s: &EngineState) -> Result<()> {
         let n = self.prep.n;
-        let bad = |what: String| {
-            Error::checkpoint(format!("{what}; the file does not belong to this scene"))
-        };
-        if s.width as usize != D {
-            return Err(bad(format!(
-                "{} values per particle, expected {D}",
-                s.width
-            )));
-        }
-        if s.id.len() != n {
-            return Err(bad(format!(
-                "{} particle slots for {n} particles",
-                s.id.len()
-            )));
-        }
-        let mut seen = vec![false; n];
-        for &i in &s.id {
-            match seen.get_mut(i as usize) {
-                Some(f) if !*f => *f = true,
-                _ => {
-                    return Err(bad(format!(
-                        "particle order lists {i} twice or out of range"
-                    )));
-                }
-            }
-        }
-        for (v, name) in [
-            (&s.pos, "positions"),
-            (&s.vel, "velocities"),
-            (&s.acc, "accelerations"),
-            (&s.aux, "half-step velocities"),
-            (&s.reference, "list-build positions"),
-        ] {
-            if v.len() != n * D {
-                return Err(bad(format!(
-                    "{name} holds {} values, expected {}",
-                    v.len(),
-                    n * D
-                )));
-            }
-        }
+        s.check(n, D)?;
         let at = |v: &[f64], k: usize| -> [f64; D] { std::array::from_fn(|d| v[k * D + d]) };
         let mine: Vec<usize> = (0..n)
             .filter(|&k| self.domain.owner(Self::xy(&at(&s.reference, k))) == comm.rank())

@@ -55,3 +55,57 @@ pub(crate) struct EngineState {
     /// it is the same list); empty on the GPU.
     pub reference: Vec<f64>,
 }
+
+impl EngineState {
+    /// Checks that the state fits a scene of `n` particles in `width` dimensions: the
+    /// width, a permutation of the particles as the slot order, and `n * width` values in
+    /// every per-particle vector.
+    ///
+    /// Errors: [`simkit_backend::Error::Checkpoint`] naming the first mismatch.
+    pub fn check(&self, n: usize, width: usize) -> simkit_backend::Result<()> {
+        let bad = |what: String| {
+            simkit_backend::Error::checkpoint(format!(
+                "{what}; the file does not belong to this scene"
+            ))
+        };
+        if self.width as usize != width {
+            return Err(bad(format!(
+                "{} values per particle, expected {width}",
+                self.width
+            )));
+        }
+        if self.id.len() != n {
+            return Err(bad(format!(
+                "{} particle slots for {n} particles",
+                self.id.len()
+            )));
+        }
+        let mut seen = vec![false; n];
+        for &i in &self.id {
+            match seen.get_mut(i as usize) {
+                Some(f) if !*f => *f = true,
+                _ => {
+                    return Err(bad(format!(
+                        "particle order lists {i} twice or out of range"
+                    )));
+                }
+            }
+        }
+        for (v, name) in [
+            (&self.pos, "positions"),
+            (&self.vel, "velocities"),
+            (&self.acc, "accelerations"),
+            (&self.aux, "half-step velocities"),
+            (&self.reference, "list-build positions"),
+        ] {
+            if v.len() != n * width {
+                return Err(bad(format!(
+                    "{name} holds {} values, expected {}",
+                    v.len(),
+                    n * width
+                )));
+            }
+        }
+        Ok(())
+    }
+}

@@ -184,7 +184,8 @@ impl CartDecomposition {
         }
     }
 
-    fn check_comm(&self, comm: &Comm) -> Result<()> {
+    /// `Ok` when `comm` has as many ranks as the decomposition has blocks.
+    pub(super) fn check_comm(&self, comm: &Comm) -> Result<()> {
         if comm.size() != self.ranks() {
             return Err(Error::invalid(
                 "communicator size",

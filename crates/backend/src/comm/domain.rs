@@ -221,20 +221,6 @@ impl ParticleDomain {
         )
     }
 
-    fn check_comm(&self, comm: &Comm) -> Result<()> {
-        if comm.size() != self.ranks() {
-            return Err(Error::invalid(
-                "communicator size",
-                comm.size(),
-                format!(
-                    "the domain was cut into {} regions; build it for comm.size() ranks",
-                    self.ranks()
-                ),
-            ));
-        }
-        Ok(())
-    }
-
     /// Sends every particle of `items` to the rank that owns it (by `xy`, wrapped into the
     /// box along periodic axes) and returns this rank's particles: those it kept, in their
     /// order, then those received. In the shift pattern: first along x, then along y, so a
@@ -250,7 +236,7 @@ impl ParticleDomain {
         items: Vec<R>,
         xy: impl Fn(&R) -> [f64; 2],
     ) -> Result<Vec<R>> {
-        self.check_comm(comm)?;
+        self.cart.check_comm(comm)?;
         let me = self.cart.coords(comm.rank());
         let nb = self.cart.neighbors(comm.rank());
         let dims = self.cart.dims();
@@ -316,7 +302,7 @@ impl ParticleDomain {
         xy: impl Fn(&R) -> [f64; 2],
         shift: impl Fn(&mut R, [f64; 2]),
     ) -> Result<GhostPlan> {
-        self.check_comm(comm)?;
+        self.cart.check_comm(comm)?;
         let rank = comm.rank();
         let me = self.cart.coords(rank);
         let nb = self.cart.neighbors(rank);

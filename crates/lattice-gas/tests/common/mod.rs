@@ -158,6 +158,30 @@ fn random(w: usize, h: usize, d: f64, seed: u32) -> Lattice {
     l
 }
 
+/// The source's open channel, 37 x 23: wall rows, a plate, inflow and outflow columns, a
+/// weak body force.
+fn open_channel() -> (Lattice, Config) {
+    let mut open = random(37, 23, 0.2, 3);
+    open.add_wall_rows();
+    open.add_obstacle(&Obstacle::Rect {
+        x0: 20,
+        x1: 22,
+        y0: 6,
+        y1: 15,
+    })
+    .expect("a plate inside");
+    let inflow = Config {
+        periodic_x: false,
+        periodic_y: false,
+        inflow: true,
+        outflow: true,
+        body_force: 0.01,
+        seed: 11,
+        ..Config::default()
+    };
+    (open, inflow)
+}
+
 /// Runs every case over `comm`; returns how many were compared (on every rank).
 pub fn check_all(comm: &Comm) -> Result<usize, String> {
     let mut cuts = Vec::new();
@@ -215,24 +239,7 @@ pub fn check_all(comm: &Comm) -> Result<usize, String> {
     )?);
     // The source's open channel: inflow and outflow columns, a plate, odd height (cut in
     // 2 x 2 on 4 ranks).
-    let mut open = random(w, h + 1, 0.2, 3);
-    open.add_wall_rows();
-    open.add_obstacle(&Obstacle::Rect {
-        x0: 20,
-        x1: 22,
-        y0: 6,
-        y1: 15,
-    })
-    .expect("a plate inside");
-    let inflow = Config {
-        periodic_x: false,
-        periodic_y: false,
-        inflow: true,
-        outflow: true,
-        body_force: 0.01,
-        seed: 11,
-        ..Config::default()
-    };
+    let (open, inflow) = open_channel();
     cuts.push(case(
         comm,
         "inflow/outflow channel with a plate",
@@ -359,24 +366,7 @@ pub fn check_gpu(comm: &Comm) -> Result<usize, String> {
         &forced,
         16,
     )?;
-    let mut open = random(w, h + 1, 0.2, 3);
-    open.add_wall_rows();
-    open.add_obstacle(&Obstacle::Rect {
-        x0: 20,
-        x1: 22,
-        y0: 6,
-        y1: 15,
-    })
-    .expect("a plate inside");
-    let inflow = Config {
-        periodic_x: false,
-        periodic_y: false,
-        inflow: true,
-        outflow: true,
-        body_force: 0.01,
-        seed: 11,
-        ..Config::default()
-    };
+    let (open, inflow) = open_channel();
     case_on(
         comm,
         gpu,
