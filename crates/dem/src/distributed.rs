@@ -5,10 +5,10 @@ use std::hash::{Hash, Hasher};
 
 use rayon::prelude::*;
 
-use simkit_backend::comm::{Comm, GhostPlan, ParticleDomain};
+use simkit_backend::comm::{Comm, ParticleDomain};
 use simkit_backend::guard::{blow_up, chunks};
 use simkit_backend::{Error, Precision, Result, Simulation};
-use simkit_neighbor::{CellGrid, ListKind, VerletList};
+use simkit_neighbor::GhostedList;
 
 use crate::cpu::{
     AXES, ForceInput, WallT, contact_force, drift_velocity_verlet, max_displacement2, wall_force,
@@ -26,9 +26,6 @@ const CHUNK: usize = 1024;
 /// then position, velocity, acceleration, predicted velocity and list-build position, three
 /// components each (`z = 0` in 2D).
 type Record = [f64; 16];
-
-/// A ghost seed: position at the list build (three components) and scene index.
-type Seed = [f64; 4];
 
 /// Granular DEM over the ranks of a [`Comm`] (CPU, `f64`, velocity Verlet): spatial
 /// decomposition with ghost particles, results independent of the rank count.
@@ -247,7 +244,7 @@ impl DistributedDem {
 
     /// Regions along x and y, `[p_x, p_y]`.
     pub fn dims(&self) -> [usize; 2] {
-        with_engine!(&self.engine, e => e.domain.dims())
+        with_engine!(&self.engine, e => e.list.domain().dims())
     }
 
     /// Neighbour-list builds so far (each with a migration), counted since this object was
@@ -417,17 +414,14 @@ const NOTHING: Finding = [4.0, 0.0, 0.0, 0.0, 0.0];
 /// This rank's part of the run in dimension `D`.
 struct Engine<const D: usize> {
     prep: Prepared,
-    domain: ParticleDomain,
+    /// The decomposition, the ghosts and the full lists (partners by scene index).
+    list: GhostedList<D>,
     time: f64,
     started: bool,
     steps: u64,
     builds: u64,
     /// Owned particles at the front of the local arrays, ghosts after them.
     owned: usize,
-    plan: GhostPlan,
-    /// Periodic images along z (3D), made on this rank after the exchanged ghosts: the
-    /// local entry they copy and the shift of their z.
-    z_images: Vec<(u32, f64)>,
     /// Scene index, owned then ghosts.
     id: Vec<u32>,
     /// Positions, owned then ghosts (owned: not wrapped since the list build).
@@ -442,9 +436,6 @@ struct Engine<const D: usize> {
     acc: Vec<[f64; D]>,
     inv_mass: Vec<f64>,
     reference: Vec<[f64; D]>,
-    /// Full list of the owned particles in CSR form, partners by increasing scene index.
-    offsets: Vec<u32>,
-    partners: Vec<u32>,
     snap: Snapshot<D>,
     coeff: Vec<ContactCoefficients>,
     walls: Vec<WallT<f64>>,
@@ -454,15 +445,6 @@ struct Engine<const D: usize> {
     len: [f64; D],
     cut2: f64,
     rebuild_dist2: f64,
-}
-
-/// Adds a periodic shift to the x and y of a position.
-fn shift_xy<const D: usize>(x: &mut [f64; D], s: [f64; 2]) {
-    for a in 0..2 {
-        if s[a] != 0.0 {
-            x[a] += s[a];
-        }
-    }
 }
 
 impl<const D: usize> Engine<D>
@@ -486,15 +468,14 @@ where
         let mut gravity = [0.0; D];
         gravity[prep.vertical] = -prep.gravity;
         let r_max = prep.cutoff / 2.0;
+        let periodic_z = (D == 3 && prep.periodic[2]).then_some((prep.lo[2], prep.len[2]));
         Ok(Self {
-            domain,
+            list: GhostedList::new(domain, periodic_z, prep.cutoff, prep.skin)?,
             time: 0.0,
             started: false,
             steps: 0,
             builds: 0,
             owned: 0,
-            plan: GhostPlan::default(),
-            z_images: Vec::new(),
             id: Vec::new(),
             pos: Vec::new(),
             aux: Vec::new(),
@@ -505,8 +486,6 @@ where
             acc: Vec::new(),
             inv_mass: Vec::new(),
             reference: Vec::new(),
-            offsets: vec![0],
-            partners: Vec::new(),
             snap: Snapshot::default(),
             coeff: prep.coeff.clone(),
             walls: walls_of::<f64, D>(&prep),
@@ -537,7 +516,7 @@ where
         for i in 0..self.prep.n {
             let mut x: [f64; D] = std::array::from_fn(|d| self.prep.positions[i][d]);
             wrap(&mut x, self.periodic, self.lo, self.len);
-            if self.domain.owner(Self::xy(&x)) == comm.rank() {
+            if self.list.domain().owner(Self::xy(&x)) == comm.rank() {
                 owned.push(i);
             }
         }
@@ -574,7 +553,7 @@ where
         s.check(n, D)?;
         let at = |v: &[f64], k: usize| -> [f64; D] { std::array::from_fn(|d| v[k * D + d]) };
         let mine: Vec<usize> = (0..n)
-            .filter(|&k| self.domain.owner(Self::xy(&at(&s.reference, k))) == comm.rank())
+            .filter(|&k| self.list.domain().owner(Self::xy(&at(&s.reference, k))) == comm.rank())
             .collect();
         let ids: Vec<usize> = mine.iter().map(|&k| s.id[k] as usize).collect();
         self.take(&ids);
@@ -598,7 +577,7 @@ where
                 self.record(k, &x)
             })
             .collect();
-        let got = self.domain.migrate(comm, out, |r| [r[1], r[2]])?;
+        let got = self.list.domain().migrate(comm, out, |r| [r[1], r[2]])?;
         let ids: Vec<usize> = got.iter().map(|r| r[0] as usize).collect();
         if let Some(&i) = ids.iter().find(|&&i| i >= self.prep.n) {
             return Err(Error::invalid(
@@ -625,118 +604,36 @@ where
     /// ghosts refreshed with the current positions and velocities.
     fn relist(&mut self, comm: &Comm) -> Result<()> {
         let n = self.owned;
-        let mut seeds: Vec<Seed> = (0..n)
-            .map(|k| {
-                let mut s = [0.0; 4];
-                s[..D].copy_from_slice(&self.reference[k]);
-                s[3] = f64::from(self.id[k]);
-                s
-            })
-            .collect();
-        self.plan = self.domain.ghosts(
-            comm,
-            &mut seeds,
-            |s| [s[0], s[1]],
-            |s, sh| {
-                s[0] += sh[0];
-                s[1] += sh[1];
-            },
-        )?;
-        // A periodic z (3D) is not cut: its images are copies of local entries.
-        self.z_images.clear();
-        if D == 3 && self.periodic[2] {
-            let (lz, range) = (self.len[2], self.domain.halo());
-            let (z0, z1) = (self.lo[2], self.lo[2] + lz);
-            for k in 0..seeds.len() {
-                let z = seeds[k][2];
-                for (near, shift) in [(z < z0 + range, lz), (z >= z1 - range, -lz)] {
-                    if near {
-                        let mut img = seeds[k];
-                        img[2] += shift;
-                        seeds.push(img);
-                        self.z_images.push((k as u32, shift));
-                    }
-                }
-            }
-        }
-        let total = seeds.len();
+        self.list.build(comm, &self.reference, &self.id[..n])?;
         let p = &self.prep;
-        for s in &seeds[n..] {
-            let i = s[3] as usize;
-            if i >= p.n {
-                return Err(Error::invalid(
-                    "ghost particle index",
-                    i,
-                    format!("must be below the particle count {}", p.n),
-                ));
-            }
+        let ghosts = &self.list.ids()[n..];
+        let bad = ghosts.iter().find(|&&i| i as usize >= p.n).map(|&i| {
+            Error::invalid(
+                "ghost particle index",
+                i,
+                format!("must be below the particle count {}", p.n),
+            )
+        });
+        comm.agree(bad.map_or(Ok(()), Err))?;
+        for &i in ghosts {
+            let i = i as usize;
             self.id.push(i as u32);
             self.radius.push(p.radius[i]);
             self.mass.push(p.mass[i]);
             self.species.push(p.species[i]);
         }
-        let at_build: Vec<[f64; D]> = seeds
-            .iter()
-            .map(|s| std::array::from_fn(|d| s[d]))
-            .collect();
-        // Non-finite positions fail the list build on some ranks only: all stop together.
-        comm.agree(self.build_lists(&at_build))?;
-        self.pos.resize(total, [0.0; D]);
-        self.aux.resize(total, [0.0; D]);
+        self.pos.resize(self.list.len(), [0.0; D]);
+        self.aux.resize(self.list.len(), [0.0; D]);
         self.refresh(comm)?;
         self.builds += 1;
-        Ok(())
-    }
-
-    /// The full list of every owned particle within the list range at `x` (owned then
-    /// ghosts), partners sorted by scene index.
-    fn build_lists(&mut self, x: &[[f64; D]]) -> Result<()> {
-        let n = self.owned;
-        self.offsets.clear();
-        self.offsets.push(0);
-        self.partners.clear();
-        if n == 0 {
-            return Ok(());
-        }
-        let (mut lo, mut hi) = ([f64::INFINITY; D], [f64::NEG_INFINITY; D]);
-        for p in x {
-            for d in 0..D {
-                lo[d] = lo[d].min(p[d]);
-                hi[d] = hi[d].max(p[d]);
-            }
-        }
-        let range = self.prep.cutoff + self.prep.skin;
-        let lengths: [f64; D] = std::array::from_fn(|d| (hi[d] - lo[d]) + range);
-        let grid = CellGrid::new(lo, lengths, [false; D], self.prep.cutoff)?;
-        let mut list = VerletList::new(&grid, self.prep.skin, ListKind::Full)?;
-        list.build(x)?;
-        let id = &self.id;
-        let mut mine: Vec<u32> = Vec::new();
-        for i in 0..n {
-            mine.clear();
-            mine.extend_from_slice(list.list_of(i).unwrap_or(&[]));
-            mine.sort_by_key(|&j| id[j as usize]);
-            self.partners.extend_from_slice(&mine);
-            self.offsets.push(self.partners.len() as u32);
-        }
         Ok(())
     }
 
     /// Sends the owned positions and predicted velocities to the ranks that hold them as
     /// ghosts.
     fn refresh(&mut self, comm: &Comm) -> Result<()> {
-        let exchanged = self.plan.owned() + self.plan.ghosts();
-        self.plan
-            .refresh(comm, &mut self.pos[..exchanged], shift_xy::<D>)?;
-        self.plan
-            .refresh(comm, &mut self.aux[..exchanged], |_, _| {})?;
-        for (k, &(src, shift)) in self.z_images.iter().enumerate() {
-            let (src, img) = (src as usize, exchanged + k);
-            self.pos[img] = self.pos[src];
-            self.pos[img][D - 1] += shift;
-            self.aux[img] = self.aux[src];
-        }
-        Ok(())
+        self.list.refresh(comm, &mut self.pos, true)?;
+        self.list.refresh(comm, &mut self.aux, false)
     }
 
     /// Forces at the current time from the positions and predicted velocities into
@@ -770,7 +667,7 @@ where
             cut2: self.cut2,
             block: usize::MAX,
         };
-        let (offsets, partners, inv_mass) = (&self.offsets, &self.partners, &self.inv_mass);
+        let (list, inv_mass) = (&self.list, &self.inv_mass);
         self.acc
             .par_chunks_mut(CHUNK)
             .enumerate()
@@ -785,8 +682,7 @@ where
                         wall_force::<f64, D, FRICTION>(&inp, w, i, &mut f);
                     }
                     let xi = inp.pos[i];
-                    let list = &partners[offsets[i] as usize..offsets[i + 1] as usize];
-                    for &j in list {
+                    for &j in list.partners(i) {
                         let j = j as usize;
                         let sep: [f64; D] = std::array::from_fn(|d| xi[d] - inp.pos[j][d]);
                         if let Some(fp) = contact_force::<f64, D, FRICTION>(&inp, i, j, sep) {
@@ -924,8 +820,7 @@ where
         for i in 0..n {
             let (xi, ri) = (self.pos[i], self.radius[i]);
             let id = f64::from(self.id[i]);
-            let list = &self.partners[self.offsets[i] as usize..self.offsets[i + 1] as usize];
-            for &j in list {
+            for &j in self.list.partners(i) {
                 let j = j as usize;
                 let r2: f64 = (0..D).map(|d| (xi[d] - self.pos[j][d]).powi(2)).sum();
                 let rj = self.radius[j];

@@ -21,11 +21,14 @@
 //!   consecutive particles ([`HalfListBlock`]), cross-image pairs stored apart with their
 //!   shift; for block-parallel force loops with Newton's third law that are bit-identical
 //!   for any thread count (the `dem` CPU backend's list).
+//! - [`GhostedList`]: one rank's particles in a spatial decomposition over MPI ranks, with
+//!   ghost copies from the neighbouring regions and full lists sorted by global index (the
+//!   distributed runs of `dem` and `md`, whose results do not depend on the rank count).
 //! - GPU: [`GpuCellList`] (device-resident sorted cells whose buffers other kernels bind,
 //!   plus [`CELLS_WGSL`] helper functions), [`GpuNeighborList`] (CSR count-then-fill) and
 //!   [`GpuNeighborSearch`] (the [`NeighborSearch`] trait on the GPU).
 //!
-//! All of them but [`BlockedHalfList`] implement [`NeighborSearch`]. [`Neighbors`] picks the
+//! All of them but [`BlockedHalfList`] and [`GhostedList`] implement [`NeighborSearch`]. [`Neighbors`] picks the
 //! recommended one (sorted cells, or the GPU search) from a [`simkit_backend::Backend`]
 //! value, built like every simkit simulation:
 //! `Neighbors::new(&grid, &Config::default(), backend)`.
@@ -58,6 +61,7 @@
 mod blocked;
 mod brute;
 mod config;
+mod ghosted;
 #[cfg(feature = "gpu")]
 mod gpu;
 mod grid;
@@ -72,6 +76,7 @@ mod verlet;
 pub use blocked::{BlockedHalfList, HalfListBlock};
 pub use brute::BruteForce;
 pub use config::Config;
+pub use ghosted::GhostedList;
 #[cfg(feature = "gpu")]
 pub use gpu::{
     AnyGpuCellList, CELLS_WGSL, GPU_LOOP_RESERVE, GPU_MAX_CELLS_PER_AXIS, GPU_MAX_PER_CELL,
