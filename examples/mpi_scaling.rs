@@ -8,6 +8,7 @@
 //! RAYON_NUM_THREADS=1 mpirun -np 2 -x RAYON_NUM_THREADS target/release/examples/mpi_scaling lattice-gas
 //! RAYON_NUM_THREADS=1 mpirun -np 2 -x RAYON_NUM_THREADS target/release/examples/mpi_scaling pp-coulomb
 //! RAYON_NUM_THREADS=1 mpirun -np 2 -x RAYON_NUM_THREADS target/release/examples/mpi_scaling dem
+//! RAYON_NUM_THREADS=1 mpirun -np 2 -x RAYON_NUM_THREADS target/release/examples/mpi_scaling md
 //! ```
 //! `benches/peers/mpi_scaling.sh` alternates 1 and 2 ranks and prints the efficiencies.
 //! Problems: `rd` — Gray–Scott f64 (`F = 0.04`, `k = 0.06`, `Du = 1`, `Dv = 0.5`, explicit
@@ -17,7 +18,10 @@
 //! electrons, f64, symplectic Euler, replicated data (`n (n - 1)` interactions per step);
 //! `dem` — the granular pile of the LAMMPS deck (`nx x ny x nz` grains on a lattice of
 //! spacing 1.05, periodic x and y, a floor, gravity, friction, `dt = 1e-4`; default
-//! 200,000 grains), spatial decomposition along x and y.
+//! 200,000 grains), spatial decomposition along x and y; `md` — LAMMPS's `in.lj` liquid
+//! (`cells^3` FCC cells at density 0.8442, T = 1.44, cutoff 2.5, skin 0.3, `dt = 0.005`,
+//! f64, velocity Verlet; default 20 cells, 32,000 atoms), spatial decomposition along x and
+//! y.
 //! Each run takes a few warm-up steps, then times `steps` steps between barriers.
 
 use std::process::ExitCode;
@@ -30,6 +34,7 @@ use simkit::backend::comm::Comm;
 use simkit::dem::scenes::granular_box;
 use simkit::dem::{Config as DemConfig, DistributedDem};
 use simkit::lattice_gas::{Config as LgConfig, DistributedLatticeGas, Lattice};
+use simkit::md::{Config as MdConfig, DistributedMd, PairParams, PairTable, scenes as md_scenes};
 use simkit::pp_coulomb::scenes::plasma_box;
 use simkit::pp_coulomb::units::PhysicalInputs;
 use simkit::pp_coulomb::{Config as PpConfig, DistributedCoulomb, Integrator};
@@ -78,6 +83,12 @@ enum Problem {
         /// Lattice sites along z (layers)
         #[arg(long, default_value_t = 20)]
         nz: usize,
+    },
+    /// LAMMPS's in.lj Lennard-Jones liquid (f64, velocity Verlet), spatial decomposition
+    Md {
+        /// FCC unit cells per side (4 cells^3 atoms; 20 = the 32,000 atoms of in.lj)
+        #[arg(long, default_value_t = 20)]
+        cells: usize,
     },
     /// Direct-sum Coulomb (f64) of the source's plasma, replicated data
     PpCoulomb {
@@ -159,6 +170,18 @@ fn run(args: &Args) -> Result<()> {
             let mut run = DistributedDem::new(&scene, &config, comm.clone())?;
             let n = scene.particles().len();
             time(&comm, args, "dem", n, n as f64, "particle-steps/s", |k| {
+                run.step(k)
+            })
+        }
+        Problem::Md { cells } => {
+            let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5))?;
+            // The velocity seed of in.lj (the one `scenes::lj_melt` uses).
+            let system = md_scenes::fcc_lattice([cells; 3], 0.8442, 1.44, table, &[0], 87287)?;
+            let config = MdConfig::with_dt(0.005);
+            let mut run = DistributedMd::new(&system, &config, comm.clone())?;
+            let n = system.particle_count();
+            drop(system);
+            time(&comm, args, "md", n, n as f64, "atom-steps/s", |k| {
                 run.step(k)
             })
         }

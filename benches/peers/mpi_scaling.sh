@@ -5,8 +5,8 @@
 # the parallel efficiency t(1) / (2 t(2)), printed with the date and the load.
 # Usage (from the repository root): sh benches/peers/mpi_scaling.sh [ROUNDS]
 # Default 3 rounds: rd Gray–Scott f64 4096^2 (100 steps), lattice-gas FHP-I 4096^2 (400
-# steps), pp-coulomb f64 N = 50,000 (3 steps), dem granular pile N = 200,000 (200 steps)
-# through examples/mpi_scaling (built here with
+# steps), pp-coulomb f64 N = 50,000 (3 steps), dem granular pile N = 200,000 (200 steps),
+# md in.lj N = 32,000 (200 steps) through examples/mpi_scaling (built here with
 # the `mpi` feature), and LAMMPS on benches/peers/dem_gran3d.lmp (2000 steps; skipped
 # without `lmp`). Needs mpirun (Debian: openmpi-bin libopenmpi-dev libclang-dev); quiet
 # machines only: check `uptime` first. Shared functions: benches/peers/lib.sh.
@@ -54,6 +54,7 @@ row "rd Gray–Scott f64 4096^2, 100 steps" --steps 100 rd --size 4096
 row "lattice-gas FHP-I 4096^2, 400 steps" --steps 400 lattice-gas --size 4096
 row "pp-coulomb f64 N = 50,000, 3 steps" --steps 3 --warmup 1 pp-coulomb --n 50000
 row "dem granular pile N = 200,000, 200 steps" --steps 200 dem --nx 100 --ny 100 --nz 20
+row "md in.lj N = 32,000, 200 steps" --steps 200 md --cells 20
 if lammps_ensure 2>/dev/null; then
   _l1=""
   _l2=""

@@ -470,7 +470,7 @@ where
         let r_max = prep.cutoff / 2.0;
         let periodic_z = (D == 3 && prep.periodic[2]).then_some((prep.lo[2], prep.len[2]));
         Ok(Self {
-            list: GhostedList::new(domain, periodic_z, prep.cutoff, prep.skin)?,
+            list: GhostedList::new(domain, periodic_z, range)?,
             time: 0.0,
             started: false,
             steps: 0,

@@ -16,6 +16,9 @@
 //! - [`System`]: box, species masses, pair table, particles (validated).
 //! - [`Md`]: the run, `Md::new(&system, &config, backend)`, implementing
 //!   [`simkit_backend::Simulation`] and [`simkit_backend::Restart`].
+//! - [`DistributedMd`]: the CPU run (`f64`) over the ranks of a
+//!   [`simkit_backend::comm::Comm`] (MPI with the `mpi` feature) by spatial decomposition,
+//!   the same bits on any rank count, checkpoints in `Md`'s format.
 //! - [`Diagnostics`]: kinetic, potential and total energy, virial pressure, per-species
 //!   temperature.
 //! - [`time_step_guide`]: the default and largest safe time step from the stiffest pair.
@@ -70,6 +73,7 @@
 mod config;
 mod cpu;
 mod diagnostics;
+mod distributed;
 mod engine;
 #[cfg(feature = "gpu")]
 mod gpu;
@@ -85,6 +89,7 @@ pub use config::{
     StepGuide, time_step_guide,
 };
 pub use diagnostics::Diagnostics;
+pub use distributed::DistributedMd;
 pub use input::{Dim, MAX_PARTICLES, System};
 pub use sim::{Md, State};
 pub use table::{

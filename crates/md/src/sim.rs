@@ -78,6 +78,51 @@ struct Payload {
     list: Vec<f64>,
 }
 
+/// A checkpoint in the format of [`Md`]'s `Restart::checkpoint`: the system, the settings,
+/// the engine state and the positions of the last list build (flat, system order), under
+/// the model string `model`.
+pub(crate) fn encode_checkpoint(
+    system: &System,
+    config: &Config,
+    model: &str,
+    engine: EngineState,
+    list: Vec<f64>,
+) -> Result<Vec<u8>> {
+    let payload = Payload {
+        system: system.clone(),
+        config: ConfigRecord::from(config),
+        engine,
+        list,
+    };
+    checkpoint::encode(
+        env!("CARGO_PKG_NAME"),
+        env!("CARGO_PKG_VERSION"),
+        model,
+        &payload,
+    )
+}
+
+/// What [`encode_checkpoint`] wrote: the model string, the system (validated again), the
+/// settings, the engine state and the list-build positions.
+pub(crate) type Decoded = (String, System, Config, EngineState, Vec<f64>);
+
+/// Reads a checkpoint of any model of this crate and validates its system.
+pub(crate) fn decode_checkpoint(bytes: &[u8]) -> Result<Decoded> {
+    let (written, payload): (String, Payload) =
+        checkpoint::decode_any_model(bytes, env!("CARGO_PKG_NAME"), env!("CARGO_PKG_VERSION"))?;
+    payload
+        .system
+        .validate()
+        .map_err(|e| Error::checkpoint(format!("the stored system is not valid: {e}")))?;
+    Ok((
+        written,
+        payload.system,
+        Config::from(payload.config),
+        payload.engine,
+        payload.list,
+    ))
+}
+
 /// Host-side snapshot: time, positions, velocities (`[x, y, 0]` in 2D) and species, in the
 /// system's particle order.
 #[derive(Clone, Debug, PartialEq)]
@@ -241,47 +286,27 @@ impl Simulation for Md {
 /// wrote it.
 impl Restart for Md {
     fn checkpoint(&mut self) -> Result<Vec<u8>> {
-        let payload = Payload {
-            system: self.system.clone(),
-            config: ConfigRecord::from(&self.config),
-            engine: self.engine.save()?,
-            list: self.engine.list_positions(),
-        };
-        checkpoint::encode(
-            env!("CARGO_PKG_NAME"),
-            env!("CARGO_PKG_VERSION"),
+        let engine = self.engine.save()?;
+        encode_checkpoint(
+            &self.system,
+            &self.config,
             &self.engine.model(),
-            &payload,
+            engine,
+            self.engine.list_positions(),
         )
     }
 
     fn resume(bytes: &[u8], backend: Backend<'_>) -> Result<Self> {
-        let (written, payload): (String, Payload) =
-            checkpoint::decode_any_model(bytes, env!("CARGO_PKG_NAME"), env!("CARGO_PKG_VERSION"))?;
-        let fail = |reason: String| Error::checkpoint(reason);
-        payload
-            .system
-            .validate()
-            .map_err(|e| fail(format!("the stored system is not valid: {e}")))?;
-        let config = Config::from(payload.config);
-        let want = model_name(
-            backend.is_gpu(),
-            config.precision,
-            payload.system.dim().axes(),
-        );
+        let (written, system, config, engine, list) = decode_checkpoint(bytes)?;
+        let want = model_name(backend.is_gpu(), config.precision, system.dim().axes());
         if written != want {
-            return Err(fail(format!(
+            return Err(Error::checkpoint(format!(
                 "holds a {} run, and {} on this backend would be a {want} run; resume it on \
                  the backend that wrote it",
                 written,
                 backend.name()
             )));
         }
-        Self::build(
-            &payload.system,
-            &config,
-            backend,
-            Some((&payload.engine, &payload.list)),
-        )
+        Self::build(&system, &config, backend, Some((&engine, &list)))
     }
 }

@@ -1,7 +1,8 @@
 //! Property tests: every public entry point driven with arbitrary values (NaN, ±inf, 0,
 //! negative, huge, mismatched lengths) returns `Ok` with a finite result or a clear `Err`,
-//! never a panic. About 11 500 cases (60 of them on the GPU), reproducible: each runner uses a fixed ChaCha seed
-//! (`SEED`) and no failure persistence, so a failure shows the same case on every run.
+//! never a panic. About 13 000 cases (60 of them on the GPU, 1500 on `DistributedMd`),
+//! reproducible: each runner uses a fixed ChaCha seed (`SEED`) and no failure persistence,
+//! so a failure shows the same case on every run.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -9,9 +10,11 @@ use proptest::prelude::*;
 use proptest::test_runner::{
     Config as RunnerConfig, RngAlgorithm, TestCaseError, TestRng, TestRunner,
 };
+use simkit_backend::comm::Comm;
 use simkit_backend::{Backend, Error, Precision, Restart, Simulation};
 use simkit_md::{
-    Config, Dim, GpuKernel, Integrator, Langevin, Md, PairParams, PairTable, System, scenes,
+    Config, Dim, DistributedMd, GpuKernel, Integrator, Langevin, Md, PairParams, PairTable, System,
+    scenes,
 };
 
 const SEED: [u8; 32] = *b"simkit-md robustness seed 2026!!";
@@ -276,6 +279,138 @@ fn runs_step_to_a_finite_state_or_a_clear_error() {
     assert!(stepped >= 500, "{stepped}");
 }
 
+/// `DistributedMd` (one process) on the same arbitrary runs: it accepts exactly what `Md`
+/// accepts in `f64` (and refuses `f32` clearly), and steps to a finite state or a clear
+/// error.
+#[test]
+fn distributed_runs_step_to_a_finite_state_or_a_clear_error() {
+    let stepped = AtomicUsize::new(0);
+    run(
+        1500,
+        (
+            dim(),
+            params(),
+            prop::collection::vec(
+                (
+                    0u32..2,
+                    vec3(),
+                    [pos_num(-2.0, 2.0), pos_num(-2.0, 2.0), pos_num(-2.0, 2.0)],
+                ),
+                0..6,
+            ),
+            (
+                prop::option::of(pos_num(0.0005, 0.05)),
+                pos_num(0.0, 0.5),
+                0u32..20,
+                integrator(),
+                prop_oneof![3 => Just(Precision::F64), 1 => Just(Precision::F32)],
+                any::<bool>(),
+                any::<bool>(),
+            ),
+            any::<[bool; 3]>(),
+            0u32..40,
+            (
+                prop::option::of((pos_num(0.0, 3.0), pos_num(0.0, 10.0), any::<u32>())),
+                any::<bool>(),
+            ),
+        ),
+        |(
+            dim,
+            p,
+            particles,
+            (dt, skin, check_every, integrator, precision, shift, allow),
+            periodic,
+            steps,
+            (thermostat, frozen),
+        )| {
+            let table = match PairTable::uniform(2, p) {
+                Ok(t) => t,
+                Err(e) => return clear(&e),
+            };
+            let mut sys =
+                match System::new(dim, [0.0; 3], [8.0; 3], periodic, vec![1.0, 2.0], table) {
+                    Ok(s) => s,
+                    Err(e) => return clear(&e),
+                };
+            for &(s, mut x, mut v) in &particles {
+                if dim == Dim::Two {
+                    x[2] = 0.0;
+                    v[2] = 0.0;
+                }
+                if let Err(e) = sys.add_particle(s, x, v) {
+                    clear(&e)?;
+                }
+            }
+            if let Err(e) = sys.set_frozen(1, frozen) {
+                clear(&e)?;
+            }
+            let config = Config {
+                dt,
+                integrator,
+                gpu_kernel: GpuKernel::default(),
+                precision,
+                skin,
+                check_every,
+                shift,
+                allow_unstable_dt: allow,
+                thermostat: thermostat.map(|(t, g, seed)| Langevin::new(t, g, seed)),
+            };
+            let made = DistributedMd::new(&sys, &config, Comm::serial());
+            if precision == Precision::F64 {
+                let md = Md::new(&sys, &config, Backend::Cpu);
+                prop_assert_eq!(
+                    md.is_ok(),
+                    made.is_ok(),
+                    "Md: {:?}, DistributedMd: {:?}",
+                    md.err(),
+                    made.as_ref().err()
+                );
+            }
+            let mut sim = match made {
+                Ok(m) => m,
+                Err(e) => return clear(&e),
+            };
+            stepped.fetch_add(1, Ordering::Relaxed);
+            match sim.step(steps) {
+                Ok(()) => prop_assert_eq!(sim.steps_done(), u64::from(steps)),
+                Err(e) => {
+                    prop_assert!(matches!(e, Error::BlowUp { .. }), "{e}");
+                    clear(&e)?;
+                }
+            }
+            let s = sim
+                .state()
+                .map_err(|e| TestCaseError::fail(e.to_string()))?;
+            prop_assert!(
+                s.positions
+                    .iter()
+                    .chain(&s.velocities)
+                    .flatten()
+                    .all(|x| x.is_finite()),
+                "non-finite state returned as Ok"
+            );
+            let d = sim
+                .diagnostics()
+                .map_err(|e| TestCaseError::fail(e.to_string()))?;
+            prop_assert!(d.kinetic.is_finite());
+            let f = sim
+                .forces()
+                .map_err(|e| TestCaseError::fail(e.to_string()))?;
+            prop_assert!(f.iter().flatten().all(|x| x.is_finite()));
+            let bytes = sim
+                .checkpoint()
+                .map_err(|e| TestCaseError::fail(e.to_string()))?;
+            let again = DistributedMd::resume(&bytes, Comm::serial())
+                .map_err(|e| TestCaseError::fail(e.to_string()))?;
+            prop_assert_eq!(again.steps_done(), sim.steps_done());
+            Ok(())
+        },
+    );
+    let stepped = stepped.into_inner();
+    eprintln!("{stepped} of 1500 cases built and stepped");
+    assert!(stepped >= 150, "{stepped}");
+}
+
 #[cfg(feature = "gpu")]
 #[test]
 fn gpu_runs_step_to_a_finite_state_or_a_clear_error() {
@@ -378,6 +513,14 @@ fn garbled_and_truncated_checkpoints_are_refused() {
                     prop_assert!(false, "accepted a damaged checkpoint");
                     finite_state(&mut m)?;
                 }
+                Err(e) => {
+                    prop_assert!(matches!(e, Error::Checkpoint { .. }), "{e}");
+                    clear(&e)?;
+                }
+            }
+            // The same bytes are Md's format for DistributedMd too.
+            match DistributedMd::resume(&b, Comm::serial()) {
+                Ok(_) => prop_assert!(false, "DistributedMd accepted a damaged checkpoint"),
                 Err(e) => {
                     prop_assert!(matches!(e, Error::Checkpoint { .. }), "{e}");
                     clear(&e)?;

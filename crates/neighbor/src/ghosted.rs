@@ -2,11 +2,15 @@
 //! with ghost copies of the particles of the neighbouring regions.
 
 use bytemuck::Pod;
+use rayon::prelude::*;
 
 use simkit_backend::comm::{Comm, GhostPlan, ParticleDomain};
 use simkit_backend::{Error, Result};
 
-use crate::{CellGrid, ListKind, VerletList};
+use crate::{CellGrid, SortedCells};
+
+/// Owned particles per rayon task of the list build.
+const CHUNK: usize = 1024;
 
 /// One rank's particles in a spatial decomposition ([`ParticleDomain`]) and their full
 /// neighbour list, for distributed particle codes whose results must not depend on the rank
@@ -14,7 +18,7 @@ use crate::{CellGrid, ListKind, VerletList};
 ///
 /// [`GhostedList::build`] takes the rank's owned particles (their positions at the list
 /// build and their global indices), fetches ghost copies of every particle and periodic
-/// image within the list range `cutoff + skin` of the rank's region ([`ParticleDomain::ghosts`]:
+/// image within the list range (interaction cutoff plus skin) of the rank's region ([`ParticleDomain::ghosts`]:
 /// the shift pattern over x and y; a periodic axis beyond them, z in 3D, gets its images
 /// on the rank itself), and lists for every owned particle all local entries within the
 /// list range, **sorted by global index**. A force loop that adds each particle's pair
@@ -29,9 +33,9 @@ use crate::{CellGrid, ListKind, VerletList};
 /// use simkit_neighbor::GhostedList;
 /// # fn main() -> simkit_backend::Result<()> {
 /// let comm = Comm::serial();
-/// // A periodic 8 x 8 square, list range 1.0 + 0.2.
+/// // A periodic 8 x 8 square, list range 1.2.
 /// let domain = ParticleDomain::new([0.0; 2], [8.0; 2], [true; 2], 1.2, None, 1)?;
-/// let mut list = GhostedList::<2>::new(domain, None, 1.0, 0.2)?;
+/// let mut list = GhostedList::<2>::new(domain, None, 1.2)?;
 /// let x = [[0.3, 4.0], [7.8, 4.0], [4.0, 4.0]];
 /// list.build(&comm, &x, &[10, 11, 12])?;
 /// // Particle 10 sees 11 through the periodic face (a ghost image at x = -0.2).
@@ -49,8 +53,8 @@ pub struct GhostedList<const D: usize> {
     domain: ParticleDomain,
     /// A periodic axis beyond x and y: its lower corner and length.
     z: Option<(f64, f64)>,
-    cutoff: f64,
-    skin: f64,
+    /// The list range (interaction cutoff plus skin).
+    range: f64,
     plan: GhostPlan,
     /// Images along the periodic z, after the exchanged ghosts: the entry each copies and
     /// its shift.
@@ -65,18 +69,13 @@ impl<const D: usize> GhostedList<D>
 where
     [f64; D]: Pod,
 {
-    /// A list over `domain` (whose halo must be at least `cutoff + skin`) for pairs within
-    /// `cutoff`, stored up to `cutoff + skin`; `periodic_z = Some((lo, len))` when the third
-    /// axis of a 3D box is periodic.
+    /// A list over `domain` (whose halo must be at least `range`) of the pairs within the
+    /// list range `range` (the interaction cutoff plus a skin); `periodic_z = Some((lo,
+    /// len))` when the third axis of a 3D box is periodic.
     ///
-    /// Errors: `D` other than 2 or 3, a `periodic_z` in 2D, a cutoff or skin that is not
-    /// finite and positive (skin: non-negative), or a halo shorter than the list range.
-    pub fn new(
-        domain: ParticleDomain,
-        periodic_z: Option<(f64, f64)>,
-        cutoff: f64,
-        skin: f64,
-    ) -> Result<Self> {
+    /// Errors: `D` other than 2 or 3, a `periodic_z` in 2D, a range that is not finite and
+    /// positive, or a halo shorter than the range.
+    pub fn new(domain: ParticleDomain, periodic_z: Option<(f64, f64)>, range: f64) -> Result<Self> {
         if D != 2 && D != 3 {
             return Err(Error::invalid("dimension", D, "must be 2 or 3"));
         }
@@ -87,28 +86,24 @@ where
                 "a 2D box has no third axis; pass None",
             ));
         }
-        if !(cutoff.is_finite() && cutoff > 0.0 && skin.is_finite() && skin >= 0.0) {
+        if !(range.is_finite() && range > 0.0) {
             return Err(Error::invalid(
-                "cutoff and skin",
-                format!("{cutoff}, {skin}"),
-                "the cutoff must be finite and > 0, the skin finite and >= 0",
+                "list range",
+                range,
+                "must be finite and > 0",
             ));
         }
-        if domain.halo() < cutoff + skin {
+        if domain.halo() < range {
             return Err(Error::invalid(
                 "halo of the domain",
                 domain.halo(),
-                format!(
-                    "must be at least the list range cutoff + skin = {}",
-                    cutoff + skin
-                ),
+                format!("must be at least the list range {range}"),
             ));
         }
         Ok(Self {
             domain,
             z: periodic_z,
-            cutoff,
-            skin,
+            range,
             plan: GhostPlan::default(),
             z_images: Vec::new(),
             owned: 0,
@@ -152,6 +147,12 @@ where
         }
     }
 
+    /// The lists in CSR form, `(offsets, partners)`: owned particle `i` has partners
+    /// `partners[offsets[i]..offsets[i + 1]]` (local entries).
+    pub fn csr(&self) -> (&[u32], &[u32]) {
+        (&self.offsets, &self.partners)
+    }
+
     /// Makes the ghosts and the lists anew from the owned particles' positions `reference`
     /// (inside this rank's region along x and y; wrapped on periodic axes) and global
     /// indices `ids`. Collective; an error on one rank is an error on every rank.
@@ -192,7 +193,7 @@ where
         )?;
         self.z_images.clear();
         if let (3, Some((z0, lz))) = (D, self.z) {
-            let range = self.cutoff + self.skin;
+            let range = self.range;
             for k in 0..seeds.len() {
                 let z = seeds[k][2];
                 for (near, shift) in [(z < z0 + range, lz), (z >= z0 + lz - range, -lz)] {
@@ -215,13 +216,23 @@ where
     }
 
     /// The full list of every owned particle within the list range at `x` (all local
-    /// entries), partners sorted by global index.
+    /// entries), partners sorted by global index: cells a list range wide over the local
+    /// entries, and each owned particle's shell of cells searched directly (the ghosts
+    /// need no lists).
     fn build_lists(&mut self, x: &[[f64; D]]) -> Result<()> {
         self.offsets.clear();
         self.offsets.push(0);
         self.partners.clear();
-        if self.owned == 0 {
+        let n = self.owned;
+        if n == 0 {
             return Ok(());
+        }
+        if x.len() > u32::MAX as usize {
+            return Err(Error::invalid(
+                "local particles",
+                x.len(),
+                "owned plus ghosts must fit u32 indices; use more ranks",
+            ));
         }
         let (mut lo, mut hi) = ([f64::INFINITY; D], [f64::NEG_INFINITY; D]);
         for p in x {
@@ -230,19 +241,42 @@ where
                 hi[d] = hi[d].max(p[d]);
             }
         }
-        let range = self.cutoff + self.skin;
+        let range = self.range;
         let lengths: [f64; D] = std::array::from_fn(|d| (hi[d] - lo[d]) + range);
-        let grid = CellGrid::new(lo, lengths, [false; D], self.cutoff)?;
-        let mut list = VerletList::new(&grid, self.skin, ListKind::Full)?;
-        list.build(x)?;
+        let grid = CellGrid::new(lo, lengths, [false; D], range)?;
+        let mut cells = SortedCells::new(&grid);
+        cells.build(x)?;
         let ids = &self.ids;
-        let mut mine: Vec<u32> = Vec::new();
-        for i in 0..self.owned {
-            mine.clear();
-            mine.extend_from_slice(list.list_of(i).unwrap_or(&[]));
-            mine.sort_by_key(|&j| ids[j as usize]);
-            self.partners.extend_from_slice(&mine);
-            self.offsets.push(self.partners.len() as u32);
+        let parts: Vec<(Vec<u32>, Vec<usize>)> = (0..n.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|c| {
+                let (mut partners, mut ends, mut keys) = (Vec::new(), Vec::new(), Vec::new());
+                for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                    // (global index, local index) packed into one integer.
+                    keys.clear();
+                    cells.for_each_neighbor_of(i, |j, _, _| {
+                        keys.push((u64::from(ids[j]) << 32) | j as u64);
+                    })?;
+                    keys.sort_unstable();
+                    partners.extend(keys.iter().map(|&k| k as u32));
+                    ends.push(partners.len());
+                }
+                Ok((partners, ends))
+            })
+            .collect::<Result<_>>()?;
+        for (partners, ends) in parts {
+            let base = self.partners.len();
+            self.partners.extend_from_slice(&partners);
+            for e in ends {
+                let end = u32::try_from(base + e).map_err(|_| {
+                    Error::invalid(
+                        "neighbour-list entries",
+                        base + e,
+                        "must fit u32 offsets; use more ranks or a smaller skin",
+                    )
+                })?;
+                self.offsets.push(end);
+            }
         }
         Ok(())
     }
@@ -294,7 +328,7 @@ mod tests {
         let comm = Comm::serial();
         let l = 6.0;
         let domain = ParticleDomain::new([0.0; 2], [l; 2], [true; 2], 1.5, None, 1).unwrap();
-        let mut list = GhostedList::<3>::new(domain, Some((0.0, l)), 1.2, 0.3).unwrap();
+        let mut list = GhostedList::<3>::new(domain, Some((0.0, l)), 1.5).unwrap();
         let x: Vec<[f64; 3]> = (0..200u32)
             .map(|k| {
                 let u = |s: u32| l * f64::from(simkit_backend::rng::rng_uniform(9, s, k));
@@ -345,10 +379,10 @@ mod tests {
     #[test]
     fn bad_settings_are_refused() {
         let domain = ParticleDomain::new([0.0; 2], [6.0; 2], [false; 2], 1.0, None, 1).unwrap();
-        assert!(GhostedList::<3>::new(domain.clone(), None, 1.2, 0.0).is_err());
-        assert!(GhostedList::<2>::new(domain.clone(), Some((0.0, 6.0)), 0.5, 0.1).is_err());
-        assert!(GhostedList::<2>::new(domain.clone(), None, f64::NAN, 0.1).is_err());
-        let mut ok = GhostedList::<2>::new(domain, None, 0.8, 0.1).unwrap();
+        assert!(GhostedList::<3>::new(domain.clone(), None, 1.2).is_err());
+        assert!(GhostedList::<2>::new(domain.clone(), Some((0.0, 6.0)), 0.6).is_err());
+        assert!(GhostedList::<2>::new(domain.clone(), None, f64::NAN).is_err());
+        let mut ok = GhostedList::<2>::new(domain, None, 0.9).unwrap();
         let comm = Comm::serial();
         assert!(ok.build(&comm, &[[1.0, 1.0]], &[]).is_err());
         let mut v = vec![[0.0; 2]; 3];

@@ -46,7 +46,7 @@ use crate::{Config, Diagnostics, State, System};
 
 pub(crate) use kernel::Kernel;
 
-const AXES: [&str; 3] = ["x", "y", "z"];
+pub(crate) const AXES: [&str; 3] = ["x", "y", "z"];
 
 /// Particles per rayon task in the per-particle passes (kick, drift, displacement).
 const MIN_LEN: usize = 4096;
@@ -125,13 +125,8 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
         let lo: [f64; D] = std::array::from_fn(|d| lo3[d]);
         let len: [f64; D] = std::array::from_fn(|d| len3[d]);
         let periodic: [bool; D] = std::array::from_fn(|d| per3[d]);
-        // The list range is `max r_c + skin`, less where a periodic length is below twice
-        // that (the system guarantees at least twice `max r_c`): a pair must be within
-        // range in one image only.
         let r_c = system.table().max_cutoff();
-        let range = (0..D)
-            .filter(|&d| periodic[d])
-            .fold(r_c + config.skin, |r, d| r.min(0.5 * len[d]));
+        let range = list_range(system, config.skin);
         let list = BlockedHalfList::new(lo, len, periodic, range, n)?;
         let unflat = |v: &[f64], what: &str| -> Result<Vec<[T; D]>> {
             if Some(v.len()) != n.checked_mul(D) {
@@ -750,10 +745,23 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
     }
 }
 
+/// The neighbour-list range of `system` with `skin`: `max r_c + skin`, less where a
+/// periodic length is below twice that (the system guarantees at least twice `max r_c`):
+/// a pair must be within range in one image only. The list is rebuilt when a particle has
+/// moved more than half of `range - max r_c`.
+pub(crate) fn list_range(system: &System, skin: f64) -> f64 {
+    let (len, per) = (system.lengths(), system.periodic());
+    (0..system.dim().axes())
+        .filter(|&d| per[d])
+        .fold(system.table().max_cutoff() + skin, |r, d| {
+            r.min(0.5 * len[d])
+        })
+}
+
 /// Wraps the periodic coordinates of `x` into `[lo, hi)` (one box length at most: a
 /// particle that moved further stays outside, and the check reports it).
 #[inline(always)]
-fn wrap<T: Real, const D: usize>(
+pub(crate) fn wrap<T: Real, const D: usize>(
     x: &mut [T; D],
     lo: [T; D],
     hi: [T; D],
@@ -776,14 +784,14 @@ fn wrap<T: Real, const D: usize>(
 
 /// Whether the squared displacement `d2` exceeds `limit` or is NaN.
 #[inline]
-fn beyond(d2: f64, limit: f64) -> bool {
+pub(crate) fn beyond(d2: f64, limit: f64) -> bool {
     d2 > limit || d2.is_nan()
 }
 
 /// Mirrors a coordinate that crossed a closed face back into the box and flips the
 /// velocity component.
 #[inline(always)]
-fn reflect<T: Real>(x: &mut T, v: &mut T, lo: T, hi: T) {
+pub(crate) fn reflect<T: Real>(x: &mut T, v: &mut T, lo: T, hi: T) {
     if *x < lo {
         *x = lo + lo - *x;
         *v = -*v;
@@ -801,7 +809,7 @@ fn kick<T: Real, const D: usize>(v: &mut [[T; D]], a: &[[T; D]], h: T) {
 }
 
 /// `v += a h` (the kick of every integrator).
-fn kick_slice<T: Real, const D: usize>(v: &mut [[T; D]], a: &[[T; D]], h: T) {
+pub(crate) fn kick_slice<T: Real, const D: usize>(v: &mut [[T; D]], a: &[[T; D]], h: T) {
     for (v, a) in v.iter_mut().zip(a) {
         for d in 0..D {
             v[d] += a[d] * h;

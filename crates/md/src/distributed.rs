@@ -1,0 +1,1394 @@
+//! [`DistributedMd`]: the CPU run over the ranks of a [`Comm`] by spatial decomposition,
+//! with results that do not depend on the rank count.
+
+use std::hash::{Hash, Hasher};
+
+use rayon::prelude::*;
+
+use simkit_backend::comm::{Comm, ParticleDomain};
+use simkit_backend::guard::{blow_up, chunks};
+use simkit_backend::{Error, Precision, Result, Simulation, max_or_nan};
+use simkit_neighbor::GhostedList;
+
+use crate::cpu::{AXES, Kernel, beyond, kick_slice, list_range, reflect, wrap};
+use crate::diagnostics::assemble;
+use crate::engine::EngineState;
+use crate::sim::{decode_checkpoint, encode_checkpoint, model_name};
+use crate::table::{PairCoeff, pair_force_energy};
+use crate::thermostat::{gaussians, ou_coefficients};
+use crate::{Config, Diagnostics, Dim, Integrator, State, System};
+
+/// Owned particles per rayon task of the per-particle passes.
+const CHUNK: usize = 1024;
+
+/// A particle as it travels between ranks (migration, gathers): system index, position,
+/// velocity, acceleration, force (three components each, `z = 0` in 2D), then `phi` and
+/// `r . F` summed over its pairs.
+type Record = [f64; 16];
+
+/// The likely cause of every blow-up the check finds (as [`crate::Md`]'s CPU backend).
+const CAUSE: &str = "a time step too large for the stiffest pair (see time_step_guide) or \
+                     particles started (nearly) on top of each other; lower Config::dt";
+
+/// Molecular dynamics over the ranks of a [`Comm`] (CPU, `f64`): spatial decomposition
+/// with ghost particles, results independent of the rank count.
+///
+/// The box is cut along x and y into one region per rank ([`ParticleDomain`], the
+/// factorisation with the smallest faces; z is not cut), each at least the neighbour-list
+/// range wide: `max r_c + skin` ([`Config::skin`]), capped as in [`crate::Md`] at half the
+/// shortest periodic length. A rank integrates the particles in its region (its *owned*
+/// particles) and keeps ghost copies of the particles within the list range of its region,
+/// received from its 4 neighbours in the shift pattern (x, then y) and refreshed every
+/// step. At every list build (when some particle anywhere moved more than half the skin: a
+/// global maximum) the periodic coordinates are wrapped, particles migrate to the rank that
+/// now owns them, and the ghosts and lists are made anew.
+///
+/// **Results do not depend on the rank count, bit for bit.** Each owned particle sums its
+/// pair forces in increasing system index of the partner, from a full list (each pair is
+/// computed from both ends: twice the pair work of the single-process half list), with
+/// the pair law of the single-process CPU backend ([`crate::pair_force_energy`], the same
+/// function), and every per-particle update is the arithmetic of that backend. A periodic
+/// image gets its box length added by the rank that sends it, the same way for any rank
+/// count. So on 1, 2, 3 or 4 ranks the positions and velocities are the same bits, and
+/// the diagnostics (per-particle terms gathered and summed in system order) too. They are
+/// *not* the bits of [`crate::Md`], which sums each particle's pairs in cell order with
+/// the reactions of its half list: the two agree to rounding at first, and as any two
+/// codes that round differently they part like trajectories of a chaotic system over long
+/// runs, with the same statistics.
+///
+/// Offered: velocity Verlet and leapfrog ([`Integrator`]), periodic and closed
+/// (reflecting) axes in 2D and 3D, any pair table, the energy shift, frozen species and
+/// the Langevin thermostat (its random numbers are keyed by step and system index, so
+/// every rank count draws the same ones). `f32` and the GPU are not offered here (use
+/// [`crate::Md`]).
+///
+/// Every method that takes `&mut self`, and the constructors, are collective: all ranks
+/// call them in the same order with the same arguments (the constructors check that the
+/// ranks' systems and settings agree).
+///
+/// ```
+/// use simkit_backend::comm::Comm;
+/// use simkit_backend::Simulation;
+/// use simkit_md::{Config, DistributedMd, PairParams, PairTable, scenes};
+/// # fn main() -> simkit_backend::Result<()> {
+/// let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5))?;
+/// let system = scenes::fcc_lattice([4; 3], 0.8442, 1.44, table, &[0], 1)?;
+/// // `Comm::mpi()?` under `mpirun -np P` (feature `mpi`); here one process.
+/// let mut md = DistributedMd::new(&system, &Config::with_dt(0.005), Comm::serial())?;
+/// let e0 = md.diagnostics()?.total; // on every rank
+/// md.step(100)?;
+/// assert!((md.diagnostics()?.total - e0).abs() < 1e-2 * e0.abs());
+/// // Checkpoints are Md's format: they resume on any rank count, or in `Md`.
+/// let bytes = md.checkpoint()?;
+/// let mut again = DistributedMd::resume(&bytes, Comm::serial())?;
+/// md.step(10)?;
+/// again.step(10)?;
+/// assert_eq!(md.state()?, again.state()?);
+/// # Ok(())
+/// # }
+/// ```
+pub struct DistributedMd {
+    comm: Comm,
+    system: System,
+    config: Config,
+    engine: Engines,
+}
+
+/// The engine in the system's dimension.
+enum Engines {
+    Two(Engine<2>),
+    Three(Engine<3>),
+}
+
+/// Runs `$body` with `$e` bound to the engine, whatever its dimension.
+macro_rules! with_engine {
+    ($engines:expr, $e:ident => $body:expr) => {
+        match $engines {
+            Engines::Two($e) => $body,
+            Engines::Three($e) => $body,
+        }
+    };
+}
+
+impl std::fmt::Debug for DistributedMd {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("DistributedMd")
+            .field("comm", &self.comm)
+            .field("particles", &self.len())
+            .field("owned", &self.owned())
+            .field("steps", &self.steps_done())
+            .finish()
+    }
+}
+
+impl DistributedMd {
+    /// Validates the system and settings as [`crate::Md::new`] does on the CPU (the same
+    /// errors, on every rank) and builds this rank's part of the run. Collective; every
+    /// rank passes the same system and configuration.
+    ///
+    /// Errors: those of [`crate::Md::new`]; [`Precision::F32`] ([`Error::Unsupported`]:
+    /// use `Md`); more ranks than regions at least a list range wide fit in the box (fewer
+    /// ranks, a smaller skin or a larger box fix it); ranks whose systems or settings
+    /// differ. An error on one rank is an error on every rank (the others name the rank
+    /// that failed).
+    pub fn new(system: &System, config: &Config, comm: Comm) -> Result<Self> {
+        Self::build(system, config, comm, None)
+    }
+
+    /// Rebuilds a run from the bytes of [`DistributedMd::checkpoint`] (any rank count) or
+    /// of [`crate::Md`]'s `Restart::checkpoint` on the CPU in `f64`, on any rank count.
+    /// Each rank takes the particles its region held at the last list build, the lists are
+    /// made from the list-build positions, and the run continues with the bits of the
+    /// uninterrupted distributed run. Collective; every rank passes the same bytes (e.g.
+    /// from [`Comm::broadcast_from_root`] of the file rank 0 read).
+    ///
+    /// Errors: another crate's or model's checkpoint (`f32`, GPU), a truncated, corrupt or
+    /// inconsistent one (as `Md::resume`), those of [`DistributedMd::new`]. An error on one
+    /// rank is an error on every rank.
+    pub fn resume(bytes: &[u8], comm: Comm) -> Result<Self> {
+        let (system, config, engine, list) = comm.agree(decode_checkpoint(bytes).and_then(
+            |(written, system, config, e, l)| {
+                let want = model_name(false, Precision::F64, system.dim().axes());
+                if written == want {
+                    Ok((system, config, e, l))
+                } else {
+                    Err(Error::checkpoint(format!(
+                        "holds a {written} run; DistributedMd resumes {want} runs (CPU, \
+                         f64); resume it with Md on the backend that wrote it"
+                    )))
+                }
+            },
+        ))?;
+        Self::build(&system, &config, comm, Some((&engine, &list)))
+    }
+
+    fn build(
+        system: &System,
+        config: &Config,
+        comm: Comm,
+        saved: Option<(&EngineState, &Vec<f64>)>,
+    ) -> Result<Self> {
+        let dt = comm.agree(prepare(system, config))?;
+        // A digest of everything the ranks must agree on: the system and settings as a
+        // checkpoint stores them (with the state, when resuming).
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        let (state, list) = match saved {
+            Some((s, l)) => (s.clone(), l.clone()),
+            None => (
+                EngineState {
+                    steps: 0,
+                    pos: Vec::new(),
+                    vel: Vec::new(),
+                    order: Vec::new(),
+                },
+                Vec::new(),
+            ),
+        };
+        comm.agree(encode_checkpoint(system, config, "", state, list))?
+            .hash(&mut h);
+        comm.check_same(
+            h.finish(),
+            "DistributedMd inputs",
+            "every rank must pass the same system and configuration (or checkpoint)",
+        )?;
+        let engine = match system.dim() {
+            Dim::Two => Engines::Two(comm.agree(Engine::new(system, config, dt, &comm))?),
+            Dim::Three => Engines::Three(comm.agree(Engine::new(system, config, dt, &comm))?),
+        };
+        let mut sim = Self {
+            comm,
+            system: system.clone(),
+            config: *config,
+            engine,
+        };
+        let (comm, system) = (&sim.comm, &sim.system);
+        with_engine!(&mut sim.engine, e => e.start(comm, system, saved)?);
+        Ok(sim)
+    }
+
+    /// The communicator.
+    pub fn comm(&self) -> &Comm {
+        &self.comm
+    }
+
+    /// The system the run started from.
+    pub fn system(&self) -> &System {
+        &self.system
+    }
+
+    /// The settings of the run.
+    pub fn config(&self) -> &Config {
+        &self.config
+    }
+
+    /// The time step in use.
+    pub fn dt(&self) -> f64 {
+        with_engine!(&self.engine, e => e.dt)
+    }
+
+    /// Simulated time (`steps * dt`).
+    pub fn time(&self) -> f64 {
+        with_engine!(&self.engine, e => e.time())
+    }
+
+    /// Number of particles (all ranks).
+    pub fn len(&self) -> usize {
+        self.system.particle_count()
+    }
+
+    /// Whether the system has no particles.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Particles this rank owns (integrates) now.
+    pub fn owned(&self) -> usize {
+        with_engine!(&self.engine, e => e.owned)
+    }
+
+    /// Ghost copies this rank holds now (particles of its neighbours and periodic images
+    /// within the list range of its region).
+    pub fn ghosts(&self) -> usize {
+        with_engine!(&self.engine, e => e.pos.len() - e.owned)
+    }
+
+    /// Regions along x and y, `[p_x, p_y]`.
+    pub fn dims(&self) -> [usize; 2] {
+        with_engine!(&self.engine, e => e.list.domain().dims())
+    }
+
+    /// The neighbour-list range: `max r_c + skin`, capped at half the shortest periodic
+    /// length (as in [`crate::Md`]); every region is at least this wide.
+    pub fn list_range(&self) -> f64 {
+        with_engine!(&self.engine, e => e.range)
+    }
+
+    /// Neighbour-list builds so far (each with a migration), counted since this object was
+    /// made (the start counts one, a resume too).
+    pub fn list_builds(&self) -> u64 {
+        with_engine!(&self.engine, e => e.builds)
+    }
+
+    /// Energies, virial pressure and per-species temperatures of the current state (as
+    /// [`crate::Md::diagnostics`]; the per-particle terms are gathered to rank 0 and summed
+    /// in system order, so they are the same bits on any rank count), on every rank.
+    /// Collective.
+    ///
+    /// Errors: a failed exchange.
+    pub fn diagnostics(&mut self) -> Result<Diagnostics> {
+        let ns = self.system.table().n_species();
+        let sums = with_engine!(&self.engine, e => e.gather_sums(&self.comm))?;
+        let sums = self.comm.broadcast_from_root(sums)?;
+        if sums.len() != ns + 2 {
+            return Err(Error::invalid(
+                "gathered diagnostics",
+                sums.len(),
+                format!("expected {} values; the ranks disagree", ns + 2),
+            ));
+        }
+        let mut count = vec![0usize; ns];
+        for &s in self.system.species() {
+            count[s as usize] += 1;
+        }
+        Ok(assemble(
+            self.time(),
+            self.system.dim().axes(),
+            self.system.volume(),
+            &sums[..ns],
+            &count,
+            sums[ns],
+            sums[ns + 1],
+        ))
+    }
+
+    /// The force on every particle at the current positions in system order (`[fx, fy,
+    /// 0]` in 2D; 0 on the particles of a frozen species, as [`crate::Md::forces`]), on
+    /// every rank. Collective.
+    ///
+    /// Errors: a failed exchange.
+    pub fn forces(&mut self) -> Result<Vec<[f64; 3]>> {
+        let rows = with_engine!(&self.engine, e => e.gather(&self.comm))?;
+        let frozen = self.system.frozen();
+        let species = self.system.species();
+        let flat = rows.map(|rows| {
+            rows.iter()
+                .enumerate()
+                .flat_map(|(i, r)| {
+                    let f = !frozen[species[i] as usize];
+                    [10, 11, 12].map(|o| if f { r[o] } else { 0.0 })
+                })
+                .collect::<Vec<f64>>()
+        });
+        let v = self.comm.broadcast_from_root(flat)?;
+        Ok(v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+    }
+
+    /// The complete state in [`crate::Md`]'s checkpoint format (`Md<cpu f64, D>`: the
+    /// particles in system order with their list-build positions), on every rank: resumes
+    /// with [`DistributedMd::resume`] on any rank count, or with `Md`'s `Restart::resume`
+    /// on the CPU in one process. The bytes are the same on any rank count. Collective.
+    ///
+    /// Errors: a failed exchange.
+    pub fn checkpoint(&mut self) -> Result<Vec<u8>> {
+        let saved = with_engine!(&self.engine, e => e.gather_checkpoint(&self.comm))?;
+        let axes = self.system.dim().axes();
+        let bytes = match saved {
+            Some((state, list)) => Some(encode_checkpoint(
+                &self.system,
+                &self.config,
+                &model_name(false, Precision::F64, axes),
+                state,
+                list,
+            )?),
+            None => None,
+        };
+        self.comm.broadcast_from_root(bytes)
+    }
+
+    /// Writes [`DistributedMd::checkpoint`] to `path` from rank 0, atomically. Collective.
+    ///
+    /// Errors: a failed exchange or write (on every rank).
+    pub fn write_checkpoint(&mut self, path: impl AsRef<std::path::Path>) -> Result<()> {
+        let bytes = self.checkpoint()?;
+        let mine = self.comm.is_root().then_some(bytes.as_slice());
+        self.comm.write_from_root(path.as_ref(), mine)
+    }
+}
+
+impl Simulation for DistributedMd {
+    type State = State;
+
+    /// Advances `steps` steps on every rank, checking the state every
+    /// [`Config::check_every`] steps and at the end as [`crate::Md`] does; a failed check
+    /// returns the same [`Error::BlowUp`] on every rank (the first finding by kind, then
+    /// by system index) with the run rolled back everywhere to the last state that passed.
+    /// Collective.
+    fn step(&mut self, steps: u32) -> Result<()> {
+        let comm = &self.comm;
+        with_engine!(&mut self.engine, e => e.guarded(comm, steps))
+    }
+
+    /// Time, positions (periodic coordinates wrapped), velocities at the step (leapfrog:
+    /// synchronised) and species of all particles in system order, gathered on rank 0 and
+    /// sent to every rank. Collective.
+    fn state(&mut self) -> Result<State> {
+        let comm = &self.comm;
+        let rows = with_engine!(&self.engine, e => e.gather(comm))?;
+        let flat = rows.map(|rows| {
+            let mut v = Vec::with_capacity(6 * rows.len());
+            for r in &rows {
+                v.extend_from_slice(&r[1..7]);
+            }
+            v
+        });
+        let v = comm.broadcast_from_root(flat)?;
+        let rows = v.chunks_exact(6);
+        Ok(State {
+            time: self.time(),
+            positions: rows.clone().map(|r| [r[0], r[1], r[2]]).collect(),
+            velocities: rows.map(|r| [r[3], r[4], r[5]]).collect(),
+            species: self.system.species().to_vec(),
+        })
+    }
+
+    fn steps_done(&self) -> u64 {
+        with_engine!(&self.engine, e => e.steps)
+    }
+
+    fn backend_name(&self) -> String {
+        let threads = rayon::current_num_threads();
+        let plural = if threads == 1 { "" } else { "s" };
+        let kernel = with_engine!(&self.engine, e => e.kernel.name());
+        format!(
+            "cpu f64 ({} ranks, {threads} thread{plural} each, full lists, {kernel})",
+            self.comm.size()
+        )
+    }
+}
+
+/// The shared validation of [`crate::Md::new`] (the time step), plus what this run does
+/// not offer.
+fn prepare(system: &System, config: &Config) -> Result<f64> {
+    if config.precision != Precision::F64 {
+        return Err(Error::Unsupported(
+            "DistributedMd computes in f64; use Precision::F64, or Md for f32".into(),
+        ));
+    }
+    config.resolve_dt(system)
+}
+
+/// The owned particles at the last check that passed, and the step count.
+#[derive(Default)]
+struct Snapshot<const D: usize> {
+    id: Vec<u32>,
+    pos: Vec<[f64; D]>,
+    vel: Vec<[f64; D]>,
+    acc: Vec<[f64; D]>,
+    force: Vec<[f64; D]>,
+    ew: Vec<[f64; 2]>,
+    reference: Vec<[f64; D]>,
+    steps: u64,
+}
+
+/// What a blow-up check found on a rank, as the ranks exchange it: `[kind, id, axis,
+/// value, extra]`; the kinds in the order of [`crate::Md`]'s check: 0 non-finite
+/// position, 1 velocity, 2 acceleration, 3 leapfrog velocity at the step, 4 outside the
+/// box, 5 farther than skin / 2 from the list-build position (value: the distance), 6
+/// kinetic energy, 7 pair energy, 8 virial (non-finite values), 9 a kinetic energy whose
+/// total over all particles may overflow; [`NOTHING`] (kind 10) when all is well.
+type Finding = [f64; 5];
+
+const NOTHING: Finding = [10.0, 0.0, 0.0, 0.0, 0.0];
+
+/// The finding to report of two: the lower kind, then the smaller system index.
+fn worse(a: Finding, b: Finding) -> Finding {
+    if (b[0], b[1]) < (a[0], a[1]) { b } else { a }
+}
+
+/// This rank's part of the run in dimension `D`.
+struct Engine<const D: usize> {
+    /// The decomposition, the ghosts and the full lists (partners by system index).
+    list: GhostedList<D>,
+    dt: f64,
+    integrator: Integrator,
+    check_every: u32,
+    /// Particles of the system.
+    n: usize,
+    /// Species of every particle of the system.
+    all_species: Vec<u32>,
+    masses: Vec<f64>,
+    /// `1 / m` per species, `0` for a frozen species (as in the CPU backend).
+    inv_mass: Vec<f64>,
+    frozen: Vec<bool>,
+    n_species: usize,
+    coeff: Vec<PairCoeff<f64>>,
+    /// The Langevin thermostat: seed and `(c1, amplitude)` per species.
+    langevin: Option<(u32, Vec<(f64, f64)>)>,
+    lo: [f64; D],
+    hi: [f64; D],
+    len: [f64; D],
+    periodic: [bool; D],
+    range: f64,
+    /// `((range - r_c) / 2)^2`: a larger squared displacement triggers a list build.
+    rebuild2: f64,
+    steps: u64,
+    builds: u64,
+    /// Owned particles at the front of the local arrays, ghosts after them.
+    owned: usize,
+    /// System index, owned then ghosts.
+    id: Vec<u32>,
+    /// Species, owned then ghosts.
+    species: Vec<u32>,
+    /// Positions, owned then ghosts (owned: periodic coordinates not wrapped since the
+    /// list build).
+    pos: Vec<[f64; D]>,
+    /// Owned only: velocity Verlet `v(t)`, leapfrog `v(t + dt/2)`.
+    vel: Vec<[f64; D]>,
+    acc: Vec<[f64; D]>,
+    force: Vec<[f64; D]>,
+    /// `sum phi` and `sum r . F` over each owned particle's pairs (each pair counted at
+    /// both ends), at the last step of each checked stretch.
+    ew: Vec<[f64; 2]>,
+    /// Positions at the last list build (wrapped).
+    reference: Vec<[f64; D]>,
+    snap: Snapshot<D>,
+    kernel: Kernel,
+}
+
+impl<const D: usize> Engine<D>
+where
+    [f64; D]: bytemuck::Pod,
+{
+    /// The engine without particles (they come with [`Engine::start`]).
+    fn new(system: &System, config: &Config, dt: f64, comm: &Comm) -> Result<Self> {
+        let (lo3, len3, per3) = (system.lo(), system.lengths(), system.periodic());
+        let r_c = system.table().max_cutoff();
+        let range = list_range(system, config.skin);
+        let half_skin = 0.5 * (range - r_c);
+        // md has no vertical axis: x and y are cut as the faces are smallest.
+        let domain = ParticleDomain::new(
+            [lo3[0], lo3[1]],
+            [len3[0], len3[1]],
+            [per3[0], per3[1]],
+            range,
+            None,
+            comm.size(),
+        )?;
+        let frozen = system.frozen().to_vec();
+        let periodic_z = (D == 3 && per3[2]).then_some((lo3[2], len3[2]));
+        Ok(Self {
+            list: GhostedList::new(domain, periodic_z, range)?,
+            dt,
+            integrator: config.integrator,
+            check_every: config.check_every,
+            n: system.particle_count(),
+            all_species: system.species().to_vec(),
+            masses: system.masses().to_vec(),
+            inv_mass: system
+                .masses()
+                .iter()
+                .zip(&frozen)
+                .map(|(&m, &f)| if f { 0.0 } else { 1.0 / m })
+                .collect(),
+            frozen,
+            n_species: system.table().n_species(),
+            coeff: system.table().coefficients::<f64>(config.shift),
+            langevin: config
+                .thermostat
+                .map(|l| (l.seed, ou_coefficients(system, &l, dt))),
+            lo: std::array::from_fn(|d| lo3[d]),
+            hi: std::array::from_fn(|d| lo3[d] + len3[d]),
+            len: std::array::from_fn(|d| len3[d]),
+            periodic: std::array::from_fn(|d| per3[d]),
+            range,
+            rebuild2: half_skin * half_skin,
+            steps: 0,
+            builds: 0,
+            owned: 0,
+            id: Vec::new(),
+            species: Vec::new(),
+            pos: Vec::new(),
+            vel: Vec::new(),
+            acc: Vec::new(),
+            force: Vec::new(),
+            ew: Vec::new(),
+            reference: Vec::new(),
+            snap: Snapshot::default(),
+            kernel: Kernel::detect(),
+        })
+    }
+
+    fn time(&self) -> f64 {
+        self.steps as f64 * self.dt
+    }
+
+    fn wrap(&self, x: &mut [f64; D]) {
+        wrap(x, self.lo, self.hi, self.len, self.periodic);
+    }
+
+    /// The initial state (the system's, or a checkpoint's), its forces and the initial
+    /// check, as the CPU backend makes them. Collective; an error is every rank's.
+    fn start(
+        &mut self,
+        comm: &Comm,
+        system: &System,
+        saved: Option<(&EngineState, &Vec<f64>)>,
+    ) -> Result<()> {
+        match saved {
+            None => {
+                self.take_system(comm, system);
+                // Wraps (a no-op for a valid system) and makes ghosts and lists.
+                self.rebuild(comm)?;
+            }
+            Some((s, list)) => {
+                comm.agree(self.take_saved(comm, s, list))?;
+                self.relist(comm)?;
+                // A stored position must be one the run could have produced.
+                let found = self.all_findings(comm)?;
+                if found[0] < NOTHING[0] {
+                    let (what, _) = self.describe(&found);
+                    return Err(Error::checkpoint(format!(
+                        "the stored state is not valid: {what}"
+                    )));
+                }
+            }
+        }
+        self.forces::<true>(None);
+        if saved.is_none() && self.integrator == Integrator::Leapfrog {
+            let h = 0.5 * self.dt;
+            let n = self.owned;
+            kick_slice(&mut self.vel[..n], &self.acc[..n], h);
+        }
+        let found = self.all_findings(comm)?;
+        if found[0] < NOTHING[0] {
+            let (what, cause) = self.describe(&found);
+            return Err(Error::invalid(
+                "initial state",
+                what,
+                format!("{cause}; move the particles apart or lower dt"),
+            ));
+        }
+        self.keep();
+        Ok(())
+    }
+
+    /// This rank takes the system's particles in its region (frozen ones at rest).
+    fn take_system(&mut self, comm: &Comm, system: &System) {
+        let (positions, velocities) = (system.positions(), system.velocities());
+        let mine: Vec<usize> = (0..self.n)
+            .filter(|&i| {
+                let mut x: [f64; D] = std::array::from_fn(|d| positions[i][d]);
+                self.wrap(&mut x);
+                self.list.domain().owner([x[0], x[1]]) == comm.rank()
+            })
+            .collect();
+        self.take(&mine);
+        for (k, &i) in mine.iter().enumerate() {
+            self.pos[k] = std::array::from_fn(|d| positions[i][d]);
+            if !self.frozen[self.all_species[i] as usize] {
+                self.vel[k] = std::array::from_fn(|d| velocities[i][d]);
+            }
+        }
+    }
+
+    /// Sets the owned system indices and their species, and sizes the owned arrays (zero).
+    fn take(&mut self, ids: &[usize]) {
+        let n = ids.len();
+        self.owned = n;
+        self.id = ids.iter().map(|&i| i as u32).collect();
+        self.species = ids.iter().map(|&i| self.all_species[i]).collect();
+        for v in [
+            &mut self.pos,
+            &mut self.vel,
+            &mut self.acc,
+            &mut self.force,
+            &mut self.reference,
+        ] {
+            v.clear();
+            v.resize(n, [0.0; D]);
+        }
+        self.ew.clear();
+        self.ew.resize(n, [0.0; 2]);
+    }
+
+    /// A checkpointed state: every rank takes the particles whose list-build position lies
+    /// in its region (where the run that wrote it had them).
+    fn take_saved(&mut self, comm: &Comm, s: &EngineState, list: &[f64]) -> Result<()> {
+        let n = self.n;
+        for (v, what) in [
+            (s.pos.as_slice(), "positions"),
+            (&s.vel, "velocities"),
+            (list, "list-build positions"),
+        ] {
+            if Some(v.len()) != n.checked_mul(D) {
+                return Err(Error::checkpoint(format!(
+                    "the stored {what} have {} values for {n} particles in {D}D",
+                    v.len()
+                )));
+            }
+            if v.iter().any(|x| !x.is_finite()) {
+                return Err(Error::checkpoint(format!(
+                    "the stored {what} are not finite"
+                )));
+            }
+        }
+        let at = |v: &[f64], k: usize| -> [f64; D] { std::array::from_fn(|d| v[k * D + d]) };
+        let mine: Vec<usize> = (0..n)
+            .filter(|&k| {
+                let r = at(list, k);
+                self.list.domain().owner([r[0], r[1]]) == comm.rank()
+            })
+            .collect();
+        self.take(&mine);
+        for (k, &i) in mine.iter().enumerate() {
+            self.pos[k] = at(&s.pos, i);
+            self.vel[k] = if self.frozen[self.all_species[i] as usize] {
+                [0.0; D]
+            } else {
+                at(&s.vel, i)
+            };
+            self.reference[k] = at(list, i);
+        }
+        self.steps = s.steps;
+        Ok(())
+    }
+
+    /// Wraps the owned positions, sends every particle to the rank that owns it now, and
+    /// makes the ghosts and lists anew.
+    fn rebuild(&mut self, comm: &Comm) -> Result<()> {
+        let n = self.owned;
+        let mut out: Vec<Record> = Vec::with_capacity(n);
+        for k in 0..n {
+            let mut x = self.pos[k];
+            self.wrap(&mut x);
+            let mut r = [0.0; 16];
+            r[0] = f64::from(self.id[k]);
+            r[1..1 + D].copy_from_slice(&x);
+            r[4..4 + D].copy_from_slice(&self.vel[k]);
+            r[7..7 + D].copy_from_slice(&self.acc[k]);
+            r[10..10 + D].copy_from_slice(&self.force[k]);
+            r[13] = self.ew[k][0];
+            r[14] = self.ew[k][1];
+            out.push(r);
+        }
+        let got = self.list.domain().migrate(comm, out, |r| [r[1], r[2]])?;
+        let total = self.n;
+        let bad = got.iter().find(|r| !(r[0] >= 0.0 && r[0] < total as f64));
+        comm.agree(match bad {
+            Some(r) => Err(Error::invalid(
+                "migrated particle index",
+                r[0],
+                format!("must be below the particle count {total}"),
+            )),
+            None => Ok(()),
+        })?;
+        let ids: Vec<usize> = got.iter().map(|r| r[0] as usize).collect();
+        self.take(&ids);
+        for (k, r) in got.iter().enumerate() {
+            self.pos[k] = std::array::from_fn(|d| r[1 + d]);
+            self.vel[k] = std::array::from_fn(|d| r[4 + d]);
+            self.acc[k] = std::array::from_fn(|d| r[7 + d]);
+            self.force[k] = std::array::from_fn(|d| r[10 + d]);
+            self.ew[k] = [r[13], r[14]];
+        }
+        self.reference.clone_from(&self.pos);
+        self.relist(comm)
+    }
+
+    /// Ghosts and lists from the list-build positions of the owned particles, then the
+    /// ghosts refreshed with the current positions.
+    fn relist(&mut self, comm: &Comm) -> Result<()> {
+        let n = self.owned;
+        self.list.build(comm, &self.reference, &self.id[..n])?;
+        self.id.truncate(n);
+        self.species.truncate(n);
+        let ghosts = &self.list.ids()[n..];
+        let bad = ghosts.iter().find(|&&i| i as usize >= self.n).map(|&i| {
+            Error::invalid(
+                "ghost particle index",
+                i,
+                format!("must be below the particle count {}", self.n),
+            )
+        });
+        comm.agree(bad.map_or(Ok(()), Err))?;
+        for &i in ghosts {
+            self.id.push(i);
+            self.species.push(self.all_species[i as usize]);
+        }
+        self.pos.resize(self.list.len(), [0.0; D]);
+        self.refresh(comm)?;
+        self.builds += 1;
+        Ok(())
+    }
+
+    /// Sends the owned positions to the ranks that hold them as ghosts (the periodic
+    /// images shifted).
+    fn refresh(&mut self, comm: &Comm) -> Result<()> {
+        self.list.refresh(comm, &mut self.pos, true)
+    }
+
+    /// Forces on the owned particles at the current positions (owned and ghosts), the
+    /// accelerations `F / m` and, with `kick = Some(h)`, the closing kick `v += a h`, in
+    /// one pass; with `ENERGY`, each particle's sums of `phi` and `r . F` too. Each
+    /// particle adds its pairs in the order of its list (increasing system index of the
+    /// partner), with the CPU backend's pair law.
+    fn forces<const ENERGY: bool>(&mut self, kick: Option<f64>) {
+        let n = self.owned;
+        let inp = PairInputs {
+            pos: &self.pos,
+            species: &self.species,
+            coeff: &self.coeff,
+            n_species: self.n_species,
+            offsets: self.list.csr().0,
+            partners: self.list.csr().1,
+        };
+        let (kernel, species, inv_mass) = (self.kernel, &self.species, &self.inv_mass);
+        self.force[..n]
+            .par_chunks_mut(CHUNK)
+            .zip(self.acc[..n].par_chunks_mut(CHUNK))
+            .zip(self.vel[..n].par_chunks_mut(CHUNK))
+            .zip(self.ew[..n].par_chunks_mut(CHUNK))
+            .enumerate()
+            .for_each(|(c, (((force, acc), vel), ew))| {
+                let first = c * CHUNK;
+                pair_sums::<D, ENERGY>(kernel, &inp, first, force, ew);
+                for (k, ((f, a), v)) in force.iter().zip(acc.iter_mut()).zip(vel).enumerate() {
+                    let im = inv_mass[species[first + k] as usize];
+                    *a = f.map(|x| x * im);
+                    if let Some(h) = kick {
+                        for d in 0..D {
+                            v[d] += a[d] * h;
+                        }
+                    }
+                }
+            });
+    }
+
+    /// The opening kick `v += a h` (when `open = Some(h)`) and the drift of a step
+    /// (Newtonian, or the thermostatted `A O A` of BAOAB), reflecting at closed faces;
+    /// returns this rank's largest squared displacement since the list build (NaN if any
+    /// is NaN). The arithmetic of the CPU backend, particle by particle.
+    fn move_particles(&mut self, open: Option<f64>) -> f64 {
+        let n = self.owned;
+        let (lo, hi, per, dt) = (self.lo, self.hi, self.periodic, self.dt);
+        let (pos, vel, acc, reference) = (
+            &mut self.pos[..n],
+            &mut self.vel[..n],
+            &self.acc[..n],
+            &self.reference[..n],
+        );
+        let displacement = |x: &[f64; D], r: &[f64; D]| {
+            let mut s2 = 0.0;
+            for d in 0..D {
+                let s = x[d] - r[d];
+                s2 += s * s;
+            }
+            s2
+        };
+        match &self.langevin {
+            None => pos
+                .par_chunks_mut(CHUNK)
+                .zip(vel.par_chunks_mut(CHUNK))
+                .zip(acc.par_chunks(CHUNK))
+                .zip(reference.par_chunks(CHUNK))
+                .map(|(((x, v), a), r)| {
+                    let mut m = 0.0;
+                    for (((x, v), a), r) in x.iter_mut().zip(v).zip(a).zip(r) {
+                        for d in 0..D {
+                            if let Some(h) = open {
+                                v[d] += a[d] * h;
+                            }
+                            x[d] += v[d] * dt;
+                            if !per[d] {
+                                reflect(&mut x[d], &mut v[d], lo[d], hi[d]);
+                            }
+                        }
+                        m = max_or_nan(m, displacement(x, r));
+                    }
+                    m
+                })
+                .reduce(|| 0.0, max_or_nan),
+            Some((seed, ou)) => {
+                let (seed, h) = (*seed, 0.5 * dt);
+                let step = self.steps as u32;
+                let (species, id) = (&self.species[..n], &self.id[..n]);
+                pos.par_chunks_mut(CHUNK)
+                    .zip(vel.par_chunks_mut(CHUNK))
+                    .zip(acc.par_chunks(CHUNK))
+                    .zip(reference.par_chunks(CHUNK))
+                    .enumerate()
+                    .map(|(c, (((x, v), a), r))| {
+                        if let Some(hk) = open {
+                            kick_slice(v, a, hk);
+                        }
+                        let mut m = 0.0;
+                        for (k, ((x, v), r)) in x.iter_mut().zip(v).zip(r).enumerate() {
+                            let i = c * CHUNK + k;
+                            let (c1, amp) = ou[species[i] as usize];
+                            let g = gaussians::<D>(seed, step, id[i]);
+                            for d in 0..D {
+                                let w = c1 * v[d] + amp * g[d];
+                                x[d] += (v[d] + w) * h;
+                                v[d] = w;
+                                if !per[d] {
+                                    reflect(&mut x[d], &mut v[d], lo[d], hi[d]);
+                                }
+                            }
+                            m = max_or_nan(m, displacement(x, r));
+                        }
+                        m
+                    })
+                    .reduce(|| 0.0, max_or_nan)
+            }
+        }
+    }
+
+    /// One step; `energy`: the potential energy and virial at its end too.
+    fn one_step(&mut self, comm: &Comm, energy: bool) -> Result<()> {
+        let (open, close) = match self.integrator {
+            Integrator::VelocityVerlet => (Some(0.5 * self.dt), 0.5 * self.dt),
+            Integrator::Leapfrog => (None, self.dt),
+        };
+        // A list build migrates particles: the owned count changes between steps, so
+        // every pass reads `self.owned` afresh.
+        let moved2 = comm.all_max(self.move_particles(open))?;
+        // A particle that moved farther than the list range since the build (or to a
+        // non-finite position) may have jumped past the next region: the run blew up. The
+        // maximum is global, so every rank count stops at the same step.
+        if moved2.is_nan() || moved2 > self.range * self.range {
+            return Err(Error::invalid(
+                "largest displacement since the last list build",
+                moved2.sqrt(),
+                format!(
+                    "must stay below the list range {} (a particle moved that far within a \
+                     few steps)",
+                    self.range
+                ),
+            ));
+        }
+        if beyond(moved2, self.rebuild2) {
+            self.rebuild(comm)?;
+        } else {
+            self.refresh(comm)?;
+        }
+        if energy {
+            self.forces::<true>(Some(close));
+        } else {
+            self.forces::<false>(Some(close));
+        }
+        self.steps += 1;
+        Ok(())
+    }
+
+    /// `steps` steps in stretches ending on multiples of `check_every`, each followed by
+    /// the blow-up check on every rank; a failure anywhere rolls every rank back.
+    fn guarded(&mut self, comm: &Comm, steps: u32) -> Result<()> {
+        for n in chunks(self.steps, steps, self.check_every) {
+            let mut failed = None;
+            for s in 0..n {
+                // The energies only where the check (and the caller) looks: the last step.
+                if let Err(e) = self.one_step(comm, s + 1 == n) {
+                    failed = Some((self.steps + 1, e.to_string()));
+                    break;
+                }
+            }
+            if let Some((bad, what)) = failed {
+                // A particle that moved too far, or a list build that failed on every rank
+                // (positions a grid cannot hold): the run blew up within the stretch.
+                self.restore(comm)?;
+                return Err(blow_up(bad, self.steps, what, CAUSE));
+            }
+            let found = self.all_findings(comm)?;
+            if found[0] < NOTHING[0] {
+                let bad = self.steps;
+                let (what, cause) = self.describe(&found);
+                self.restore(comm)?;
+                return Err(blow_up(bad, self.steps, what, cause));
+            }
+            self.keep();
+        }
+        Ok(())
+    }
+
+    /// Every rank's first finding, the same on every rank. Collective.
+    fn all_findings(&self, comm: &Comm) -> Result<Finding> {
+        let all = comm.all_gather(&[self.check()])?;
+        Ok(all.iter().copied().fold(NOTHING, worse))
+    }
+
+    /// This rank's first finding (the checks of the CPU backend, over the owned
+    /// particles; within a kind the smallest system index).
+    fn check(&self) -> Finding {
+        let n = self.owned;
+        let mut found = NOTHING;
+        let mut note = |f: Finding| found = worse(found, f);
+        let h = 0.5 * self.dt;
+        let leapfrog = self.integrator == Integrator::Leapfrog;
+        // Kinetic energies above this could overflow the total (in any order).
+        let ke_limit = f64::MAX / self.n.max(1) as f64;
+        for k in 0..n {
+            let id = f64::from(self.id[k]);
+            for (kind, v) in [
+                (0.0, &self.pos[k]),
+                (1.0, &self.vel[k]),
+                (2.0, &self.acc[k]),
+            ] {
+                if let Some(d) = (0..D).find(|&d| !v[d].is_finite()) {
+                    note([kind, id, d as f64, v[d], 0.0]);
+                }
+            }
+            if leapfrog {
+                for d in 0..D {
+                    let u = self.vel[k][d] - self.acc[k][d] * h;
+                    if !u.is_finite() {
+                        note([3.0, id, d as f64, u, 0.0]);
+                        break;
+                    }
+                }
+            }
+            let (x, r) = (self.pos[k], self.reference[k]);
+            for d in 0..D {
+                let (lo, hi) = (self.lo[d], self.hi[d]);
+                let (y, out) = if self.periodic[d] {
+                    (r[d], !(r[d] >= lo && r[d] < hi))
+                } else {
+                    (x[d], !(x[d] >= lo && x[d] <= hi))
+                };
+                if out {
+                    note([4.0, id, d as f64, y, 0.0]);
+                    break;
+                }
+            }
+            let mut s2 = 0.0;
+            for d in 0..D {
+                let s = x[d] - r[d];
+                s2 += s * s;
+            }
+            if beyond(s2, self.rebuild2) {
+                note([5.0, id, 0.0, s2.sqrt(), 0.0]);
+            }
+            let v2: f64 = self.vel[k].iter().map(|x| x * x).sum();
+            let ke = 0.5 * self.masses[self.species[k] as usize] * v2;
+            for (kind, x) in [(6.0, ke), (7.0, self.ew[k][0]), (8.0, self.ew[k][1])] {
+                if !x.is_finite() {
+                    note([kind, id, 0.0, x, 0.0]);
+                }
+            }
+            if ke > ke_limit {
+                note([9.0, id, 0.0, ke, 0.0]);
+            }
+        }
+        found
+    }
+
+    /// The blow-up message and cause of a finding (the same on every rank).
+    fn describe(&self, f: &Finding) -> (String, String) {
+        let (kind, id, axis) = (f[0] as usize, f[1] as usize, AXES[(f[2] as usize).min(2)]);
+        let what = match kind {
+            0..=2 => {
+                let name = ["position", "velocity", "acceleration"][kind];
+                format!("particle {id}: {name} {axis} = {}", f[3])
+            }
+            3 => format!("particle {id}: velocity {axis} at the step = {}", f[3]),
+            4 => {
+                let d = f[2] as usize;
+                format!(
+                    "particle {id}: position {axis} = {} left the box [{}, {}] (it moved more \
+                     than a box length in one step)",
+                    f[3], self.lo[d], self.hi[d]
+                )
+            }
+            5 => format!(
+                "particle {id}: {} from its position at the last list build, more than \
+                 skin / 2 = {}",
+                f[3],
+                self.rebuild2.sqrt()
+            ),
+            6..=8 => {
+                let name = ["kinetic energy", "pair energy", "virial"][kind - 6];
+                format!("particle {id}: {name} = {}", f[3])
+            }
+            _ => format!(
+                "particle {id}: kinetic energy = {}, the total over {} particles may overflow",
+                f[3], self.n
+            ),
+        };
+        (what, CAUSE.to_string())
+    }
+
+    /// Copies the owned state into the guard's snapshot.
+    fn keep(&mut self) {
+        let (s, n) = (&mut self.snap, self.owned);
+        s.id.clear();
+        s.id.extend_from_slice(&self.id[..n]);
+        s.pos.clear();
+        s.pos.extend_from_slice(&self.pos[..n]);
+        s.vel.clone_from(&self.vel);
+        s.acc.clone_from(&self.acc);
+        s.force.clone_from(&self.force);
+        s.ew.clone_from(&self.ew);
+        s.reference.clone_from(&self.reference);
+        s.steps = self.steps;
+    }
+
+    /// Puts every rank back to its snapshot (the particles it owned then) and remakes
+    /// ghosts and lists from the list-build positions, so the lists are those the run had.
+    fn restore(&mut self, comm: &Comm) -> Result<()> {
+        let ids: Vec<usize> = self.snap.id.iter().map(|&i| i as usize).collect();
+        self.take(&ids);
+        let s = &self.snap;
+        self.pos.clone_from(&s.pos);
+        self.vel.clone_from(&s.vel);
+        self.acc.clone_from(&s.acc);
+        self.force.clone_from(&s.force);
+        self.ew.clone_from(&s.ew);
+        self.reference.clone_from(&s.reference);
+        self.steps = s.steps;
+        self.relist(comm)
+    }
+
+    /// Every particle's record on rank 0 in system order (`None` elsewhere): position
+    /// wrapped, velocity at the step (leapfrog: synchronised), acceleration, force,
+    /// `phi` and `r . F` sums.
+    fn gather(&self, comm: &Comm) -> Result<Option<Vec<Record>>> {
+        let n = self.owned;
+        let h = 0.5 * self.dt;
+        let leapfrog = self.integrator == Integrator::Leapfrog;
+        let mine: Vec<Record> = (0..n)
+            .map(|k| {
+                let mut r = [0.0; 16];
+                r[0] = f64::from(self.id[k]);
+                let mut x = self.pos[k];
+                self.wrap(&mut x);
+                for d in 0..D {
+                    r[1 + d] = x[d];
+                    r[4 + d] = if leapfrog {
+                        self.vel[k][d] - self.acc[k][d] * h
+                    } else {
+                        self.vel[k][d]
+                    };
+                    r[7 + d] = self.acc[k][d];
+                    r[10 + d] = self.force[k][d];
+                }
+                r[13] = self.ew[k][0];
+                r[14] = self.ew[k][1];
+                r
+            })
+            .collect();
+        self.collect(comm, &mine)
+    }
+
+    /// `mine` from every rank on rank 0, sorted by system index (`None` elsewhere).
+    ///
+    /// Errors: ranks that do not own each particle exactly once (a bug).
+    fn collect(&self, comm: &Comm, mine: &[Record]) -> Result<Option<Vec<Record>>> {
+        let Some(parts) = comm.gather_to_root(mine)? else {
+            return Ok(None);
+        };
+        let total = self.n;
+        let mut rows: Vec<Record> = parts.into_iter().flatten().collect();
+        rows.sort_by(|a, b| a[0].total_cmp(&b[0]));
+        if rows.len() != total || rows.iter().enumerate().any(|(k, r)| r[0] != k as f64) {
+            return Err(Error::invalid(
+                "gathered particles",
+                rows.len(),
+                format!("the ranks must own each of the {total} particles exactly once"),
+            ));
+        }
+        Ok(Some(rows))
+    }
+
+    /// On rank 0: the kinetic energy of every species, the potential energy and the
+    /// virial, summed in system order (`None` elsewhere).
+    fn gather_sums(&self, comm: &Comm) -> Result<Option<Vec<f64>>> {
+        let Some(rows) = self.gather(comm)? else {
+            return Ok(None);
+        };
+        let mut out = vec![0.0; self.n_species + 2];
+        let (mut potential, mut virial) = (0.0, 0.0);
+        for (i, r) in rows.iter().enumerate() {
+            let s = self.all_species[i] as usize;
+            let v2: f64 = r[4..4 + D].iter().map(|x| x * x).sum();
+            out[s] += 0.5 * self.masses[s] * v2;
+            potential += r[13];
+            virial += r[14];
+        }
+        // Each pair was counted at both ends.
+        out[self.n_species] = 0.5 * potential;
+        out[self.n_species + 1] = 0.5 * virial;
+        Ok(Some(out))
+    }
+
+    /// On rank 0: the engine state (positions as the run holds them, velocities as the
+    /// integrator stores them, system order) and the list-build positions, flat.
+    fn gather_checkpoint(&self, comm: &Comm) -> Result<Option<(EngineState, Vec<f64>)>> {
+        let mine: Vec<Record> = (0..self.owned)
+            .map(|k| {
+                let mut r = [0.0; 16];
+                r[0] = f64::from(self.id[k]);
+                r[1..1 + D].copy_from_slice(&self.pos[k]);
+                r[4..4 + D].copy_from_slice(&self.vel[k]);
+                r[7..7 + D].copy_from_slice(&self.reference[k]);
+                r
+            })
+            .collect();
+        let Some(rows) = self.collect(comm, &mine)? else {
+            return Ok(None);
+        };
+        let column = |o: usize| -> Vec<f64> {
+            rows.iter()
+                .flat_map(|r| r[o..o + D].iter().copied())
+                .collect()
+        };
+        Ok(Some((
+            EngineState {
+                steps: self.steps,
+                pos: column(1),
+                vel: column(4),
+                // Empty: the particles are in the system order.
+                order: Vec::new(),
+            },
+            column(7),
+        )))
+    }
+}
+
+/// Partners per chunk of the pair sums: the law is evaluated for a chunk's lanes at once
+/// (the compiler vectorises it), then the terms are added one by one in list order.
+const LANES: usize = 16;
+
+/// What the pair sums read: positions and species (owned then ghosts), the flat
+/// species-pair table, the full lists of the owned particles.
+struct PairInputs<'a, const D: usize> {
+    pos: &'a [[f64; D]],
+    species: &'a [u32],
+    coeff: &'a [PairCoeff<f64>],
+    n_species: usize,
+    offsets: &'a [u32],
+    partners: &'a [u32],
+}
+
+/// The pair sums of owned particles `first..first + force.len()`, compiled for the best
+/// instruction set of this CPU ([`Kernel`]: the same bits on every one, since Rust never
+/// fuses a multiply and an add on its own).
+fn pair_sums<const D: usize, const ENERGY: bool>(
+    kernel: Kernel,
+    inp: &PairInputs<'_, D>,
+    first: usize,
+    force: &mut [[f64; D]],
+    ew: &mut [[f64; 2]],
+) {
+    match kernel {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `Kernel::detect` only returns Avx512 when the CPU has these features.
+        Kernel::Avx512 => unsafe { pair_sums_avx512::<D, ENERGY>(inp, first, force, ew) },
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `Kernel::detect` only returns Avx2 (or better) when the CPU has AVX2, FMA.
+        Kernel::Avx2 => unsafe { pair_sums_avx2::<D, ENERGY>(inp, first, force, ew) },
+        _ => pair_sums_body::<D, ENERGY>(inp, first, force, ew),
+    }
+}
+
+/// [`pair_sums_body`] compiled for AVX-512.
+///
+/// # Safety
+/// The CPU must have AVX-512F, AVX-512VL, AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
+unsafe fn pair_sums_avx512<const D: usize, const ENERGY: bool>(
+    inp: &PairInputs<'_, D>,
+    first: usize,
+    force: &mut [[f64; D]],
+    ew: &mut [[f64; 2]],
+) {
+    pair_sums_body::<D, ENERGY>(inp, first, force, ew);
+}
+
+/// [`pair_sums_body`] compiled for AVX2.
+///
+/// # Safety
+/// The CPU must have AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn pair_sums_avx2<const D: usize, const ENERGY: bool>(
+    inp: &PairInputs<'_, D>,
+    first: usize,
+    force: &mut [[f64; D]],
+    ew: &mut [[f64; 2]],
+) {
+    pair_sums_body::<D, ENERGY>(inp, first, force, ew);
+}
+
+/// For each owned particle `i = first + k`: `force[k]` = the sum of `(f / r) (x_i - x_j)`
+/// over its list (increasing system index of the partner `j`), and with `ENERGY`
+/// `ew[k] = [sum phi, sum r . F]`, the terms from [`pair_force_energy`]. The law runs on a
+/// chunk of [`LANES`] partners at once; the sums then take the terms one by one in list
+/// order, so the result is the bits of a plain loop over the list.
+#[inline(always)]
+fn pair_sums_body<const D: usize, const ENERGY: bool>(
+    inp: &PairInputs<'_, D>,
+    first: usize,
+    force: &mut [[f64; D]],
+    ew: &mut [[f64; 2]],
+) {
+    let ns = inp.n_species;
+    for (k, (f, ew)) in force.iter_mut().zip(ew.iter_mut()).enumerate() {
+        let i = first + k;
+        let xi = inp.pos[i];
+        let row = &inp.coeff[inp.species[i] as usize * ns..][..ns];
+        let mut fi = [0.0; D];
+        let (mut e, mut w) = (0.0, 0.0);
+        let list = &inp.partners[inp.offsets[i] as usize..inp.offsets[i + 1] as usize];
+        for chunk in list.chunks(LANES) {
+            // Unused lanes: r2 = 0 and rc2 = 0, outside the cutoff test (never summed).
+            let mut s = [[0.0; LANES]; D];
+            let (mut c12, mut c6) = ([0.0; LANES], [0.0; LANES]);
+            let (mut rc2, mut shift) = ([0.0; LANES], [0.0; LANES]);
+            for (l, &j) in chunk.iter().enumerate() {
+                let j = j as usize;
+                let xj = inp.pos[j];
+                for d in 0..D {
+                    s[d][l] = xi[d] - xj[d];
+                }
+                let c = &row[inp.species[j] as usize];
+                (c12[l], c6[l], rc2[l], shift[l]) = (c.c12, c.c6, c.rc2, c.shift);
+            }
+            let (mut fr, mut pe, mut r2s) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
+            for l in 0..LANES {
+                let mut r2 = 0.0;
+                for sd in &s {
+                    r2 += sd[l] * sd[l];
+                }
+                let c = PairCoeff {
+                    c12: c12[l],
+                    c6: c6[l],
+                    rc2: rc2[l],
+                    shift: shift[l],
+                };
+                (fr[l], pe[l]) = pair_force_energy(&c, r2);
+                r2s[l] = r2;
+            }
+            for l in 0..chunk.len() {
+                for d in 0..D {
+                    fi[d] += fr[l] * s[d][l];
+                }
+                if ENERGY {
+                    e += pe[l];
+                    w += fr[l] * r2s[l];
+                }
+            }
+        }
+        *f = fi;
+        if ENERGY {
+            *ew = [e, w];
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{PairParams, PairTable};
+
+    /// Every compiled kernel gives the bits of a plain loop over the list, with and
+    /// without the energies, for lists of every length around the chunk width.
+    #[test]
+    fn pair_sums_are_a_plain_loop_on_every_kernel() {
+        let mut t = PairTable::uniform(2, PairParams::lj(1.0, 1.0, 2.5)).unwrap();
+        t.set(0, 1, PairParams::new(1.3, 0.9, 1.0, 0.4, 2.0))
+            .unwrap();
+        let coeff = t.coefficients::<f64>(true);
+        let n = 70;
+        let u = |k: usize, a: u32| f64::from(simkit_backend::rng::rng_uniform(5, a, k as u32));
+        let pos: Vec<[f64; 3]> = (0..n)
+            .map(|k| [4.0 * u(k, 0), 4.0 * u(k, 1), 4.0 * u(k, 2)])
+            .collect();
+        let species: Vec<u32> = (0..n as u32).map(|k| k % 2).collect();
+        // Particle i lists the next i % 40 particles (0 to 39 partners).
+        let (mut offsets, mut partners) = (vec![0u32], Vec::new());
+        for i in 0..n {
+            partners.extend((1..=i % 40).map(|k| ((i + k) % n) as u32));
+            offsets.push(partners.len() as u32);
+        }
+        let inp = PairInputs {
+            pos: &pos,
+            species: &species,
+            coeff: &coeff,
+            n_species: 2,
+            offsets: &offsets,
+            partners: &partners,
+        };
+        let mut want = vec![([0.0; 3], [0.0; 2]); n];
+        for (i, (f, ew)) in want.iter_mut().enumerate() {
+            for &j in &partners[offsets[i] as usize..offsets[i + 1] as usize] {
+                let j = j as usize;
+                let s: [f64; 3] = std::array::from_fn(|d| pos[i][d] - pos[j][d]);
+                let mut r2 = 0.0;
+                for x in s {
+                    r2 += x * x;
+                }
+                let c = &coeff[species[i] as usize * 2 + species[j] as usize];
+                let (fr, pe) = pair_force_energy(c, r2);
+                for d in 0..3 {
+                    f[d] += fr * s[d];
+                }
+                ew[0] += pe;
+                ew[1] += fr * r2;
+            }
+        }
+        assert!(want.iter().any(|(f, _)| f[0] != 0.0));
+        for kernel in Kernel::available() {
+            let (mut f, mut ew) = (vec![[0.0; 3]; n], vec![[0.0; 2]; n]);
+            pair_sums::<3, true>(kernel, &inp, 0, &mut f, &mut ew);
+            let (mut g, mut unused) = (vec![[0.0; 3]; n], vec![[7.0; 2]; n]);
+            pair_sums::<3, false>(kernel, &inp, 0, &mut g, &mut unused);
+            for i in 0..n {
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&f[i]), bits(&want[i].0), "{kernel:?} particle {i}");
+                assert_eq!(bits(&g[i]), bits(&want[i].0), "{kernel:?} particle {i}");
+                assert_eq!(bits(&ew[i]), bits(&want[i].1), "{kernel:?} particle {i}");
+                assert_eq!(unused[i], [7.0; 2], "energies left alone without ENERGY");
+            }
+        }
+    }
+}
