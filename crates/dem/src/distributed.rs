@@ -579,13 +579,15 @@ where
             .collect();
         let got = self.list.domain().migrate(comm, out, |r| [r[1], r[2]])?;
         let ids: Vec<usize> = got.iter().map(|r| r[0] as usize).collect();
-        if let Some(&i) = ids.iter().find(|&&i| i >= self.prep.n) {
-            return Err(Error::invalid(
+        let bad = ids.iter().find(|&&i| i >= self.prep.n).map(|&i| {
+            Error::invalid(
                 "migrated particle index",
                 i,
                 format!("must be below the particle count {}", self.prep.n),
-            ));
-        }
+            )
+        });
+        // Every rank stops, not only the one that received it.
+        comm.agree(bad.map_or(Ok(()), Err))?;
         self.take(&ids);
         let part = |o: usize| -> Vec<[f64; D]> {
             got.iter()
