@@ -940,19 +940,10 @@ where
     fn gather_state(&self, comm: &Comm) -> Result<Option<EngineState>> {
         let n = self.owned;
         let mine: Vec<Record> = (0..n).map(|k| self.record(k, &self.pos[k])).collect();
-        let Some(parts) = comm.gather_to_root(&mine)? else {
+        let total = self.prep.n;
+        let Some(rows) = comm.gather_indexed::<16>(&mine, total)? else {
             return Ok(None);
         };
-        let total = self.prep.n;
-        let mut rows: Vec<Record> = parts.into_iter().flatten().collect();
-        rows.sort_by(|a, b| a[0].total_cmp(&b[0]));
-        if rows.len() != total || rows.iter().enumerate().any(|(k, r)| r[0] != k as f64) {
-            return Err(Error::invalid(
-                "gathered particles",
-                rows.len(),
-                format!("the ranks must own each of the {total} particles exactly once"),
-            ));
-        }
         let column = |o: usize| -> Vec<f64> {
             rows.iter()
                 .flat_map(|r| r[o..o + D].iter().copied())

@@ -1115,27 +1115,7 @@ where
                 r
             })
             .collect();
-        self.collect(comm, &mine)
-    }
-
-    /// `mine` from every rank on rank 0, sorted by system index (`None` elsewhere).
-    ///
-    /// Errors: ranks that do not own each particle exactly once (a bug).
-    fn collect(&self, comm: &Comm, mine: &[Record]) -> Result<Option<Vec<Record>>> {
-        let Some(parts) = comm.gather_to_root(mine)? else {
-            return Ok(None);
-        };
-        let total = self.n;
-        let mut rows: Vec<Record> = parts.into_iter().flatten().collect();
-        rows.sort_by(|a, b| a[0].total_cmp(&b[0]));
-        if rows.len() != total || rows.iter().enumerate().any(|(k, r)| r[0] != k as f64) {
-            return Err(Error::invalid(
-                "gathered particles",
-                rows.len(),
-                format!("the ranks must own each of the {total} particles exactly once"),
-            ));
-        }
-        Ok(Some(rows))
+        comm.gather_indexed::<16>(&mine, self.n)
     }
 
     /// On rank 0: the kinetic energy of every species, the potential energy and the
@@ -1172,7 +1152,7 @@ where
                 r
             })
             .collect();
-        let Some(rows) = self.collect(comm, &mine)? else {
+        let Some(rows) = comm.gather_indexed::<16>(&mine, self.n)? else {
             return Ok(None);
         };
         let column = |o: usize| -> Vec<f64> {

@@ -18,15 +18,9 @@ fn one_process_passes_the_decomposed_cases() {
 }
 
 /// Largest difference of `a` from `b` over all particles and axes, relative to the
-/// largest magnitude in `b`.
+/// largest magnitude in `b` (`testing::max_rel_diff` on the flattened vectors).
 fn max_rel(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
-    let scale = b.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
-    let diff = a
-        .iter()
-        .flatten()
-        .zip(b.iter().flatten())
-        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
-    diff / scale
+    simkit_backend::testing::max_rel_diff(a.as_flattened(), b.as_flattened(), b.as_flattened())
 }
 
 /// Relative difference of two numbers.

@@ -425,6 +425,35 @@ impl Comm {
         Ok(())
     }
 
+    /// The records of particles spread over the ranks (each rank passes those it owns;
+    /// element 0 of a record is the particle's global index, `0..total`) on rank 0 in
+    /// global order: `Some` there, `None` on the other ranks. Collective.
+    ///
+    /// Errors (on rank 0): the ranks together do not hold each of the `total` particles
+    /// exactly once.
+    pub fn gather_indexed<const K: usize>(
+        &self,
+        mine: &[[f64; K]],
+        total: usize,
+    ) -> Result<Option<Vec<[f64; K]>>>
+    where
+        [f64; K]: Pod,
+    {
+        let Some(parts) = self.gather_to_root(mine)? else {
+            return Ok(None);
+        };
+        let mut rows: Vec<[f64; K]> = parts.into_iter().flatten().collect();
+        rows.sort_by(|a, b| a[0].total_cmp(&b[0]));
+        if rows.len() != total || rows.iter().enumerate().any(|(k, r)| r[0] != k as f64) {
+            return Err(Error::invalid(
+                "gathered particles",
+                rows.len(),
+                format!("the ranks must own each of the {total} particles exactly once"),
+            ));
+        }
+        Ok(Some(rows))
+    }
+
     /// Every rank's `send` (any length per rank) on rank 0, in rank order: `Some` there,
     /// `None` on the other ranks.
     pub fn gather_to_root<T: Pod>(&self, send: &[T]) -> Result<Option<Vec<Vec<T>>>> {
