@@ -6,7 +6,7 @@
 
 use bytemuck::{Pod, Zeroable};
 use simkit_backend::comm::Block;
-use simkit_backend::gpu::{DISPATCH_WGSL, Uniform, record_pass, run_pass};
+use simkit_backend::gpu::{DISPATCH_WGSL, Staging, Uniform, record_pass, run_pass};
 use simkit_backend::rng::RNG_WGSL;
 use simkit_backend::{GpuBuffer, GpuContext, Kernel, KernelDesc, Result};
 
@@ -53,6 +53,8 @@ pub(crate) struct GpuBlock {
     edge_idx: Vec<u32>,
     ghost_idx: Vec<u32>,
     edge_vals: GpuBuffer<u32>,
+    /// The host-readable copy of `edge_vals`, made once (one download every step).
+    edge_staging: Staging<u32>,
     ghost_vals: GpuBuffer<u32>,
     /// The buffer holding the current state.
     current: usize,
@@ -169,6 +171,7 @@ impl GpuBlock {
             unpack_kernel,
             params,
             gp,
+            edge_staging: Staging::new(ctx, edge_idx.len()),
             edge_idx,
             ghost_idx,
             edge_vals,
@@ -187,7 +190,7 @@ impl GpuBlock {
         let (cur, next) = (self.current, self.current ^ 1);
         let sites = u64::from(self.gp.nx) * u64::from(self.gp.ny);
         let ctx = self.ctx.clone();
-        let staging = ctx.checked("stepping an FHP block", || -> Result<_> {
+        ctx.checked("stepping an FHP block", || -> Result<()> {
             let mut encoder = ctx.encoder("fhp block step");
             record_pass(&mut encoder, "fhp block step", |pass| {
                 self.step_kernel
@@ -199,11 +202,12 @@ impl GpuBlock {
                     self.edge_idx.len() as u64,
                 )
             })?;
-            let staging = self.edge_vals.encode_download(&ctx, &mut encoder);
+            self.edge_vals
+                .encode_copy_to(&mut encoder, &self.edge_staging)?;
             ctx.submit(encoder);
-            Ok(staging)
+            Ok(())
         })??;
-        let vals = staging.read(&ctx)?;
+        let vals = self.edge_staging.read_kept(&ctx)?;
         for (&k, &v) in self.edge_idx.iter().zip(&vals) {
             padded[k as usize] = v as u8;
         }

@@ -150,20 +150,37 @@ impl<T: Pod> GpuBuffer<T> {
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
     ) -> Staging<T> {
-        let bytes = (self.len * size_of::<T>()) as u64;
-        let staging = ctx.device().create_buffer(&wgpu::BufferDescriptor {
-            label: Some("staging"),
-            size: padded(bytes),
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        if bytes > 0 {
-            encoder.copy_buffer_to_buffer(&self.buffer, 0, &staging, 0, padded(bytes));
+        let staging = Staging::new(ctx, self.len);
+        self.record_copy(encoder, &staging.buffer);
+        staging
+    }
+
+    /// Records a copy of this buffer into `staging` (made for this buffer's length, e.g.
+    /// once for a download every step); read it with [`Staging::read_kept`] after
+    /// submitting.
+    ///
+    /// Errors: a staging buffer of another length.
+    pub fn encode_copy_to(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        staging: &Staging<T>,
+    ) -> Result<()> {
+        if staging.len != self.len {
+            return Err(Error::invalid(
+                format!("staging buffer for '{}'", self.label),
+                staging.len,
+                format!("must hold the buffer's {} values", self.len),
+            ));
         }
-        Staging {
-            buffer: staging,
-            len: self.len,
-            _marker: PhantomData,
+        self.record_copy(encoder, &staging.buffer);
+        Ok(())
+    }
+
+    /// Records a copy of the whole buffer into `dst` (at least as large).
+    fn record_copy(&self, encoder: &mut wgpu::CommandEncoder, dst: &wgpu::Buffer) {
+        let bytes = (self.len * size_of::<T>()) as u64;
+        if bytes > 0 {
+            encoder.copy_buffer_to_buffer(&self.buffer, 0, dst, 0, padded(bytes));
         }
     }
 
@@ -201,8 +218,31 @@ pub struct Staging<T: Pod> {
 }
 
 impl<T: Pod> Staging<T> {
+    /// A host-readable buffer for `len` values of `T`, to be filled by
+    /// [`GpuBuffer::encode_copy_to`] and read by [`Staging::read_kept`] as often as needed.
+    pub fn new(ctx: &GpuContext, len: usize) -> Self {
+        let bytes = (len * size_of::<T>()) as u64;
+        let buffer = ctx.device().create_buffer(&wgpu::BufferDescriptor {
+            label: Some("staging"),
+            size: padded(bytes),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Self {
+            buffer,
+            len,
+            _marker: PhantomData,
+        }
+    }
+
     /// Waits for the copy and returns the values.
     pub fn read(self, ctx: &GpuContext) -> Result<Vec<T>> {
+        self.read_kept(ctx)
+    }
+
+    /// Waits for the last recorded copy and returns the values, keeping the buffer for the
+    /// next copy (it is unmapped again).
+    pub fn read_kept(&self, ctx: &GpuContext) -> Result<Vec<T>> {
         if self.len == 0 {
             return Ok(Vec::new());
         }
