@@ -168,6 +168,39 @@ fn precision() -> impl Strategy<Value = Precision> {
     prop_oneof![Just(Precision::F64), Just(Precision::F32)]
 }
 
+/// The two-species system of the run property tests: an 8^3 box (`dim`), the pair
+/// parameters `p` for every pair, the `particles` (species, position, velocity; z dropped in
+/// 2D), species 1 frozen or not. `None` when a builder refused the input with a clear error.
+fn system(
+    dim: Dim,
+    p: PairParams,
+    particles: &[(u32, [f64; 3], [f64; 3])],
+    periodic: [bool; 3],
+    frozen: bool,
+) -> Result<Option<System>, TestCaseError> {
+    let table = match PairTable::uniform(2, p) {
+        Ok(t) => t,
+        Err(e) => return clear(&e).map(|()| None),
+    };
+    let mut sys = match System::new(dim, [0.0; 3], [8.0; 3], periodic, vec![1.0, 2.0], table) {
+        Ok(s) => s,
+        Err(e) => return clear(&e).map(|()| None),
+    };
+    for &(s, mut x, mut v) in particles {
+        if dim == Dim::Two {
+            x[2] = 0.0;
+            v[2] = 0.0;
+        }
+        if let Err(e) = sys.add_particle(s, x, v) {
+            clear(&e)?;
+        }
+    }
+    if let Err(e) = sys.set_frozen(1, frozen) {
+        clear(&e)?;
+    }
+    Ok(Some(sys))
+}
+
 #[test]
 fn runs_step_to_a_finite_state_or_a_clear_error() {
     let stepped = AtomicUsize::new(0);
@@ -211,27 +244,9 @@ fn runs_step_to_a_finite_state_or_a_clear_error() {
             steps,
             (thermostat, species_target, frozen),
         )| {
-            let table = match PairTable::uniform(2, p) {
-                Ok(t) => t,
-                Err(e) => return clear(&e),
+            let Some(mut sys) = system(dim, p, &particles, periodic, frozen)? else {
+                return Ok(());
             };
-            let mut sys =
-                match System::new(dim, [0.0; 3], [8.0; 3], periodic, vec![1.0, 2.0], table) {
-                    Ok(s) => s,
-                    Err(e) => return clear(&e),
-                };
-            for &(s, mut x, mut v) in &particles {
-                if dim == Dim::Two {
-                    x[2] = 0.0;
-                    v[2] = 0.0;
-                }
-                if let Err(e) = sys.add_particle(s, x, v) {
-                    clear(&e)?;
-                }
-            }
-            if let Err(e) = sys.set_frozen(1, frozen) {
-                clear(&e)?;
-            }
             if let Err(e) = sys.set_species_langevin(0, species_target.map(|(t, g)| [t, g])) {
                 clear(&e)?;
             }
@@ -323,27 +338,9 @@ fn distributed_runs_step_to_a_finite_state_or_a_clear_error() {
             steps,
             (thermostat, frozen),
         )| {
-            let table = match PairTable::uniform(2, p) {
-                Ok(t) => t,
-                Err(e) => return clear(&e),
+            let Some(sys) = system(dim, p, &particles, periodic, frozen)? else {
+                return Ok(());
             };
-            let mut sys =
-                match System::new(dim, [0.0; 3], [8.0; 3], periodic, vec![1.0, 2.0], table) {
-                    Ok(s) => s,
-                    Err(e) => return clear(&e),
-                };
-            for &(s, mut x, mut v) in &particles {
-                if dim == Dim::Two {
-                    x[2] = 0.0;
-                    v[2] = 0.0;
-                }
-                if let Err(e) = sys.add_particle(s, x, v) {
-                    clear(&e)?;
-                }
-            }
-            if let Err(e) = sys.set_frozen(1, frozen) {
-                clear(&e)?;
-            }
             let config = Config {
                 dt,
                 integrator,
