@@ -1,4 +1,5 @@
-//! CPU lookup-table backend: one byte per site, rows in parallel with rayon.
+//! CPU lookup-table backend: one byte per site, bands of rows in parallel with rayon, several
+//! steps per pass over the lattice (temporal blocking).
 //!
 //! Each row gathers its incoming particles from three padded row copies (the row itself and
 //! its two neighbours, wrapped or zero-filled at the edges), so the gather has no branches.
@@ -21,6 +22,7 @@ pub struct LutCpu {
     next: Vec<u8>,
     rule: LutRule,
     steps: u64,
+    steps_per_pass: u32,
 }
 
 impl LutCpu {
@@ -34,6 +36,7 @@ impl LutCpu {
             lattice,
             next,
             steps: 0,
+            steps_per_pass: Self::DEFAULT_STEPS_PER_PASS,
         })
     }
 
@@ -48,32 +51,58 @@ impl LutCpu {
         self.rule.vbmi
     }
 
-    fn step_once(&mut self) {
+    /// Sets how many steps one pass over the lattice advances (temporal blocking; at least
+    /// 1). The lattice after any number of steps is the same bits for every setting; only the
+    /// speed differs. The default ([`LutCpu::DEFAULT_STEPS_PER_PASS`]) suits lattices larger
+    /// than the caches, where the update is bound by memory traffic.
+    pub fn with_steps_per_pass(mut self, steps: u32) -> Self {
+        self.steps_per_pass = steps.max(1);
+        self
+    }
+
+    /// Steps advanced per pass over the lattice when [`LutCpu::with_steps_per_pass`] is not
+    /// called.
+    pub const DEFAULT_STEPS_PER_PASS: u32 = 4;
+
+    /// Advances `levels` steps in one pass over the lattice (temporal blocking). The rows are
+    /// cut into bands, one rayon task each; a band sweeps upwards through its rows, keeping
+    /// the last three rows of every intermediate step in a small ring (`3 (w + 2)` bytes per
+    /// step), so the lattice is read and written once per pass instead of once per step. A
+    /// band of rows `j0..j1` recomputes the intermediate rows its neighbours also compute
+    /// (step `s` of `levels` over rows `j0 - (levels - s)..j1 + (levels - s)`), which costs
+    /// `levels (levels - 1)` extra row updates per band.
+    fn pass(&mut self, levels: usize) {
         let w = self.lattice.width();
         let h = self.lattice.height();
-        let rows = self.rule.at_step(self.steps as u32);
+        let steps: Vec<RowStep<'_>> = (0..levels as u64)
+            .map(|s| self.rule.at_step((self.steps + s) as u32))
+            .collect();
         let ctx = PadCtx {
             src: self.lattice.cells(),
             w,
             h,
             config: &self.rule.config,
         };
-        self.next.par_chunks_mut(w).enumerate().for_each_init(
-            || vec![0u8; 3 * (w + 2)],
-            |pad, (j, row)| {
-                let (mid, rest) = pad.split_at_mut(w + 2);
-                let (up, down) = rest.split_at_mut(w + 2);
-                ctx.pad_row(Some(j), mid);
-                ctx.pad_row(ctx.neighbour_row(j, true), up);
-                ctx.pad_row(ctx.neighbour_row(j, false), down);
-                rows.row(j, (j * w) as u32, row, [mid, up, down], [true, true]);
-            },
-        );
+        let band = band_rows(h, levels, rayon::current_num_threads());
+        self.next
+            .par_chunks_mut(band * w)
+            .enumerate()
+            .for_each_init(
+                || vec![0u8; levels * 3 * (w + 2)],
+                |ring, (b, out)| ctx.band(&steps, b * band, out, ring),
+            );
         let cells = std::mem::take(&mut self.next);
         self.next =
             std::mem::replace(&mut self.lattice, Lattice::from_raw(w, h, cells)).into_cells();
-        self.steps += 1;
+        self.steps += levels as u64;
     }
+}
+
+/// Rows per band of a temporally blocked pass over `h` rows advancing `levels` steps: about
+/// four bands per thread, and at least `16 levels` rows so that the recomputed rows at the
+/// band's edges (`levels (levels - 1)`) stay a small fraction.
+fn band_rows(h: usize, levels: usize, threads: usize) -> usize {
+    h.div_ceil(4 * threads.max(1)).max(16 * levels).min(h)
 }
 
 /// The edges of a whole lattice: the padded copies of a row and of its neighbours.
@@ -92,31 +121,79 @@ impl PadCtx<'_> {
         match jj {
             None => dst.fill(0),
             Some(jj) => {
-                let row = &self.src[jj * w..(jj + 1) * w];
-                dst[1..=w].copy_from_slice(row);
-                if self.config.periodic_x {
-                    dst[0] = row[w - 1];
-                    dst[w + 1] = row[0];
-                } else {
-                    dst[0] = 0;
-                    dst[w + 1] = 0;
-                }
+                dst[1..=w].copy_from_slice(&self.src[jj * w..(jj + 1) * w]);
+                self.pad_edges(dst);
             }
         }
     }
 
-    fn neighbour_row(&self, j: usize, up: bool) -> Option<usize> {
-        let h = self.h;
-        if up {
-            if j + 1 < h {
-                Some(j + 1)
-            } else {
-                self.config.periodic_y.then_some(0)
-            }
-        } else if j > 0 {
-            Some(j - 1)
+    /// Fills the two padding sites of a padded row whose sites `1..=w` are set: the wrapped
+    /// sites where x is periodic, else empty.
+    fn pad_edges(&self, dst: &mut [u8]) {
+        let w = self.w;
+        if self.config.periodic_x {
+            dst[0] = dst[w];
+            dst[w + 1] = dst[1];
         } else {
-            self.config.periodic_y.then_some(h - 1)
+            dst[0] = 0;
+            dst[w + 1] = 0;
+        }
+    }
+
+    /// The lattice row at band coordinate `x` (any integer): wrapped where y is periodic,
+    /// `None` outside the lattice where it is not.
+    fn row_at(&self, x: isize) -> Option<usize> {
+        let h = self.h as isize;
+        if self.config.periodic_y {
+            Some(x.rem_euclid(h) as usize)
+        } else {
+            (0..h).contains(&x).then_some(x as usize)
+        }
+    }
+
+    /// Advances the rows `j0..j0 + out.len() / w` by `steps.len()` steps into `out`, reading
+    /// the old lattice; `ring` holds `3 (w + 2)` bytes per step.
+    fn band(&self, steps: &[RowStep<'_>], j0: usize, out: &mut [u8], ring: &mut [u8]) {
+        let w = self.w;
+        let levels = steps.len() as isize;
+        let pw = w + 2;
+        let (j0, j1) = (j0 as isize, (j0 + out.len() / w) as isize);
+        // At sweep position r: load row r of the old lattice, then compute row r - s of
+        // step s, for s = 1..=levels, each from rows r - s - 1..=r - s + 1 of step s - 1
+        // (the last of them made just before). Ring slot x mod 3 of level s holds row x.
+        let slot = |x: isize| x.rem_euclid(3) as usize * pw;
+        for r in j0 - levels..j1 + levels {
+            self.pad_row(self.row_at(r), &mut ring[slot(r)..slot(r) + pw]);
+            for s in 1..=levels {
+                let x = r - s;
+                let reach = levels - s;
+                if x < j0 - reach || x >= j1 + reach {
+                    continue;
+                }
+                let (before, after) = ring.split_at_mut(s as usize * 3 * pw);
+                let src = &before[(s as usize - 1) * 3 * pw..];
+                let rows = [
+                    &src[slot(x)..slot(x) + pw],
+                    &src[slot(x + 1)..slot(x + 1) + pw],
+                    &src[slot(x - 1)..slot(x - 1) + pw],
+                ];
+                let Some(jj) = self.row_at(x) else {
+                    if s < levels {
+                        after[slot(x)..slot(x) + pw].fill(0);
+                    }
+                    continue;
+                };
+                let step = &steps[s as usize - 1];
+                if s == levels {
+                    let q = (x - j0) as usize;
+                    let dst = &mut out[q * w..(q + 1) * w];
+                    step.row(jj, (jj * w) as u32, dst, rows, [true, true]);
+                } else {
+                    let dst = &mut after[slot(x)..slot(x) + pw];
+                    step.row(jj, (jj * w) as u32, &mut dst[1..=w], rows, [true, true]);
+                    self.pad_edges(dst);
+                }
+            }
         }
     }
 }
@@ -333,8 +410,11 @@ impl engine::Engine for LutCpu {
     fn step(&mut self, steps: u32) -> Result<()> {
         // The whole loop on a pool thread: no hand-over to the pool per row pass.
         simkit_backend::pool::on_pool(|| {
-            for _ in 0..steps {
-                self.step_once();
+            let mut left = steps;
+            while left > 0 {
+                let levels = left.min(self.steps_per_pass);
+                self.pass(levels as usize);
+                left -= levels;
             }
         });
         Ok(())
@@ -365,6 +445,52 @@ mod tests {
     use super::*;
     use crate::{Obstacle, RuleSet};
     use simkit_backend::Simulation;
+
+    /// Temporal blocking changes nothing but speed: every number of steps per pass gives the
+    /// lattice of one step per pass, with lattices shorter than a band and longer, periodic
+    /// and closed in y, a step count that is not a multiple of the pass, and a thread count
+    /// that makes several bands.
+    #[test]
+    fn steps_per_pass_keep_the_bits() {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(3)
+            .build()
+            .unwrap();
+        for (w, h) in [(70, 4), (64, 40), (33, 130), (128, 290)] {
+            let mut chan = Lattice::new(w, h).unwrap();
+            chan.fill_random(0.35, h as u32).unwrap();
+            chan.add_wall_rows();
+            let channel = Config {
+                periodic_x: false,
+                periodic_y: false,
+                inflow: true,
+                outflow: true,
+                body_force: 0.05,
+                seed: 7,
+                ..Config::default()
+            };
+            let mut boxed = Lattice::new(w, h).unwrap();
+            boxed.fill_random(0.4, 5).unwrap();
+            let periodic = Config {
+                periodic_x: false,
+                ..Config::default()
+            };
+            for (l, p) in [(chan, channel), (boxed, periodic)] {
+                let run = |per_pass: u32| {
+                    let mut sim = LutCpu::new(l.clone(), &p)
+                        .unwrap()
+                        .with_steps_per_pass(per_pass);
+                    pool.install(|| sim.step(23)).unwrap();
+                    sim.state().unwrap()
+                };
+                let one = run(1);
+                assert!(one != l, "{w} x {h}: lattice unchanged");
+                for per_pass in [2, 3, 4, 7, 30] {
+                    assert!(run(per_pass) == one, "{w} x {h} {p:?}, {per_pass} per pass");
+                }
+            }
+        }
+    }
 
     /// The VBMI path (where the CPU has it) and the scalar loop give the same lattice, for
     /// widths with and without a scalar tail, periodic and channel scenes, force and both
