@@ -1,5 +1,7 @@
 //! AVX-512 fast path of the field kernel: `vrsqrt14` (14-bit reciprocal square root)
-//! refined by Newton–Raphson steps instead of a square root and a division. With
+//! refined by Newton–Raphson steps instead of a square root and a division. The steps carry
+//! the estimate scaled by a power of two (2 y after one step, 16 y after two), which saves a
+//! multiply per step; the sums are scaled back once after the loop, exactly. With
 //! `SPLIT`, the separations come from coordinates split into high and low parts, as
 //! `kernel::Split` forms them (the mixed mode).
 //!
@@ -41,11 +43,7 @@ pub(crate) unsafe fn block_f32<const SPLIT: bool>(
         _mm512_set1_ps(p),
     );
     let vl = li.map(|l| _mm512_set1_ps(l));
-    let (half, three_halves, zero) = (
-        _mm512_set1_ps(0.5),
-        _mm512_set1_ps(1.5),
-        _mm512_setzero_ps(),
-    );
+    let (three, zero) = (_mm512_set1_ps(3.0), _mm512_setzero_ps());
     let (mut ax, mut ay, mut az) = (zero, zero, zero);
     for c in (0..n).step_by(16) {
         // SAFETY: c + 16 <= n, the length of every slice.
@@ -83,24 +81,21 @@ pub(crate) unsafe fn block_f32<const SPLIT: bool>(
             r2
         };
         let y0 = _mm512_rsqrt14_ps(arg);
-        // y1 = y0 (1.5 - 0.5 arg y0^2)
-        let h = _mm512_mul_ps(_mm512_mul_ps(half, arg), _mm512_mul_ps(y0, y0));
-        let y1 = _mm512_mul_ps(y0, _mm512_sub_ps(three_halves, h));
-        let w = _mm512_mul_ps(_mm512_mul_ps(y1, y1), _mm512_mul_ps(y1, sq));
-        let w = match kind {
-            LawKind::Plummer => w,
-            LawKind::Exact => _mm512_maskz_mov_ps(_mm512_cmp_ps_mask::<_CMP_GT_OQ>(r2, zero), w),
-            LawKind::Exclusion => _mm512_maskz_mov_ps(_mm512_cmp_ps_mask::<_CMP_GT_OQ>(r2, vp), w),
+        // One Newton step y1 = y0 (1.5 - 0.5 arg y0^2), carried as u = 2 y1 = y0 (3 - arg y0 y0)
+        // (two multiplies and a fused step); w = q y1^3 = q u^3 / 8, the 1/8 applied to the
+        // sums after the loop (a power of two: the same bits as scaling every term).
+        let u = _mm512_mul_ps(y0, _mm512_fnmadd_ps(_mm512_mul_ps(arg, y0), y0, three));
+        let keep = match kind {
+            LawKind::Plummer => !0,
+            LawKind::Exact => _mm512_cmp_ps_mask::<_CMP_GT_OQ>(r2, zero),
+            LawKind::Exclusion => _mm512_cmp_ps_mask::<_CMP_GT_OQ>(r2, vp),
         };
+        let w = _mm512_maskz_mul_ps(keep, _mm512_mul_ps(u, u), _mm512_mul_ps(u, sq));
         ax = _mm512_fmadd_ps(w, dx, ax);
         ay = _mm512_fmadd_ps(w, dy, ay);
         az = _mm512_fmadd_ps(w, dz, az);
     }
-    [
-        _mm512_reduce_add_ps(ax),
-        _mm512_reduce_add_ps(ay),
-        _mm512_reduce_add_ps(az),
-    ]
+    [ax, ay, az].map(|a| _mm512_reduce_add_ps(a) * 0.125)
 }
 
 /// f64 field of one target from a block of sources (length a multiple of 8).
@@ -126,9 +121,9 @@ pub(crate) unsafe fn block_f64<const SPLIT: bool>(
         _mm512_set1_pd(p),
     );
     let vl = li.map(|l| _mm512_set1_pd(l));
-    let (half, three_halves, zero) = (
-        _mm512_set1_pd(0.5),
-        _mm512_set1_pd(1.5),
+    let (three, twelve, zero) = (
+        _mm512_set1_pd(3.0),
+        _mm512_set1_pd(12.0),
         _mm512_setzero_pd(),
     );
     let (mut ax, mut ay, mut az) = (zero, zero, zero);
@@ -167,27 +162,23 @@ pub(crate) unsafe fn block_f64<const SPLIT: bool>(
         } else {
             r2
         };
-        let ha = _mm512_mul_pd(half, arg);
-        let mut yk = _mm512_rsqrt14_pd(arg);
-        for _ in 0..2 {
-            // y = y (1.5 - (0.5 arg y) y), the bracket in one fused step.
-            let hy = _mm512_mul_pd(ha, yk);
-            yk = _mm512_mul_pd(yk, _mm512_fnmadd_pd(hy, yk, three_halves));
-        }
-        // w = y^3 q, the pair mask applied by the last multiply.
+        // Two Newton steps y' = y (1.5 - 0.5 arg y^2), carried as scaled estimates (two
+        // multiplies and a fused step each): u1 = y0 (3 - arg y0 y0) = 2 y1 and
+        // u2 = u1 (12 - arg u1 u1) = 16 y2. Then w = q y2^3 = q u2^3 / 4096, the 1/4096 applied
+        // to the sums after the loop (a power of two: the same bits as scaling every term).
+        let y0 = _mm512_rsqrt14_pd(arg);
+        let u1 = _mm512_mul_pd(y0, _mm512_fnmadd_pd(_mm512_mul_pd(arg, y0), y0, three));
+        let u2 = _mm512_mul_pd(u1, _mm512_fnmadd_pd(_mm512_mul_pd(arg, u1), u1, twelve));
+        // The pair mask applied by the last multiply.
         let keep = match kind {
             LawKind::Plummer => !0,
             LawKind::Exact => _mm512_cmp_pd_mask::<_CMP_GT_OQ>(r2, zero),
             LawKind::Exclusion => _mm512_cmp_pd_mask::<_CMP_GT_OQ>(r2, vp),
         };
-        let w = _mm512_maskz_mul_pd(keep, _mm512_mul_pd(yk, yk), _mm512_mul_pd(yk, sq));
+        let w = _mm512_maskz_mul_pd(keep, _mm512_mul_pd(u2, u2), _mm512_mul_pd(u2, sq));
         ax = _mm512_fmadd_pd(w, dx, ax);
         ay = _mm512_fmadd_pd(w, dy, ay);
         az = _mm512_fmadd_pd(w, dz, az);
     }
-    [
-        _mm512_reduce_add_pd(ax),
-        _mm512_reduce_add_pd(ay),
-        _mm512_reduce_add_pd(az),
-    ]
+    [ax, ay, az].map(|a| _mm512_reduce_add_pd(a) * (1.0 / 4096.0))
 }
