@@ -132,7 +132,7 @@ fn gpu_and_cpu_trajectories_agree() {
                     Precision::F32 => {
                         let mut exact = PpCoulomb::new(
                             p64.clone(),
-                            &config.clone().with_precision(Precision::F64),
+                            &config.with_precision(Precision::F64),
                             Backend::Cpu,
                         )
                         .unwrap();
