@@ -354,6 +354,7 @@ impl TraversalKernel {
             TraversalKernel::PackedAvx2 => {
                 std::arch::is_x86_feature_detected!("avx2")
                     && std::arch::is_x86_feature_detected!("fma")
+                    && std::arch::is_x86_feature_detected!("popcnt")
             }
             #[cfg(target_arch = "x86_64")]
             TraversalKernel::PackedAvx512 => {
@@ -361,6 +362,7 @@ impl TraversalKernel {
                     && std::arch::is_x86_feature_detected!("avx512vl")
                     && std::arch::is_x86_feature_detected!("avx2")
                     && std::arch::is_x86_feature_detected!("fma")
+                    && std::arch::is_x86_feature_detected!("popcnt")
             }
             #[cfg(not(target_arch = "x86_64"))]
             TraversalKernel::PackedAvx2 | TraversalKernel::PackedAvx512 => false,
@@ -417,9 +419,9 @@ pub(crate) fn visit_cells<const D: usize, F: FnMut(usize, usize, [f64; D], f64)>
 /// [`visit_cells`] with the packed AVX-512 kernel.
 ///
 /// # Safety
-/// The CPU must support AVX-512F, AVX-512VL, AVX2 and FMA.
+/// The CPU must support AVX-512F, AVX-512VL, AVX2, FMA and POPCNT.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
+#[target_feature(enable = "avx512f,avx512vl,avx2,fma,popcnt")]
 unsafe fn visit_cells_avx512<const D: usize, F: FnMut(usize, usize, [f64; D], f64)>(
     v: &View<'_, D>,
     cells: Range<usize>,
@@ -433,9 +435,9 @@ unsafe fn visit_cells_avx512<const D: usize, F: FnMut(usize, usize, [f64; D], f6
 /// [`visit_cells`] with the packed AVX2 kernel.
 ///
 /// # Safety
-/// The CPU must support AVX2 and FMA.
+/// The CPU must support AVX2, FMA and POPCNT.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
+#[target_feature(enable = "avx2,fma,popcnt")]
 unsafe fn visit_cells_avx2<const D: usize, F: FnMut(usize, usize, [f64; D], f64)>(
     v: &View<'_, D>,
     cells: Range<usize>,
@@ -497,9 +499,9 @@ pub(crate) fn visit_particle<const D: usize, F: FnMut(usize, usize, [f64; D], f6
 /// [`visit_particle`] with the packed AVX-512 kernel.
 ///
 /// # Safety
-/// The CPU must support AVX-512F, AVX-512VL, AVX2 and FMA.
+/// The CPU must support AVX-512F, AVX-512VL, AVX2, FMA and POPCNT.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
+#[target_feature(enable = "avx512f,avx512vl,avx2,fma,popcnt")]
 unsafe fn visit_particle_avx512<const D: usize, F: FnMut(usize, usize, [f64; D], f64)>(
     v: &View<'_, D>,
     rank: usize,
@@ -514,9 +516,9 @@ unsafe fn visit_particle_avx512<const D: usize, F: FnMut(usize, usize, [f64; D],
 /// [`visit_particle`] with the packed AVX2 kernel.
 ///
 /// # Safety
-/// The CPU must support AVX2 and FMA.
+/// The CPU must support AVX2, FMA and POPCNT.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
+#[target_feature(enable = "avx2,fma,popcnt")]
 unsafe fn visit_particle_avx2<const D: usize, F: FnMut(usize, usize, [f64; D], f64)>(
     v: &View<'_, D>,
     rank: usize,
@@ -605,9 +607,9 @@ mod avx512 {
     /// of the 8 particles at sorted positions `k..k + 8`.
     ///
     /// # Safety
-    /// The CPU must support AVX-512F; `k + 8` must not exceed any column's length.
+    /// The CPU must support AVX-512F and POPCNT; `k + 8` must not exceed any column's length.
     #[inline]
-    #[target_feature(enable = "avx512f")]
+    #[target_feature(enable = "avx512f,popcnt")]
     unsafe fn r2_of<const D: usize>(
         cols: &[&[f64]; D],
         k: usize,
@@ -634,11 +636,11 @@ mod avx512 {
     /// operations in the same order as the portable pass, so the same hits.
     ///
     /// # Safety
-    /// The CPU must support AVX-512F. Every `j1` must be at most `cols[d].len() - 15` (the
+    /// The CPU must support AVX-512F and POPCNT. Every `j1` must be at most `cols[d].len() - 15` (the
     /// coordinate padding) and at most `1 << RUN_SHIFT`, there may be at most
     /// `1 << (32 - RUN_SHIFT)` runs, and `hits` must hold the total run length plus 16.
     #[inline]
-    #[target_feature(enable = "avx512f")]
+    #[target_feature(enable = "avx512f,popcnt")]
     pub(super) unsafe fn particle_hits<const D: usize>(
         cols: [&[f64]; D],
         p: [f64; D],
@@ -722,9 +724,9 @@ mod avx2 {
     /// of the 4 particles at sorted positions `k..k + 4`.
     ///
     /// # Safety
-    /// The CPU must support AVX2; `k + 4` must not exceed any column's length.
+    /// The CPU must support AVX2 and POPCNT; `k + 4` must not exceed any column's length.
     #[inline]
-    #[target_feature(enable = "avx2")]
+    #[target_feature(enable = "avx2,popcnt")]
     unsafe fn r2_of<const D: usize>(
         cols: &[&[f64]; D],
         k: usize,
@@ -746,11 +748,11 @@ mod avx2 {
     /// (a store may write up to 8 slots past the last hit).
     ///
     /// # Safety
-    /// The CPU must support AVX2. Every `j1` must be at most `cols[d].len() - 7` and at most
+    /// The CPU must support AVX2 and POPCNT. Every `j1` must be at most `cols[d].len() - 7` and at most
     /// `1 << RUN_SHIFT`, there may be at most `1 << (32 - RUN_SHIFT)` runs, and `hits` must
     /// hold the total run length plus 8.
     #[inline]
-    #[target_feature(enable = "avx2")]
+    #[target_feature(enable = "avx2,popcnt")]
     pub(super) unsafe fn particle_hits<const D: usize>(
         cols: [&[f64]; D],
         p: [f64; D],
