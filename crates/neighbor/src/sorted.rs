@@ -5,7 +5,10 @@ use rayon::prelude::*;
 use simkit_backend::{Error, Result};
 
 use crate::CellGrid;
-use crate::traverse::{COORD_PAD, Scratch, TraversalKernel, View, visit_cells, visit_particle};
+use crate::grid::OutOfBox;
+use crate::traverse::{
+    COORD_PAD, Coords32, Scratch, TraversalKernel, View, f32_band, visit_cells, visit_particle,
+};
 
 /// Cells handed to one rayon task in parallel traversals.
 const CELLS_PER_TASK: usize = 64;
@@ -64,6 +67,9 @@ pub struct SortedCells<const D: usize> {
     rank: Vec<u32>,
     kernel: TraversalKernel,
     coords: [Vec<f64>; D],
+    /// `coords` rounded to `f32`, built only where the AVX-512 kernel runs with a
+    /// single-precision first pass (see [`SortedCells::build`]); empty otherwise.
+    coords32: [Vec<f32>; D],
     wrapped: Vec<[f64; D]>,
 }
 
@@ -78,8 +84,27 @@ impl<const D: usize> SortedCells<D> {
             rank: Vec::new(),
             kernel: TraversalKernel::Auto,
             coords: std::array::from_fn(|_| Vec::new()),
+            coords32: std::array::from_fn(|_| Vec::new()),
             wrapped: Vec::new(),
         }
+    }
+
+    /// The decision band of the single-precision first pass, where this list runs one: the
+    /// AVX-512 kernel, wrapped coordinates bounded by the box (not [`OutOfBox::Clamp`]),
+    /// and a box small enough against the cutoff for `f32` to decide most candidates.
+    fn band32(&self) -> Option<(f32, f32)> {
+        let kernel = match self.kernel {
+            TraversalKernel::Auto => TraversalKernel::best(),
+            k => k,
+        };
+        if kernel != TraversalKernel::PackedAvx512
+            || !kernel.is_supported()
+            || self.grid.out_of_box() == OutOfBox::Clamp
+        {
+            return None;
+        }
+        let longest = self.grid.lengths().into_iter().fold(0.0, f64::max);
+        f32_band(longest, self.grid.cutoff(), D)
     }
 
     /// Sorts `positions` into cells (wrapping periodic axes, validating every coordinate).
@@ -158,6 +183,7 @@ impl<const D: usize> SortedCells<D> {
         let order = SharedSlice::new(&mut self.order);
         let coords: [SharedSlice<f64>; D] =
             std::array::from_fn(|d| SharedSlice::new(&mut self.coords[d]));
+
         let (wrapped, cell_of) = (&self.wrapped, &self.cell_of);
         self.rank
             .par_chunks_mut(chunk_len)
@@ -182,6 +208,19 @@ impl<const D: usize> SortedCells<D> {
                     }
                 }
             });
+        // The single-precision copy, converted from the sorted columns in order (a stream;
+        // a fourth scatter in the loop above cost more).
+        let single = self.band32().is_some();
+        for (c32, c) in self.coords32.iter_mut().zip(&self.coords) {
+            c32.resize(if single { c.len() } else { 0 }, 0.0);
+            c32.par_chunks_mut(WRAP_BLOCK)
+                .zip(c.par_chunks(WRAP_BLOCK))
+                .for_each(|(to, from)| {
+                    for (t, &f) in to.iter_mut().zip(from) {
+                        *t = f as f32;
+                    }
+                });
+        }
         Ok(())
     }
 
@@ -298,6 +337,14 @@ impl<const D: usize> SortedCells<D> {
             order: &self.order,
             kernel: self.kernel,
             coords: std::array::from_fn(|d| self.coords[d].as_slice()),
+            coords32: self.band32().and_then(|(lo, hi)| {
+                // Built by the last `build` (not when the kernel was changed after it).
+                (self.coords32[0].len() == self.coords[0].len()).then(|| Coords32 {
+                    cols: std::array::from_fn(|d| self.coords32[d].as_slice()),
+                    lo,
+                    hi,
+                })
+            }),
         }
     }
 

@@ -53,6 +53,62 @@ pub(crate) struct View<'a, const D: usize> {
     pub kernel: TraversalKernel,
     /// Sorted coordinates, each followed by [`COORD_PAD`] padding values.
     pub coords: [&'a [f64]; D],
+    /// Single-precision copies of `coords` with their decision band, for the AVX-512
+    /// kernel's first pass ([`Coords32`]); `None` where they are not built.
+    pub coords32: Option<Coords32<'a, D>>,
+}
+
+/// Sorted coordinates rounded to `f32` (each followed by [`COORD_PAD`] padding values), for a
+/// first pass that decides most candidates in single precision (16 lanes per AVX-512
+/// register instead of 8): a candidate whose `f32` squared distance is at most `lo` is a
+/// hit, above `hi` a miss, and in between (candidates within about `1e-5` of the cutoff
+/// in a 100-wide box) it is decided by the `f64` squared distance computed exactly as the
+/// `f64` kernels compute it. `lo` and `hi` bound the rounding ([`f32_band`]), so the hits
+/// are exactly those of the `f64` kernels.
+#[derive(Clone, Copy)]
+pub(crate) struct Coords32<'a, const D: usize> {
+    pub cols: [&'a [f32]; D],
+    pub lo: f32,
+    pub hi: f32,
+}
+
+/// The decision band `(lo, hi)` of a single-precision first pass ([`Coords32`]) over wrapped
+/// coordinates in `[0, L]` (`L` the longest box side, also the largest periodic shift) and
+/// cutoff `rc`, or `None` where the band would be wider than 5 % of the cutoff (coordinates
+/// too large for `f32` to decide most candidates).
+///
+/// Derivation, with `u = 2^-24` (the `f32` unit roundoff) and `r` the exact distance: each
+/// rounded coordinate is within `u L` of its value, the shifted position `p - s` (|.| <= 2L,
+/// formed in `f64`, then rounded) within `2 u L (1 + 2^-29)`, and the rounded difference
+/// adds `u (|e| + 3 u L)`, so each component of the `f32` separation is within
+/// `u (3 L + r) (1 + 2u)` of the exact one and the vector within
+/// `delta(r) = sqrt(D) u (3 L + r) (1 + 2u)`. The squares and sums add a relative
+/// `(1 + u)^D - 1 < 2 D u`. With `eta = 2 delta(rc) + 1e-12 rc` (which also covers the
+/// `f64` result's few ulps and the rounding of this computation), an `f32` value at most
+/// `lo = (1 - 2 D u) (rc - eta)^2` implies `r < rc (1 - 2^-51)`, so the `f64` squared distance
+/// is below `rc^2`; a value above `hi = (1 + 2 D u) (rc + eta)^2` implies
+/// `r > rc (1 + 2^-51)`, so the `f64` one is above (both as `r -+ delta(r)` is increasing
+/// in `r`). `lo` is rounded down and `hi` up to `f32`.
+pub(crate) fn f32_band(longest: f64, rc: f64, dims: usize) -> Option<(f32, f32)> {
+    let u = f64::from(f32::EPSILON) / 2.0;
+    let delta = (dims as f64).sqrt() * u * (3.0 * longest + rc) * (1.0 + 2.0 * u);
+    let eta = 2.0 * delta + 1e-12 * rc;
+    // Also refuses a NaN band (a non-finite box or cutoff).
+    if eta.is_nan() || eta >= 0.05 * rc || !longest.is_finite() {
+        return None;
+    }
+    let lo = (1.0 - 2.0 * dims as f64 * u) * (rc - eta) * (rc - eta);
+    let hi = (1.0 + 2.0 * dims as f64 * u) * (rc + eta) * (rc + eta);
+    let down = |x: f64| {
+        let f = x as f32;
+        if f64::from(f) > x { f.next_down() } else { f }
+    };
+    let up = |x: f64| {
+        let f = x as f32;
+        if f64::from(f) < x { f.next_up() } else { f }
+    };
+    let (lo, hi) = (down(lo), up(hi));
+    (lo.is_finite() && hi.is_finite() && lo > 0.0).then_some((lo, hi))
 }
 
 /// Scratch buffers of one traversal (one per thread).
@@ -136,7 +192,12 @@ fn particle_runs<
         // at most 27 runs; `hits` holds the total plus 16.
         let count = unsafe {
             if KERNEL == PACKED_AVX512 {
-                avx512::particle_hits(v.coords, pi, spans, shifts, rc2, hits)
+                match &v.coords32 {
+                    Some(c32) => {
+                        avx512::particle_hits_f32(v.coords, c32, pi, spans, shifts, rc2, hits)
+                    }
+                    None => avx512::particle_hits(v.coords, pi, spans, shifts, rc2, hits),
+                }
             } else {
                 avx2::particle_hits(v.coords, pi, spans, shifts, rc2, hits)
             }
@@ -689,6 +750,101 @@ mod avx512 {
         }
         count
     }
+
+    /// [`particle_hits`] with a single-precision first pass ([`super::Coords32`]): 16
+    /// candidates per register, each separation `(p - s) - x` with the shifted position
+    /// formed in `f64` and rounded once per run; lanes at most `lo` are hits, lanes in
+    /// `(lo, hi]` are decided by [`exact_hits`] (the `f64` squared distance of
+    /// [`particle_hits`]), so the hits, their order and the count are those of
+    /// [`particle_hits`].
+    ///
+    /// # Safety
+    /// As [`particle_hits`]; the columns of `c32` are at least as long as those of `cols`.
+    #[inline]
+    #[target_feature(enable = "avx512f,popcnt")]
+    pub(super) unsafe fn particle_hits_f32<const D: usize>(
+        cols: [&[f64]; D],
+        c32: &super::Coords32<'_, D>,
+        p: [f64; D],
+        spans: &[(usize, usize)],
+        shifts: &[[f64; D]],
+        rc2: f64,
+        hits: &mut [u32],
+    ) -> usize {
+        let len = cols.iter().map(|c| c.len()).min().unwrap_or(0);
+        let total: usize = spans.iter().map(|&(a, b)| b - a).sum();
+        assert!(c32.cols.iter().all(|c| c.len() >= len));
+        assert!(
+            spans
+                .iter()
+                .all(|&(_, b)| b + 15 <= len && b <= 1 << RUN_SHIFT)
+        );
+        assert!(spans.len() <= 1 << (32 - RUN_SHIFT) && hits.len() >= total + 16);
+        let (lo, hi) = (_mm512_set1_ps(c32.lo), _mm512_set1_ps(c32.hi));
+        let iota = _mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0);
+        let mut count = 0usize;
+        for (r, (&(j0, j1), shift)) in spans.iter().zip(shifts).enumerate() {
+            let q: [__m512; D] = std::array::from_fn(|d| _mm512_set1_ps((p[d] - shift[d]) as f32));
+            let tag = (r as u32) << RUN_SHIFT;
+            let mut k = j0;
+            while k < j1 {
+                let lanes = (j1 - k).min(16) as u32;
+                let tail = (0xffffu32 >> (16 - lanes)) as u16;
+                // SAFETY: `k + 16 <= j1 + 15 <= len` (asserted), so the loads stay inside
+                // the columns of both precisions; `count + 16 <= total + 16` (at most one hit
+                // per candidate so far), so the store stays inside `hits`.
+                unsafe {
+                    let mut r2 = _mm512_setzero_ps();
+                    for (qd, col) in q.iter().zip(&c32.cols) {
+                        let e = _mm512_sub_ps(*qd, _mm512_loadu_ps(col.as_ptr().add(k)));
+                        r2 = _mm512_fmadd_ps(e, e, r2);
+                    }
+                    let mut m = _mm512_cmp_ps_mask::<_CMP_LE_OQ>(r2, lo) & tail;
+                    let near = _mm512_cmp_ps_mask::<_CMP_LE_OQ>(r2, hi) & tail & !m;
+                    if near != 0 {
+                        m |= exact_hits(&cols, p, shift, rc2, k, near);
+                    }
+                    let idx = _mm512_add_epi32(_mm512_set1_epi32((tag | k as u32) as i32), iota);
+                    _mm512_storeu_si512(
+                        hits.as_mut_ptr().add(count).cast(),
+                        _mm512_maskz_compress_epi32(m, idx),
+                    );
+                    count += m.count_ones() as usize;
+                }
+                k += 16;
+            }
+        }
+        count
+    }
+
+    /// The lanes of `lanes` (candidates `k + l`) whose `f64` squared distance from `p` is at
+    /// most `rc2`, computed with the operations of [`r2_of`] in its order (so the same bits).
+    #[cold]
+    #[inline(never)]
+    fn exact_hits<const D: usize>(
+        cols: &[&[f64]; D],
+        p: [f64; D],
+        shift: &[f64; D],
+        rc2: f64,
+        k: usize,
+        mut lanes: u16,
+    ) -> u16 {
+        let mut m = 0u16;
+        while lanes != 0 {
+            let l = lanes.trailing_zeros() as usize;
+            lanes &= lanes - 1;
+            let mut r2 = 0.0;
+            for d in 0..D {
+                let dx = (p[d] - cols[d][k + l]) - shift[d];
+                let sq = dx * dx;
+                r2 = if d == 0 { sq } else { r2 + sq };
+            }
+            if r2 <= rc2 {
+                m |= 1 << l;
+            }
+        }
+        m
+    }
 }
 
 /// The packed kernel for AVX2: as [`avx512`], 8 candidates at a time, the hit lanes packed
@@ -818,9 +974,17 @@ mod tests {
         visit: impl Fn(&View<'_, D>, &mut Scratch<D>, &mut dyn FnMut(usize, usize, [f64; D], f64)),
         cells: &SortedCells<D>,
     ) -> Pairs<D> {
+        collect_view(visit, &cells.view())
+    }
+
+    /// [`collect`] on a given view.
+    fn collect_view<const D: usize>(
+        visit: impl Fn(&View<'_, D>, &mut Scratch<D>, &mut dyn FnMut(usize, usize, [f64; D], f64)),
+        view: &View<'_, D>,
+    ) -> Pairs<D> {
         let mut out = Vec::new();
         let mut s = Scratch::new();
-        visit(&cells.view(), &mut s, &mut |i, j, sep, r2| {
+        visit(view, &mut s, &mut |i, j, sep, r2| {
             out.push((i, j, sep.map(f64::to_bits), r2.to_bits()))
         });
         out
@@ -893,15 +1057,27 @@ mod tests {
     /// Compares every packed kernel this CPU runs with the portable one; returns the
     /// kernels compared.
     fn kernels_agree<const D: usize>(periodic: [bool; D], cutoff: f64, seed: u64) -> Vec<u8> {
-        let mut ran = Vec::new();
         let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
         let l = 9.0;
         let p: Vec<[f64; D]> = (0..3000)
             .map(|_| std::array::from_fn(|_| rng.random::<f64>() * l))
             .collect();
-        let grid = CellGrid::new([0.0; D], [l; D], periodic, cutoff).unwrap();
+        kernels_agree_on(&p, [l; D], periodic, cutoff)
+    }
+
+    /// [`kernels_agree`] on given positions in a box of sides `lengths`; the AVX-512 kernel
+    /// runs with and without its single-precision first pass (where the list built it).
+    fn kernels_agree_on<const D: usize>(
+        p: &[[f64; D]],
+        lengths: [f64; D],
+        periodic: [bool; D],
+        cutoff: f64,
+    ) -> Vec<u8> {
+        let mut ran = Vec::new();
+        let l = lengths.into_iter().fold(0.0, f64::max);
+        let grid = CellGrid::new([0.0; D], lengths, periodic, cutoff).unwrap();
         let mut cells = SortedCells::new(&grid);
-        cells.build(&p).unwrap();
+        cells.build(p).unwrap();
         let nc = grid.n_cells();
         for half in [true, false] {
             let portable = collect(
@@ -916,6 +1092,19 @@ mod tests {
                     &cells,
                 );
                 assert_eq!(packed, portable, "kernel {kernel} and portable differ");
+                if kernel == PACKED_AVX512 {
+                    assert!(
+                        cells.view().coords32.is_some() == f32_band(l, cutoff, D).is_some(),
+                        "the list built its f32 coordinates where the band allows"
+                    );
+                    let mut plain = cells.view();
+                    plain.coords32 = None;
+                    let f64_only = collect_view(
+                        |v, s, mut f| visit_cells_with(kernel, v, 0..nc, half, s, &mut f),
+                        &plain,
+                    );
+                    assert_eq!(f64_only, portable, "AVX-512 without f32 pass and portable");
+                }
                 // One particle at a time (the gather traversal's entry point).
                 for i in (0..p.len()).step_by(97) {
                     let at = (cells.rank()[i] as usize, cells.cell_of()[i] as usize);
@@ -935,6 +1124,49 @@ mod tests {
             }
         }
         ran
+    }
+
+    /// The single-precision first pass of the AVX-512 kernel reports exactly the `f64` hits
+    /// where `f32` cannot decide: a 3000-wide periodic box (decision band about 1e-3 of the
+    /// cutoff), 4000 random particles plus 1500 pairs planted at distances within a few
+    /// `f64` ulps of the cutoff, some across the periodic faces; the planted pairs must reach
+    /// the band's exact check (counted), and the kernels must agree pair for pair.
+    #[test]
+    fn f32_first_pass_keeps_the_f64_pairs() {
+        let (box_len, rc) = ([3000.0, 6.0, 6.0], 1.0);
+        let (lo, hi) = f32_band(box_len[0], rc, 3).expect("a band at L = 3000, rc = 1");
+        assert!(f64::from(lo) < rc * rc && rc * rc < f64::from(hi));
+        assert!(
+            f32_band(1e9, 1.0, 3).is_none(),
+            "no band where f32 cannot decide"
+        );
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(11);
+        let mut p: Vec<[f64; 3]> = (0..4000)
+            .map(|_| std::array::from_fn(|d| rng.random::<f64>() * box_len[d]))
+            .collect();
+        let mut near = 0;
+        for k in 0..1500 {
+            let a: [f64; 3] = std::array::from_fn(|d| rng.random::<f64>() * box_len[d]);
+            // A direction, scaled to the cutoff, nudged by -4..=4 f64 ulps of the cutoff.
+            let dir: [f64; 3] = std::array::from_fn(|_| rng.random::<f64>() - 0.5);
+            let norm = dir.iter().map(|x| x * x).sum::<f64>().sqrt();
+            let r = rc + (k % 9) as f64 * rc * f64::EPSILON - 4.0 * rc * f64::EPSILON;
+            let b: [f64; 3] =
+                std::array::from_fn(|d| (a[d] + dir[d] / norm * r).rem_euclid(box_len[d]));
+            let sep: [f64; 3] = std::array::from_fn(|d| {
+                let x = (a[d] as f32 - b[d] as f32).abs();
+                f64::from(x.min(box_len[d] as f32 - x))
+            });
+            let r2_32 = sep.iter().map(|x| x * x).sum::<f64>();
+            if r2_32 > f64::from(lo) && r2_32 <= f64::from(hi) {
+                near += 1;
+            }
+            p.push(a);
+            p.push(b);
+        }
+        assert!(near > 1000, "only {near} planted pairs reach the band");
+        let ran = kernels_agree_on(&p, box_len, [true; 3], rc);
+        report_kernels("f32_first_pass_keeps_the_f64_pairs", &ran);
     }
 
     /// Both packed kernels report exactly the candidates of their runs that are within the
