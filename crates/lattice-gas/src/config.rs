@@ -15,7 +15,8 @@ pub enum CpuMethod {
     /// the width is a multiple of 64, else the lookup table.
     #[default]
     Auto,
-    /// [`crate::LutCpu`]: one byte per site, table lookup, rayon over rows (any width).
+    /// [`crate::LutCpu`]: one byte per site, table lookup, rayon over bands of rows, four
+    /// steps per pass over the lattice (any width).
     Lut,
     /// [`crate::MultiSpinCpu`]: 64-site bit-planes, boolean collisions (width a multiple
     /// of 64).
