@@ -720,7 +720,6 @@ mod avx512 {
         assert!(spans.len() <= 1 << (32 - RUN_SHIFT) && hits.len() >= total + 16);
         let pv: [__m512d; D] = std::array::from_fn(|d| _mm512_set1_pd(p[d]));
         let cut = _mm512_set1_pd(rc2);
-        let iota = _mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0);
         let mut count = 0usize;
         for (r, (&(j0, j1), shift)) in spans.iter().zip(shifts).enumerate() {
             let sv: [__m512d; D] = std::array::from_fn(|d| _mm512_set1_pd(shift[d]));
@@ -738,12 +737,7 @@ mod avx512 {
                     let m_lo = _mm512_cmp_pd_mask::<_CMP_LE_OQ>(lo, cut);
                     let m_hi = _mm512_cmp_pd_mask::<_CMP_LE_OQ>(hi, cut);
                     let m = (u16::from(m_lo) | (u16::from(m_hi) << 8)) & tail;
-                    let idx = _mm512_add_epi32(_mm512_set1_epi32((tag | k as u32) as i32), iota);
-                    _mm512_storeu_si512(
-                        hits.as_mut_ptr().add(count).cast(),
-                        _mm512_maskz_compress_epi32(m, idx),
-                    );
-                    count += m.count_ones() as usize;
+                    count = pack(hits, count, tag, k, m);
                 }
                 k += 16;
             }
@@ -781,7 +775,6 @@ mod avx512 {
         );
         assert!(spans.len() <= 1 << (32 - RUN_SHIFT) && hits.len() >= total + 16);
         let (lo, hi) = (_mm512_set1_ps(c32.lo), _mm512_set1_ps(c32.hi));
-        let iota = _mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0);
         let mut count = 0usize;
         for (r, (&(j0, j1), shift)) in spans.iter().zip(shifts).enumerate() {
             let q: [__m512; D] = std::array::from_fn(|d| _mm512_set1_ps((p[d] - shift[d]) as f32));
@@ -804,17 +797,33 @@ mod avx512 {
                     if near != 0 {
                         m |= exact_hits(&cols, p, shift, rc2, k, near);
                     }
-                    let idx = _mm512_add_epi32(_mm512_set1_epi32((tag | k as u32) as i32), iota);
-                    _mm512_storeu_si512(
-                        hits.as_mut_ptr().add(count).cast(),
-                        _mm512_maskz_compress_epi32(m, idx),
-                    );
-                    count += m.count_ones() as usize;
+                    count = pack(hits, count, tag, k, m);
                 }
                 k += 16;
             }
         }
         count
+    }
+
+    /// Stores the indices `j | tag` of the hit lanes `m` of candidates `k..k + 16` at
+    /// `hits[count..]` (packed with `vpcompressd`, stored as a whole vector) and returns the
+    /// count with them.
+    ///
+    /// # Safety
+    /// The CPU must support AVX-512F and POPCNT; `count + 16 <= hits.len()`.
+    #[inline]
+    #[target_feature(enable = "avx512f,popcnt")]
+    unsafe fn pack(hits: &mut [u32], count: usize, tag: u32, k: usize, m: u16) -> usize {
+        let iota = _mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0);
+        let idx = _mm512_add_epi32(_mm512_set1_epi32((tag | k as u32) as i32), iota);
+        // SAFETY: 16 slots from `count` are inside `hits` (the caller's contract).
+        unsafe {
+            _mm512_storeu_si512(
+                hits.as_mut_ptr().add(count).cast(),
+                _mm512_maskz_compress_epi32(m, idx),
+            )
+        };
+        count + m.count_ones() as usize
     }
 
     /// The lanes of `lanes` (candidates `k + l`) whose `f64` squared distance from `p` is at
