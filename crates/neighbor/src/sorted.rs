@@ -16,6 +16,9 @@ const CELLS_PER_TASK: usize = 64;
 /// Particles per rayon task when positions are wrapped and assigned to cells.
 const WRAP_BLOCK: usize = 4096;
 
+/// How many particles ahead the scatter prefetches its destination.
+const AHEAD: usize = 16;
+
 /// Below this many particles the counting sort runs as one chunk.
 const PAR_SORT_MIN: usize = 1 << 15;
 
@@ -35,6 +38,21 @@ impl<T> SharedSlice<T> {
         Self {
             ptr: data.as_mut_ptr(),
             len: data.len(),
+        }
+    }
+
+    /// Asks the CPU to fetch the cache line of `index` (a hint: nothing if out of range or
+    /// not on x86-64).
+    #[inline]
+    pub(crate) fn prefetch(&self, index: usize) {
+        #[cfg(target_arch = "x86_64")]
+        if index < self.len {
+            // SAFETY: in bounds; a prefetch neither reads nor writes memory.
+            unsafe {
+                std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(
+                    self.ptr.add(index).cast(),
+                )
+            };
         }
     }
 
@@ -71,6 +89,20 @@ pub struct SortedCells<const D: usize> {
     /// single-precision first pass (see [`SortedCells::build`]); empty otherwise.
     coords32: [Vec<f32>; D],
     wrapped: Vec<[f64; D]>,
+    /// The counting sort's scatter target (see [`Slot`]), in sorted order.
+    slots: Vec<Slot<D>>,
+}
+
+/// One particle as the counting sort scatters it: its wrapped position and id in one
+/// 32-byte-aligned record, so that placing a particle writes one cache line; a streaming
+/// pass then splits the records into the sorted columns. (Scattering the id and each
+/// coordinate to its own column touched four random lines per particle, and the scatter
+/// was most of the build.)
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
+struct Slot<const D: usize> {
+    x: [f64; D],
+    id: u32,
 }
 
 impl<const D: usize> SortedCells<D> {
@@ -86,6 +118,7 @@ impl<const D: usize> SortedCells<D> {
             coords: std::array::from_fn(|_| Vec::new()),
             coords32: std::array::from_fn(|_| Vec::new()),
             wrapped: Vec::new(),
+            slots: Vec::new(),
         }
     }
 
@@ -112,8 +145,9 @@ impl<const D: usize> SortedCells<D> {
     /// Parallel on the rayon pool: the cell assignment, then a two-pass counting sort over
     /// contiguous chunks of particles (each chunk counts its particles per cell; a prefix
     /// sum over cells and chunks gives every chunk its own write cursor per cell; each chunk
-    /// scatters its ids and positions). Ids stay ascending inside a cell, so the result does
-    /// not depend on the number of threads.
+    /// scatters a record of id and position per particle), then a streaming pass that splits
+    /// the sorted records into the id and coordinate columns. Ids stay ascending inside a
+    /// cell, so the result does not depend on the number of threads.
     pub fn build(&mut self, positions: &[[f64; D]]) -> Result<()> {
         let n = positions.len();
         if n > u32::MAX as usize - 1 {
@@ -173,17 +207,11 @@ impl<const D: usize> SortedCells<D> {
             }
         }
         self.cell_start[nc] = acc;
-        // Pass 2: every chunk scatters its ids, ranks and positions into cell order.
-        self.order.resize(n, 0);
+        // Pass 2: every chunk scatters its particles (id and position, one record each) into
+        // cell order and notes their ranks.
         self.rank.resize(n, 0);
-        for col in &mut self.coords {
-            // The padding is read by the distance pass (and masked off), never reported.
-            col.resize(n + COORD_PAD, 0.0);
-        }
-        let order = SharedSlice::new(&mut self.order);
-        let coords: [SharedSlice<f64>; D] =
-            std::array::from_fn(|d| SharedSlice::new(&mut self.coords[d]));
-
+        self.slots.resize(n, Slot { x: [0.0; D], id: 0 });
+        let slots = SharedSlice::new(&mut self.slots);
         let (wrapped, cell_of) = (&self.wrapped, &self.cell_of);
         self.rank
             .par_chunks_mut(chunk_len)
@@ -191,8 +219,12 @@ impl<const D: usize> SortedCells<D> {
             .enumerate()
             .for_each(|(t, (ranks, cursor))| {
                 let first = t * chunk_len;
+                let last = first + ranks.len();
                 for (k, r) in ranks.iter_mut().enumerate() {
                     let i = first + k;
+                    if i + AHEAD < last {
+                        slots.prefetch(cursor[cell_of[i + AHEAD] as usize] as usize);
+                    }
                     let slot = &mut cursor[cell_of[i] as usize];
                     let s = *slot as usize;
                     *slot += 1;
@@ -201,26 +233,48 @@ impl<const D: usize> SortedCells<D> {
                     // (prefix sum of the counts), and every particle takes one slot, so each
                     // index `s` is written by exactly one particle of one task.
                     unsafe {
-                        order.write(s, i as u32);
-                        for (d, col) in coords.iter().enumerate() {
-                            col.write(s, wrapped[i][d]);
+                        slots.write(
+                            s,
+                            Slot {
+                                x: wrapped[i],
+                                id: i as u32,
+                            },
+                        )
+                    };
+                }
+            });
+        // Pass 3, streaming: the records into the id column and the coordinate columns (and
+        // their single-precision copies where the AVX-512 kernel's first pass runs).
+        self.order.resize(n, 0);
+        let single = self.band32().is_some();
+        for (col, c32) in self.coords.iter_mut().zip(&mut self.coords32) {
+            // The padding is read by the distance pass (and masked off), never reported.
+            col.resize(n + COORD_PAD, 0.0);
+            c32.resize(if single { n + COORD_PAD } else { 0 }, 0.0);
+        }
+        let order = SharedSlice::new(&mut self.order);
+        let coords: [SharedSlice<f64>; D] =
+            std::array::from_fn(|d| SharedSlice::new(&mut self.coords[d]));
+        let coords32: [SharedSlice<f32>; D] =
+            std::array::from_fn(|d| SharedSlice::new(&mut self.coords32[d]));
+        self.slots
+            .par_chunks(WRAP_BLOCK)
+            .enumerate()
+            .for_each(|(b, chunk)| {
+                for (k, slot) in chunk.iter().enumerate() {
+                    let s = b * WRAP_BLOCK + k;
+                    // SAFETY: every task writes its own range of sorted positions, below `n`.
+                    unsafe {
+                        order.write(s, slot.id);
+                        for d in 0..D {
+                            coords[d].write(s, slot.x[d]);
+                            if single {
+                                coords32[d].write(s, slot.x[d] as f32);
+                            }
                         }
                     }
                 }
             });
-        // The single-precision copy, converted from the sorted columns in order (a stream;
-        // a fourth scatter in the loop above cost more).
-        let single = self.band32().is_some();
-        for (c32, c) in self.coords32.iter_mut().zip(&self.coords) {
-            c32.resize(if single { c.len() } else { 0 }, 0.0);
-            c32.par_chunks_mut(WRAP_BLOCK)
-                .zip(c.par_chunks(WRAP_BLOCK))
-                .for_each(|(to, from)| {
-                    for (t, &f) in to.iter_mut().zip(from) {
-                        *t = f as f32;
-                    }
-                });
-        }
         Ok(())
     }
 
