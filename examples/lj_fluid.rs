@@ -30,7 +30,7 @@ use std::time::Instant;
 
 use clap::Parser;
 use simkit::backend::{Backend, Error, GpuContext, Precision, Result, Simulation};
-use simkit::md::{Config, Diagnostics, Md, PairParams, PairTable, State, System, scenes};
+use simkit::md::{Config, Diagnostics, LennardJones, Md, PairTable, State, System, scenes};
 use simkit::output::csv::CsvWriter;
 use simkit::output::vtk::Particles;
 use simkit::output::xyz::{XyzFrame, write_xyz};
@@ -95,7 +95,7 @@ fn system(cells: usize) -> Result<System> {
     if cells == 20 {
         return scenes::lj_melt();
     }
-    let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, CUTOFF))?;
+    let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, CUTOFF))?;
     scenes::fcc_lattice([cells; 3], DENSITY, TEMPERATURE, table, &[0], SEED)
 }
 

@@ -29,7 +29,7 @@ use std::time::Instant;
 
 use clap::Parser;
 use simkit::backend::{Backend, GpuContext, Precision, Result, Simulation};
-use simkit::md::{Config, Md, PairParams, PairTable, System, scenes};
+use simkit::md::{Config, LennardJones, Md, PairTable, System, scenes};
 use simkit::output::csv::write_csv;
 use simkit::output::plot::{Plot, Scale, Series, Style};
 
@@ -73,7 +73,7 @@ struct Row {
 
 /// The melted liquid every mode starts from.
 fn liquid() -> Result<System> {
-    let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5))?;
+    let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5))?;
     let mut system = scenes::fcc_lattice([8; 3], 0.8442, 1.44, table, &[0], 87287)?;
     let mut melt = Md::new(&system, &config(0.005, 0.3, Precision::F64), Backend::Cpu)?;
     melt.step(400)?;

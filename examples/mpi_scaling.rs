@@ -34,7 +34,7 @@ use simkit::backend::comm::Comm;
 use simkit::dem::scenes::granular_box;
 use simkit::dem::{Config as DemConfig, DistributedDem};
 use simkit::lattice_gas::{Config as LgConfig, DistributedLatticeGas, Lattice};
-use simkit::md::{Config as MdConfig, DistributedMd, PairParams, PairTable, scenes as md_scenes};
+use simkit::md::{Config as MdConfig, DistributedMd, LennardJones, PairTable, scenes as md_scenes};
 use simkit::pp_coulomb::scenes::plasma_box;
 use simkit::pp_coulomb::units::PhysicalInputs;
 use simkit::pp_coulomb::{Config as PpConfig, DistributedCoulomb, Integrator};
@@ -174,7 +174,7 @@ fn run(args: &Args) -> Result<()> {
             })
         }
         Problem::Md { cells } => {
-            let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5))?;
+            let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5))?;
             // The velocity seed of in.lj (the one `scenes::lj_melt` uses).
             let system = md_scenes::fcc_lattice([cells; 3], 0.8442, 1.44, table, &[0], 87287)?;
             let config = MdConfig::with_dt(0.005);

@@ -5,7 +5,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use simkit::backend::{Backend, Result, Simulation};
-use simkit::md::{Config, Md, PairParams, PairTable, scenes};
+use simkit::md::{Config, LennardJones, Md, PairTable, scenes};
 use simkit::output::csv::write_csv;
 use simkit::output::plot::{Plot, Series};
 
@@ -15,7 +15,7 @@ use crate::Row;
 /// shifted to 0 at the cutoff (so that pairs crossing it do not make the energy jump),
 /// dt = 0.005, 600 steps (t = 3); energies per atom every 20 steps.
 pub fn run(backend: Backend<'_>, out: &Path) -> Result<Row> {
-    let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5))?;
+    let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5))?;
     let system = scenes::fcc_lattice([5; 3], 0.8442, 1.44, table, &[0], 87287)?;
     let n = system.particle_count() as f64;
     let config = Config {

@@ -66,6 +66,10 @@ pub trait Real:
     fn to_f64(self) -> f64;
     /// Square root.
     fn sqrt(self) -> Self;
+    /// `e^self`.
+    fn exp(self) -> Self;
+    /// Natural logarithm.
+    fn ln(self) -> Self;
     /// The smaller of two values (the other one when either is NaN).
     fn min(self, other: Self) -> Self;
     /// The larger of two values (the other one when either is NaN).
@@ -92,6 +96,14 @@ macro_rules! impl_real {
             #[inline(always)]
             fn sqrt(self) -> Self {
                 $t::sqrt(self)
+            }
+            #[inline(always)]
+            fn exp(self) -> Self {
+                $t::exp(self)
+            }
+            #[inline(always)]
+            fn ln(self) -> Self {
+                $t::ln(self)
             }
             #[inline(always)]
             fn min(self, other: Self) -> Self {

@@ -12,10 +12,11 @@ override KICK: f32 = 0.0;
 @group(0) @binding(2) var<storage, read> counts: array<u32>;
 @group(0) @binding(3) var<storage, read> slots: array<u32>;
 @group(0) @binding(4) var<storage, read> pos: array<vec4<f32>>;
-@group(0) @binding(5) var<storage, read> table: array<vec4<f32>>;
-@group(0) @binding(6) var<storage, read_write> acc: array<vec4<f32>>;
-@group(0) @binding(7) var<storage, read_write> vel: array<vec4<f32>>;
-@group(0) @binding(8) var<storage, read_write> vir: array<f32>;
+@group(0) @binding(5) var<storage, read> coeff: array<MdCoeff>;
+@group(0) @binding(6) var<storage, read> species: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read_write> acc: array<vec4<f32>>;
+@group(0) @binding(8) var<storage, read_write> vel: array<vec4<f32>>;
+@group(0) @binding(9) var<storage, read_write> vir: array<f32>;
 
 var<workgroup> stage_pos: array<vec4<f32>, CAP>;
 var<workgroup> stage_id: array<u32, CAP>;
@@ -69,7 +70,7 @@ fn md_block_force(
                         let pj = stage_pos[k];
                         let sep = nb_min_image(grid, ti - pj.xyz);
                         let r2 = dot(sep, sep);
-                        let fe = md_pair_force_energy(table[row + u32(pj.w)], r2);
+                        let fe = md_pair_force_energy(coeff[row + u32(pj.w)], r2);
                         f += fe.x * sep;
                         e += fe.y;
                         w += fe.x * r2;
@@ -81,7 +82,7 @@ fn md_block_force(
     if (!holds) {
         return;
     }
-    let a = f * table[prm.n_species * prm.n_species + si].x;
+    let a = f * species[si].x;
     acc[i] = vec4<f32>(a, e);
     vir[i] = w;
     if (KICK > 0.0) {

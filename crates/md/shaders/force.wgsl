@@ -11,12 +11,13 @@ override KICK: f32 = 0.0;
 @group(0) @binding(3) var<storage, read> sorted_ids: array<u32>;
 @group(0) @binding(4) var<storage, read> sorted_pos: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read> wrapped: array<vec4<f32>>;
-// n_species^2 pair entries (c12, c6, rc2, shift), entry si * n_species + sj, then one
-// (1 / mass, 0, 0, 0) entry per species.
-@group(0) @binding(6) var<storage, read> table: array<vec4<f32>>;
-@group(0) @binding(7) var<storage, read_write> acc: array<vec4<f32>>;
-@group(0) @binding(8) var<storage, read_write> vel: array<vec4<f32>>;
-@group(0) @binding(9) var<storage, read_write> vir: array<f32>;
+// n_species^2 pair coefficients of the law, entry si * n_species + sj.
+@group(0) @binding(6) var<storage, read> coeff: array<MdCoeff>;
+// Per species: (1 / mass, c1, amplitude, 0).
+@group(0) @binding(7) var<storage, read> species: array<vec4<f32>>;
+@group(0) @binding(8) var<storage, read_write> acc: array<vec4<f32>>;
+@group(0) @binding(9) var<storage, read_write> vel: array<vec4<f32>>;
+@group(0) @binding(10) var<storage, read_write> vir: array<f32>;
 
 @compute @workgroup_size(64)
 fn md_force(
@@ -50,7 +51,7 @@ fn md_force(
                     let pj = sorted_pos[k];
                     let sep = nb_min_image(grid, ti - pj.xyz);
                     let r2 = dot(sep, sep);
-                    let fe = md_pair_force_energy(table[row + u32(pj.w)], r2);
+                    let fe = md_pair_force_energy(coeff[row + u32(pj.w)], r2);
                     f += fe.x * sep;
                     e += fe.y;
                     w += fe.x * r2;
@@ -58,7 +59,7 @@ fn md_force(
             }
         }
     }
-    let a = f * table[prm.n_species * prm.n_species + si].x;
+    let a = f * species[si].x;
     acc[i] = vec4<f32>(a, e);
     vir[i] = w;
     if (KICK > 0.0) {

@@ -2,8 +2,8 @@
 // v' = c1 v + amplitude R, x += (v + v') dt / 2, v = v', then the boundary rule. R are the
 // normal numbers of key (seed, step, particle); the step is tick[0], advanced on the device
 // by md_tick after every step. Needs drift.wgsl, noise.wgsl and RNG_WGSL.
-// table: the force kernel's table; entry n_species^2 + s is (1 / mass, c1, amplitude, 0).
-@group(0) @binding(4) var<storage, read> table: array<vec4<f32>>;
+// Per species s: (1 / mass, c1, amplitude, 0).
+@group(0) @binding(4) var<storage, read> species: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read> tick: array<u32>;
 
 @compute @workgroup_size(64)
@@ -17,7 +17,7 @@ fn md_drift_langevin(
         return;
     }
     let v = md_open_kick(i);
-    let ou = table[prm.n_species * prm.n_species + u32(pos[i].w)];
+    let ou = species[u32(pos[i].w)];
     let g = md_gaussians(prm.seed, tick[0], i);
     var w = ou.y * v + ou.z * g;
     if (prm.dim < 3u) {

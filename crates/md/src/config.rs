@@ -3,7 +3,7 @@
 use serde::{Deserialize, Serialize};
 use simkit_backend::{Error, Precision, Result};
 
-use crate::{Langevin, System};
+use crate::{Langevin, PairLaw, System};
 
 /// Time integration scheme (both second order, symplectic and time reversible; one force
 /// evaluation per step).
@@ -123,7 +123,7 @@ impl Config {
     /// step over the safe bound without [`allow_unstable_dt`](Self::allow_unstable_dt),
     /// no `dt` for a system without interacting pairs (no guidance exists then), or a
     /// thermostat with a negative or non-finite temperature or friction.
-    pub fn resolve_dt(&self, system: &System) -> Result<f64> {
+    pub fn resolve_dt<L: PairLaw>(&self, system: &System<L>) -> Result<f64> {
         if let Some(l) = &self.thermostat {
             crate::thermostat::check_target("thermostat", l.temperature, l.gamma)?;
         }
@@ -147,8 +147,9 @@ impl Config {
                 return Err(Error::invalid(
                     "dt",
                     "None",
-                    "no pair interacts (every eps or a + b is 0), so no time step can be \
-                     derived; give Config::dt",
+                    "no pair of the table gives a stiffness (no pair interacts, or the \
+                     law has no well, e.g. Yukawa), so no time step can be derived; give \
+                     Config::dt",
                 ));
             }
         };
@@ -175,7 +176,7 @@ impl Config {
 pub struct StepGuide {
     /// The species pair with the shortest period.
     pub pair: (usize, usize),
-    /// Where its stiffness was measured ([`crate::PairParams::stiffness_distance`]).
+    /// Where its stiffness was measured ([`crate::PairLaw::stiffness`]).
     pub distance: f64,
     /// Its period `T = 2 pi sqrt(mu / phi''(r*))`, `mu = m_i m_j / (m_i + m_j)`.
     pub period: f64,
@@ -187,28 +188,28 @@ pub struct StepGuide {
 
 /// Time-step guidance from the stiffest species pair.
 ///
-/// For every pair with `eps > 0` the curvature `k = phi''(r*)` is taken at
-/// `r* = sigma (2a/b)^(1/6)` (the minimum of `phi`) when `a, b > 0`, and at
-/// `r* = sigma a^(1/12)` (where the repulsion equals `4 eps`) for a purely repulsive pair;
-/// the pair then oscillates with `omega = sqrt(k / mu)`, `mu` the reduced mass, period
+/// For every pair whose law gives a stiffness ([`crate::PairLaw::stiffness`]) the
+/// curvature `k = phi''(r*)` is taken at the distance `r*` the law names: for
+/// [`crate::LennardJones`] with `eps > 0`, `r* = sigma (2a/b)^(1/6)` (the minimum of
+/// `phi`) when `a, b > 0`, and `r* = sigma a^(1/12)` (where the repulsion equals `4 eps`)
+/// for a purely repulsive pair; the minimum for [`crate::Morse`], [`crate::Mie`] and
+/// [`crate::Buckingham`] (when inside the cutoff), the cutoff for [`crate::Wca`]. The pair
+/// then oscillates with `omega = sqrt(k / mu)`, `mu` the reduced mass, period
 /// `T = 2 pi / omega`. For Lennard-Jones `k = 72 eps / (2^(1/3) sigma^2) = 57.15 eps /
 /// sigma^2`, so with `m = 1` (`mu = 1/2`) `T = 0.588 sigma sqrt(m / eps)`: the default
 /// `T / 120` is `0.0049`, the bound `T / 20` is `0.0294`. Velocity Verlet is linearly stable for
 /// `omega dt < 2` (`dt < T / pi`); the bound keeps a margin of six for the stiffer
-/// repulsive core that hot collisions reach. `None` when no pair interacts.
-pub fn time_step_guide(system: &System) -> Option<StepGuide> {
+/// repulsive core that hot collisions reach. `None` when no pair gives a stiffness.
+pub fn time_step_guide<L: PairLaw>(system: &System<L>) -> Option<StepGuide> {
     let table = system.table();
     let masses = system.masses();
     let n = table.n_species();
     let mut best: Option<StepGuide> = None;
     for si in 0..n {
         for sj in si..n {
-            let Some(p) = table.get(si, sj) else { continue };
-            if p.eps == 0.0 || p.a == 0.0 {
+            let Some((r, k)) = table.get(si, sj).and_then(|p| p.stiffness()) else {
                 continue;
-            }
-            let r = p.stiffness_distance();
-            let k = p.curvature(r);
+            };
             let mu = masses[si] * masses[sj] / (masses[si] + masses[sj]);
             if !(k > 0.0 && k.is_finite()) {
                 continue;

@@ -14,9 +14,8 @@ use crate::cpu::{AXES, Kernel, beyond, kick_slice, list_range, reflect, wrap};
 use crate::diagnostics::assemble;
 use crate::engine::EngineState;
 use crate::sim::{decode_checkpoint, encode_checkpoint, model_name};
-use crate::table::{PairCoeff, pair_force_energy};
 use crate::thermostat::{gaussians, ou_coefficients};
-use crate::{Config, Diagnostics, Dim, Integrator, State, System};
+use crate::{Config, Diagnostics, Dim, Integrator, LennardJones, PairLaw, State, System};
 
 /// Owned particles per rayon task of the per-particle passes.
 const CHUNK: usize = 1024;
@@ -69,9 +68,9 @@ const CAUSE: &str = "a time step too large for the stiffest pair (see time_step_
 /// ```
 /// use simkit_backend::comm::Comm;
 /// use simkit_backend::Simulation;
-/// use simkit_md::{Config, DistributedMd, PairParams, PairTable, scenes};
+/// use simkit_md::{Config, DistributedMd, LennardJones, PairTable, scenes};
 /// # fn main() -> simkit_backend::Result<()> {
-/// let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5))?;
+/// let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5))?;
 /// let system = scenes::fcc_lattice([4; 3], 0.8442, 1.44, table, &[0], 1)?;
 /// // `Comm::mpi()?` under `mpirun -np P` (feature `mpi`); here one process.
 /// let mut md = DistributedMd::new(&system, &Config::with_dt(0.005), Comm::serial())?;
@@ -80,24 +79,24 @@ const CAUSE: &str = "a time step too large for the stiffest pair (see time_step_
 /// assert!((md.diagnostics()?.total - e0).abs() < 1e-2 * e0.abs());
 /// // Checkpoints are Md's format: they resume on any rank count, or in `Md`.
 /// let bytes = md.checkpoint()?;
-/// let mut again = DistributedMd::resume(&bytes, Comm::serial())?;
+/// let mut again = DistributedMd::<LennardJones>::resume(&bytes, Comm::serial())?;
 /// md.step(10)?;
 /// again.step(10)?;
 /// assert_eq!(md.state()?, again.state()?);
 /// # Ok(())
 /// # }
 /// ```
-pub struct DistributedMd {
+pub struct DistributedMd<L: PairLaw = LennardJones> {
     comm: Comm,
-    system: System,
+    system: System<L>,
     config: Config,
-    engine: Engines,
+    engine: Engines<L>,
 }
 
 /// The engine in the system's dimension.
-enum Engines {
-    Two(Engine<2>),
-    Three(Engine<3>),
+enum Engines<L: PairLaw> {
+    Two(Engine<2, L>),
+    Three(Engine<3, L>),
 }
 
 /// Runs `$body` with `$e` bound to the engine, whatever its dimension.
@@ -110,7 +109,7 @@ macro_rules! with_engine {
     };
 }
 
-impl std::fmt::Debug for DistributedMd {
+impl<L: PairLaw> std::fmt::Debug for DistributedMd<L> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("DistributedMd")
             .field("comm", &self.comm)
@@ -121,7 +120,7 @@ impl std::fmt::Debug for DistributedMd {
     }
 }
 
-impl DistributedMd {
+impl<L: PairLaw> DistributedMd<L> {
     /// Validates the system and settings as [`crate::Md::new`] does on the CPU (the same
     /// errors, on every rank) and builds this rank's part of the run. Collective; every
     /// rank passes the same system and configuration.
@@ -131,7 +130,7 @@ impl DistributedMd {
     /// ranks, a smaller skin or a larger box fix it); ranks whose systems or settings
     /// differ. An error on one rank is an error on every rank (the others name the rank
     /// that failed).
-    pub fn new(system: &System, config: &Config, comm: Comm) -> Result<Self> {
+    pub fn new(system: &System<L>, config: &Config, comm: Comm) -> Result<Self> {
         Self::build(system, config, comm, None)
     }
 
@@ -148,7 +147,7 @@ impl DistributedMd {
     pub fn resume(bytes: &[u8], comm: Comm) -> Result<Self> {
         let (system, config, engine, list) = comm.agree(decode_checkpoint(bytes).and_then(
             |(written, system, config, e, l)| {
-                let want = model_name(false, Precision::F64, system.dim().axes());
+                let want = model_name::<L>(false, Precision::F64, system.dim().axes());
                 if written == want {
                     Ok((system, config, e, l))
                 } else {
@@ -163,7 +162,7 @@ impl DistributedMd {
     }
 
     fn build(
-        system: &System,
+        system: &System<L>,
         config: &Config,
         comm: Comm,
         saved: Option<(&EngineState, &Vec<f64>)>,
@@ -212,7 +211,7 @@ impl DistributedMd {
     }
 
     /// The system the run started from.
-    pub fn system(&self) -> &System {
+    pub fn system(&self) -> &System<L> {
         &self.system
     }
 
@@ -336,7 +335,7 @@ impl DistributedMd {
             Some((state, list)) => Some(encode_checkpoint(
                 &self.system,
                 &self.config,
-                &model_name(false, Precision::F64, axes),
+                &model_name::<L>(false, Precision::F64, axes),
                 state,
                 list,
             )?),
@@ -355,7 +354,7 @@ impl DistributedMd {
     }
 }
 
-impl Simulation for DistributedMd {
+impl<L: PairLaw> Simulation for DistributedMd<L> {
     type State = State;
 
     /// Advances `steps` steps on every rank, checking the state every
@@ -408,7 +407,7 @@ impl Simulation for DistributedMd {
 
 /// The shared validation of [`crate::Md::new`] (the time step), plus what this run does
 /// not offer.
-fn prepare(system: &System, config: &Config) -> Result<f64> {
+fn prepare<L: PairLaw>(system: &System<L>, config: &Config) -> Result<f64> {
     if config.precision != Precision::F64 {
         return Err(Error::Unsupported(
             "DistributedMd computes in f64; use Precision::F64, or Md for f32".into(),
@@ -446,7 +445,7 @@ fn worse(a: Finding, b: Finding) -> Finding {
 }
 
 /// This rank's part of the run in dimension `D`.
-struct Engine<const D: usize> {
+struct Engine<const D: usize, L: PairLaw> {
     /// The decomposition, the ghosts and the full lists (partners by system index).
     list: GhostedList<D>,
     dt: f64,
@@ -461,7 +460,7 @@ struct Engine<const D: usize> {
     inv_mass: Vec<f64>,
     frozen: Vec<bool>,
     n_species: usize,
-    coeff: Vec<PairCoeff<f64>>,
+    coeff: Vec<L::Coeff<f64>>,
     /// The Langevin thermostat: seed and `(c1, amplitude)` per species.
     langevin: Option<(u32, Vec<(f64, f64)>)>,
     lo: [f64; D],
@@ -495,12 +494,12 @@ struct Engine<const D: usize> {
     kernel: Kernel,
 }
 
-impl<const D: usize> Engine<D>
+impl<const D: usize, L: PairLaw> Engine<D, L>
 where
     [f64; D]: bytemuck::Pod,
 {
     /// The engine without particles (they come with [`Engine::start`]).
-    fn new(system: &System, config: &Config, dt: f64, comm: &Comm) -> Result<Self> {
+    fn new(system: &System<L>, config: &Config, dt: f64, comm: &Comm) -> Result<Self> {
         let (lo3, len3, per3) = (system.lo(), system.lengths(), system.periodic());
         let r_c = system.table().max_cutoff();
         let range = list_range(system, config.skin);
@@ -571,7 +570,7 @@ where
     fn start(
         &mut self,
         comm: &Comm,
-        system: &System,
+        system: &System<L>,
         saved: Option<(&EngineState, &Vec<f64>)>,
     ) -> Result<()> {
         match saved {
@@ -613,7 +612,7 @@ where
     }
 
     /// This rank takes the system's particles in its region (frozen ones at rest).
-    fn take_system(&mut self, comm: &Comm, system: &System) {
+    fn take_system(&mut self, comm: &Comm, system: &System<L>) {
         let (positions, velocities) = (system.positions(), system.velocities());
         let mine: Vec<usize> = (0..self.n)
             .filter(|&i| {
@@ -774,11 +773,12 @@ where
     /// partner), with the CPU backend's pair law.
     fn forces<const ENERGY: bool>(&mut self, kick: Option<f64>) {
         let n = self.owned;
-        let inp = PairInputs {
+        let inp = PairInputs::<D, L> {
             pos: &self.pos,
             species: &self.species,
             coeff: &self.coeff,
             n_species: self.n_species,
+            pad: 2.0 * self.range,
             offsets: self.list.csr().0,
             partners: self.list.csr().1,
         };
@@ -791,7 +791,7 @@ where
             .enumerate()
             .for_each(|(c, (((force, acc), vel), ew))| {
                 let first = c * CHUNK;
-                pair_sums::<D, ENERGY>(kernel, &inp, first, force, ew);
+                pair_sums::<D, L, ENERGY>(kernel, &inp, first, force, ew);
                 for (k, ((f, a), v)) in force.iter().zip(acc.iter_mut()).zip(vel).enumerate() {
                     let im = inv_mass[species[first + k] as usize];
                     *a = f.map(|x| x * im);
@@ -1179,11 +1179,13 @@ const LANES: usize = 16;
 
 /// What the pair sums read: positions and species (owned then ghosts), the flat
 /// species-pair table, the full lists of the owned particles.
-struct PairInputs<'a, const D: usize> {
+struct PairInputs<'a, const D: usize, L: PairLaw> {
     pos: &'a [[f64; D]],
     species: &'a [u32],
-    coeff: &'a [PairCoeff<f64>],
+    coeff: &'a [L::Coeff<f64>],
     n_species: usize,
+    /// A separation beyond every cutoff (for the unused lanes).
+    pad: f64,
     offsets: &'a [u32],
     partners: &'a [u32],
 }
@@ -1191,9 +1193,9 @@ struct PairInputs<'a, const D: usize> {
 /// The pair sums of owned particles `first..first + force.len()`, compiled for the best
 /// instruction set of this CPU ([`Kernel`]: the same bits on every one, since Rust never
 /// fuses a multiply and an add on its own).
-fn pair_sums<const D: usize, const ENERGY: bool>(
+fn pair_sums<const D: usize, L: PairLaw, const ENERGY: bool>(
     kernel: Kernel,
-    inp: &PairInputs<'_, D>,
+    inp: &PairInputs<'_, D, L>,
     first: usize,
     force: &mut [[f64; D]],
     ew: &mut [[f64; 2]],
@@ -1201,11 +1203,11 @@ fn pair_sums<const D: usize, const ENERGY: bool>(
     match kernel {
         #[cfg(target_arch = "x86_64")]
         // SAFETY: `Kernel::detect` only returns Avx512 when the CPU has these features.
-        Kernel::Avx512 => unsafe { pair_sums_avx512::<D, ENERGY>(inp, first, force, ew) },
+        Kernel::Avx512 => unsafe { pair_sums_avx512::<D, L, ENERGY>(inp, first, force, ew) },
         #[cfg(target_arch = "x86_64")]
         // SAFETY: `Kernel::detect` only returns Avx2 (or better) when the CPU has AVX2, FMA.
-        Kernel::Avx2 => unsafe { pair_sums_avx2::<D, ENERGY>(inp, first, force, ew) },
-        _ => pair_sums_body::<D, ENERGY>(inp, first, force, ew),
+        Kernel::Avx2 => unsafe { pair_sums_avx2::<D, L, ENERGY>(inp, first, force, ew) },
+        _ => pair_sums_body::<D, L, ENERGY>(inp, first, force, ew),
     }
 }
 
@@ -1215,13 +1217,13 @@ fn pair_sums<const D: usize, const ENERGY: bool>(
 /// The CPU must have AVX-512F, AVX-512VL, AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
-unsafe fn pair_sums_avx512<const D: usize, const ENERGY: bool>(
-    inp: &PairInputs<'_, D>,
+unsafe fn pair_sums_avx512<const D: usize, L: PairLaw, const ENERGY: bool>(
+    inp: &PairInputs<'_, D, L>,
     first: usize,
     force: &mut [[f64; D]],
     ew: &mut [[f64; 2]],
 ) {
-    pair_sums_body::<D, ENERGY>(inp, first, force, ew);
+    pair_sums_body::<D, L, ENERGY>(inp, first, force, ew);
 }
 
 /// [`pair_sums_body`] compiled for AVX2.
@@ -1230,23 +1232,23 @@ unsafe fn pair_sums_avx512<const D: usize, const ENERGY: bool>(
 /// The CPU must have AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn pair_sums_avx2<const D: usize, const ENERGY: bool>(
-    inp: &PairInputs<'_, D>,
+unsafe fn pair_sums_avx2<const D: usize, L: PairLaw, const ENERGY: bool>(
+    inp: &PairInputs<'_, D, L>,
     first: usize,
     force: &mut [[f64; D]],
     ew: &mut [[f64; 2]],
 ) {
-    pair_sums_body::<D, ENERGY>(inp, first, force, ew);
+    pair_sums_body::<D, L, ENERGY>(inp, first, force, ew);
 }
 
 /// For each owned particle `i = first + k`: `force[k]` = the sum of `(f / r) (x_i - x_j)`
 /// over its list (increasing system index of the partner `j`), and with `ENERGY`
-/// `ew[k] = [sum phi, sum r . F]`, the terms from [`pair_force_energy`]. The law runs on a
+/// `ew[k] = [sum phi, sum r . F]`, the terms from [`PairLaw::force_energy`]. The law runs on a
 /// chunk of [`LANES`] partners at once; the sums then take the terms one by one in list
 /// order, so the result is the bits of a plain loop over the list.
 #[inline(always)]
-fn pair_sums_body<const D: usize, const ENERGY: bool>(
-    inp: &PairInputs<'_, D>,
+fn pair_sums_body<const D: usize, L: PairLaw, const ENERGY: bool>(
+    inp: &PairInputs<'_, D, L>,
     first: usize,
     force: &mut [[f64; D]],
     ew: &mut [[f64; 2]],
@@ -1260,18 +1262,17 @@ fn pair_sums_body<const D: usize, const ENERGY: bool>(
         let (mut e, mut w) = (0.0, 0.0);
         let list = &inp.partners[inp.offsets[i] as usize..inp.offsets[i + 1] as usize];
         for chunk in list.chunks(LANES) {
-            // Unused lanes: r2 = 0 and rc2 = 0, outside the cutoff test (never summed).
+            // Unused lanes: a separation beyond every cutoff (never summed).
             let mut s = [[0.0; LANES]; D];
-            let (mut c12, mut c6) = ([0.0; LANES], [0.0; LANES]);
-            let (mut rc2, mut shift) = ([0.0; LANES], [0.0; LANES]);
+            s[0] = [inp.pad; LANES];
+            let mut cs = [row[0]; LANES];
             for (l, &j) in chunk.iter().enumerate() {
                 let j = j as usize;
                 let xj = inp.pos[j];
                 for d in 0..D {
                     s[d][l] = xi[d] - xj[d];
                 }
-                let c = &row[inp.species[j] as usize];
-                (c12[l], c6[l], rc2[l], shift[l]) = (c.c12, c.c6, c.rc2, c.shift);
+                cs[l] = row[inp.species[j] as usize];
             }
             let (mut fr, mut pe, mut r2s) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
             for l in 0..LANES {
@@ -1279,13 +1280,7 @@ fn pair_sums_body<const D: usize, const ENERGY: bool>(
                 for sd in &s {
                     r2 += sd[l] * sd[l];
                 }
-                let c = PairCoeff {
-                    c12: c12[l],
-                    c6: c6[l],
-                    rc2: rc2[l],
-                    shift: shift[l],
-                };
-                (fr[l], pe[l]) = pair_force_energy(&c, r2);
+                (fr[l], pe[l]) = L::force_energy(&cs[l], r2);
                 r2s[l] = r2;
             }
             for l in 0..chunk.len() {
@@ -1308,14 +1303,14 @@ fn pair_sums_body<const D: usize, const ENERGY: bool>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{PairParams, PairTable};
+    use crate::{LennardJones, PairTable};
 
     /// Every compiled kernel gives the bits of a plain loop over the list, with and
     /// without the energies, for lists of every length around the chunk width.
     #[test]
     fn pair_sums_are_a_plain_loop_on_every_kernel() {
-        let mut t = PairTable::uniform(2, PairParams::lj(1.0, 1.0, 2.5)).unwrap();
-        t.set(0, 1, PairParams::new(1.3, 0.9, 1.0, 0.4, 2.0))
+        let mut t = PairTable::uniform(2, LennardJones::new(1.0, 1.0, 2.5)).unwrap();
+        t.set(0, 1, LennardJones::weighted(1.3, 0.9, 1.0, 0.4, 2.0))
             .unwrap();
         let coeff = t.coefficients::<f64>(true);
         let n = 70;
@@ -1330,11 +1325,12 @@ mod tests {
             partners.extend((1..=i % 40).map(|k| ((i + k) % n) as u32));
             offsets.push(partners.len() as u32);
         }
-        let inp = PairInputs {
+        let inp = PairInputs::<3, LennardJones> {
             pos: &pos,
             species: &species,
             coeff: &coeff,
             n_species: 2,
+            pad: 10.0,
             offsets: &offsets,
             partners: &partners,
         };
@@ -1348,7 +1344,7 @@ mod tests {
                     r2 += x * x;
                 }
                 let c = &coeff[species[i] as usize * 2 + species[j] as usize];
-                let (fr, pe) = pair_force_energy(c, r2);
+                let (fr, pe) = LennardJones::force_energy(c, r2);
                 for d in 0..3 {
                     f[d] += fr * s[d];
                 }
@@ -1359,9 +1355,9 @@ mod tests {
         assert!(want.iter().any(|(f, _)| f[0] != 0.0));
         for kernel in Kernel::available() {
             let (mut f, mut ew) = (vec![[0.0; 3]; n], vec![[0.0; 2]; n]);
-            pair_sums::<3, true>(kernel, &inp, 0, &mut f, &mut ew);
+            pair_sums::<3, LennardJones, true>(kernel, &inp, 0, &mut f, &mut ew);
             let (mut g, mut unused) = (vec![[0.0; 3]; n], vec![[7.0; 2]; n]);
-            pair_sums::<3, false>(kernel, &inp, 0, &mut g, &mut unused);
+            pair_sums::<3, LennardJones, false>(kernel, &inp, 0, &mut g, &mut unused);
             for i in 0..n {
                 let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
                 assert_eq!(bits(&f[i]), bits(&want[i].0), "{kernel:?} particle {i}");

@@ -4,7 +4,7 @@ use serde::{Deserialize, Serialize};
 use simkit_backend::vector::IntoVec3;
 use simkit_backend::{Error, Result};
 
-use crate::PairTable;
+use crate::{LennardJones, PairLaw, PairTable};
 
 /// Most particles a [`System`] holds (indices are `u32`).
 pub const MAX_PARTICLES: usize = 1 << 28;
@@ -35,9 +35,9 @@ const AXES: [&str; 3] = ["x", "y", "z"];
 /// and the [`PairTable`]) and the particles (species, position, velocity).
 ///
 /// ```
-/// use simkit_md::{Dim, PairParams, PairTable, System};
+/// use simkit_md::{Dim, LennardJones, PairTable, System};
 /// # fn main() -> simkit_backend::Result<()> {
-/// let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5))?;
+/// let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5))?;
 /// let mut sys = System::new(Dim::Three, [0.0; 3], [6.0; 3], [true; 3], vec![1.0], table)?;
 /// sys.add_particle(0, [1.0, 1.0, 1.0], [0.0; 3])?;
 /// assert!(sys.add_particle(0, [7.0, 1.0, 1.0], [0.0; 3]).is_err()); // outside the box
@@ -46,13 +46,13 @@ const AXES: [&str; 3] = ["x", "y", "z"];
 /// # }
 /// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct System {
+pub struct System<L = LennardJones> {
     dim: Dim,
     lo: [f64; 3],
     len: [f64; 3],
     periodic: [bool; 3],
     masses: Vec<f64>,
-    table: PairTable,
+    table: PairTable<L>,
     frozen: Vec<bool>,
     species_langevin: Vec<Option<[f64; 2]>>,
     species: Vec<u32>,
@@ -60,7 +60,7 @@ pub struct System {
     velocities: Vec<[f64; 3]>,
 }
 
-impl System {
+impl<L: PairLaw> System<L> {
     /// An empty system. In 2D only `x` and `y` of `lo`, `len` and `periodic` are used;
     /// `lo` and `len` are any [`IntoVec3`] (`glam` vectors or arrays).
     ///
@@ -74,7 +74,7 @@ impl System {
         len: impl IntoVec3,
         periodic: [bool; 3],
         masses: Vec<f64>,
-        table: PairTable,
+        table: PairTable<L>,
     ) -> Result<Self> {
         let (lo, len) = (lo.into_vec3(), len.into_vec3());
         let n_species = masses.len();
@@ -367,7 +367,7 @@ impl System {
         &self.masses
     }
     /// The pair table.
-    pub fn table(&self) -> &PairTable {
+    pub fn table(&self) -> &PairTable<L> {
         &self.table
     }
     /// Number of particles.

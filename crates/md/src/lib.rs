@@ -1,18 +1,20 @@
 //! Molecular dynamics of several particle species interacting through pair potentials
-//!
-//! ```text
-//! phi(r) = 4 eps (a (sigma/r)^12 - b (sigma/r)^6)    for r < r_c, 0 beyond
-//! ```
-//!
-//! with `eps, sigma, a, b, r_c` set per unordered species pair in one [`PairTable`]
-//! (`a = b = 1`: Lennard-Jones; `b = 0`: purely repulsive), optionally shifted by
-//! `phi(r_c)` ([`Config::shift`]), integrated at constant energy (NVE) with velocity
+//! `phi(r)`, cut at `r_c`, of any law that implements [`PairLaw`], with parameters set per
+//! unordered species pair in one [`PairTable`], optionally shifted by `phi(r_c)`
+//! ([`Config::shift`]), integrated at constant energy (NVE) with velocity
 //! Verlet or leapfrog ([`Integrator`]) in a 2D or 3D box with periodic or reflecting axes.
 //! Optional: a Langevin thermostat ([`Config::thermostat`], [`Langevin`]; BAOAB splitting
 //! of Leimkuhler & Matthews 2013, global or per-species targets, counter-based random
 //! numbers shared by the CPU and the GPU) and frozen species ([`System::set_frozen`]: a
 //! substrate that exerts forces but does not move).
 //!
+//! - [`PairLaw`]: what a potential provides (parameters, coefficients, the force and
+//!   energy as one Rust function generic over [`simkit_backend::Real`] with its WGSL twin,
+//!   cutoff, curvature for the time-step guidance, validation). Built in:
+//!   [`LennardJones`] (`4 eps (a (sigma/r)^12 - b (sigma/r)^6)`, the default law),
+//!   [`Morse`], [`Yukawa`], [`Mie`], [`Wca`], [`Buckingham`], each validated against
+//!   LAMMPS. A law of your own runs at the speed of a built-in one on every backend
+//!   (`examples/custom_law.rs`; test its WGSL with [`check_law_on_gpu`]).
 //! - [`System`]: box, species masses, pair table, particles (validated).
 //! - [`Md`]: the run, `Md::new(&system, &config, backend)`, implementing
 //!   [`simkit_backend::Simulation`] and [`simkit_backend::Restart`].
@@ -22,8 +24,6 @@
 //! - [`Diagnostics`]: kinetic, potential and total energy, virial pressure, per-species
 //!   temperature.
 //! - [`time_step_guide`]: the default and largest safe time step from the stiffest pair.
-//! - [`pair_force_energy`]: the pair law, one function generic over
-//!   [`simkit_backend::Real`] (`f64` default, `f32` with [`Config::precision`]).
 //! - [`scenes`]: LAMMPS's `in.lj` melt and a gas/liquid/solid table.
 //! - [`reference`](mod@reference): NIST's truncated Lennard-Jones state point, reproduced by a
 //!   thermostatted run.
@@ -50,10 +50,10 @@
 //!
 //! ```
 //! use simkit_backend::{Backend, Restart, Simulation};
-//! use simkit_md::{Config, Md, scenes};
+//! use simkit_md::{Config, LennardJones, Md, PairTable, scenes};
 //! # fn main() -> simkit_backend::Result<()> {
 //! // 4 x 4 x 4 FCC cells of Lennard-Jones atoms (256), density 0.8442, T = 1.44.
-//! let table = simkit_md::PairTable::uniform(1, simkit_md::PairParams::lj(1.0, 1.0, 2.5))?;
+//! let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5))?;
 //! let system = scenes::fcc_lattice([4; 3], 0.8442, 1.44, table, &[0], 1)?;
 //! let mut md = Md::new(&system, &Config::with_dt(0.005), Backend::Cpu)?;
 //! let e0 = md.diagnostics()?.total;
@@ -62,13 +62,37 @@
 //! assert!((d.total - e0).abs() < 1e-2 * e0.abs());
 //! // Checkpoint and resume: the run continues bit for bit.
 //! let bytes = md.checkpoint()?;
-//! let mut again = Md::resume(&bytes, Backend::Cpu)?;
+//! let mut again = Md::<LennardJones>::resume(&bytes, Backend::Cpu)?;
 //! md.step(10)?;
 //! again.step(10)?;
 //! assert_eq!(md.state()?, again.state()?);
 //! # Ok(())
 //! # }
 //! ```
+//!
+//! Another law is another type in the table; everything else is the same:
+//!
+//! ```
+//! use simkit_backend::{Backend, Simulation};
+//! use simkit_md::{Config, Md, Morse, PairTable, scenes};
+//! # fn main() -> simkit_backend::Result<()> {
+//! // Morse atoms (well depth 1 at r0 = 1.1, alpha = 4) on the same lattice.
+//! let table = PairTable::uniform(1, Morse::new(1.0, 4.0, 1.1, 2.5))?;
+//! let system = scenes::fcc_lattice([4; 3], 0.8442, 0.5, table, &[0], 1)?;
+//! // dt from the curvature of the well, 2 alpha^2 D0.
+//! let mut md = Md::new(&system, &Config::default(), Backend::Cpu)?;
+//! let e0 = md.diagnostics()?.total;
+//! md.step(100)?;
+//! assert!((md.diagnostics()?.total - e0).abs() < 1e-3 * e0.abs());
+//! // A checkpoint names its law: it resumes as Md::<Morse> only.
+//! let bytes = simkit_backend::Restart::checkpoint(&mut md)?;
+//! assert!(<simkit_md::Md as simkit_backend::Restart>::resume(&bytes, Backend::Cpu).is_err());
+//! # Ok(())
+//! # }
+//! ```
+
+// Links to the GPU items resolve when they are compiled (the `gpu` feature, on by default).
+#![cfg_attr(not(feature = "gpu"), allow(rustdoc::broken_intra_doc_links))]
 
 mod config;
 mod cpu;
@@ -78,6 +102,10 @@ mod engine;
 #[cfg(feature = "gpu")]
 mod gpu;
 mod input;
+mod law;
+#[cfg(feature = "gpu")]
+mod law_check;
+mod laws;
 pub mod reference;
 pub mod scenes;
 mod sim;
@@ -91,8 +119,13 @@ pub use config::{
 pub use diagnostics::Diagnostics;
 pub use distributed::DistributedMd;
 pub use input::{Dim, MAX_PARTICLES, System};
-pub use sim::{Md, State};
-pub use table::{
-    MAX_COEFFICIENT, MAX_SPECIES, PairCoeff, PairParams, PairTable, pair_force_energy,
+pub use law::PairLaw;
+#[cfg(feature = "gpu")]
+pub use law_check::{LawCheck, check_law_on_gpu};
+pub use laws::{
+    BuckCoeff, Buckingham, LennardJones, LjCoeff, MAX_COEFFICIENT, Mie, MieCoeff, Morse,
+    MorseCoeff, Wca, Yukawa, YukawaCoeff,
 };
+pub use sim::{Md, State};
+pub use table::{MAX_SPECIES, PairTable};
 pub use thermostat::Langevin;

@@ -10,7 +10,7 @@
 
 use simkit_backend::{Backend, Error, Result, Simulation};
 
-use crate::{Config, Langevin, Md, PairParams, PairTable, scenes};
+use crate::{Config, Langevin, LennardJones, Md, PairTable, scenes};
 
 /// Reference temperature `T*`.
 pub const NIST_TEMPERATURE: f64 = 0.85;
@@ -75,7 +75,7 @@ pub fn nist_lj_state_point(
         ));
     }
     let (rho, rc) = (NIST_DENSITY, NIST_CUTOFF);
-    let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, rc))?;
+    let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, rc))?;
     let sys = scenes::fcc_lattice([cells; 3], rho, 1.5, table, &[0], u64::from(seed))?;
     let atoms = sys.particle_count();
     let config = Config {

@@ -5,7 +5,7 @@ use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 use simkit_backend::{Error, Result};
 
-use crate::{Dim, MAX_PARTICLES, PairParams, PairTable, System};
+use crate::{Dim, LennardJones, MAX_PARTICLES, PairLaw, PairTable, System};
 
 /// Species index of the gas in [`three_phase_table`].
 pub const GAS: u32 = 0;
@@ -32,14 +32,14 @@ const FCC: [[f64; 3]; 4] = [
 /// Errors: a zero cell count, more than [`MAX_PARTICLES`] atoms, a non-finite or
 /// non-positive density, a negative temperature, an empty or unknown species list, and
 /// whatever [`System::new`] refuses (e.g. a box shorter than twice the largest cutoff).
-pub fn fcc_lattice(
+pub fn fcc_lattice<L: PairLaw>(
     cells: [usize; 3],
     density: f64,
     temperature: f64,
-    table: PairTable,
+    table: PairTable<L>,
     species: &[u32],
     seed: u64,
-) -> Result<System> {
+) -> Result<System<L>> {
     let n = cells
         .iter()
         .try_fold(4usize, |acc, &c| acc.checked_mul(c))
@@ -118,7 +118,7 @@ pub fn fcc_lattice(
 /// `20^3`-cell FCC lattice at density `0.8442`, temperature `1.44`, cutoff `2.5`; run it
 /// with skin `0.3` (the default) and `dt = 0.005`.
 pub fn lj_melt() -> Result<System> {
-    let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5))?;
+    let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5))?;
     fcc_lattice([20; 3], 0.8442, 1.44, table, &[0], 87287)
 }
 
@@ -135,12 +135,12 @@ pub fn lj_melt() -> Result<System> {
 /// Gas particles only repel (a small core among themselves), the liquid and the solid
 /// attract their own kind and repel each other.
 pub fn three_phase_table() -> Result<PairTable> {
-    let mut t = PairTable::uniform(3, PairParams::lj(1.0, 1.0, 5.0))?;
+    let mut t = PairTable::uniform(3, LennardJones::new(1.0, 1.0, 5.0))?;
     let (g, l, s) = (GAS as usize, LIQUID as usize, SOLID as usize);
-    t.set(g, g, PairParams::repulsive(1.0, 0.5, 2.0))?;
-    t.set(g, l, PairParams::repulsive(1.0, 1.0, 3.0))?;
-    t.set(g, s, PairParams::repulsive(1.0, 1.0, 3.0))?;
-    t.set(l, s, PairParams::repulsive(1.0, 1.0, 5.0))?;
+    t.set(g, g, LennardJones::repulsive(1.0, 0.5, 2.0))?;
+    t.set(g, l, LennardJones::repulsive(1.0, 1.0, 3.0))?;
+    t.set(g, s, LennardJones::repulsive(1.0, 1.0, 3.0))?;
+    t.set(l, s, LennardJones::repulsive(1.0, 1.0, 5.0))?;
     Ok(t)
 }
 

@@ -5,14 +5,32 @@ use simkit_backend::{Backend, Error, Precision, Restart, Result, Simulation, che
 
 use crate::cpu::CpuEngine;
 use crate::engine::{Engine, EngineState};
-use crate::{Config, Diagnostics, Dim, GpuKernel, Integrator, Langevin, System};
+use crate::{
+    Config, Diagnostics, Dim, GpuKernel, Integrator, Langevin, LennardJones, PairLaw, System,
+};
 
-/// The checkpoint model string of an engine: backend, precision, dimension.
-pub(crate) fn model_name(gpu: bool, precision: Precision, axes: usize) -> String {
-    if gpu {
-        format!("Md<gpu f32, {axes}>")
+/// The checkpoint model string of an engine: backend, precision, dimension and, for a
+/// law other than the default [`LennardJones`], the law's name (`Md<cpu f64, 3>`,
+/// `Md<gpu f32, 2, morse>`), so a run resumes only with the law that wrote it.
+pub(crate) fn model_name<L: PairLaw>(gpu: bool, precision: Precision, axes: usize) -> String {
+    let kind = if gpu {
+        format!("gpu f32, {axes}")
     } else {
-        format!("Md<cpu {}, {axes}>", precision.wgsl())
+        format!("cpu {}, {axes}", precision.wgsl())
+    };
+    if L::NAME == LennardJones::NAME {
+        format!("Md<{kind}>")
+    } else {
+        format!("Md<{kind}, {}>", L::NAME)
+    }
+}
+
+/// The law named by a model string of [`model_name`] (the default law when none is).
+fn model_law(model: &str) -> &str {
+    let inner = model.trim_start_matches("Md<").trim_end_matches('>');
+    match inner.splitn(3, ", ").nth(2) {
+        Some(law) => law,
+        None => LennardJones::NAME,
     }
 }
 
@@ -69,8 +87,9 @@ impl From<ConfigRecord> for Config {
 /// Everything a checkpoint holds: the inputs (validated again on resume) and the engine's
 /// dynamic state.
 #[derive(Serialize, Deserialize)]
-struct Payload {
-    system: System,
+#[serde(bound = "L: PairLaw")]
+struct Payload<L> {
+    system: System<L>,
     config: ConfigRecord,
     engine: EngineState,
     /// The positions of the CPU's last neighbour-list build (flat, system order; empty on
@@ -81,8 +100,8 @@ struct Payload {
 /// A checkpoint in the format of [`Md`]'s `Restart::checkpoint`: the system, the settings,
 /// the engine state and the positions of the last list build (flat, system order), under
 /// the model string `model`.
-pub(crate) fn encode_checkpoint(
-    system: &System,
+pub(crate) fn encode_checkpoint<L: PairLaw>(
+    system: &System<L>,
     config: &Config,
     model: &str,
     engine: EngineState,
@@ -104,11 +123,24 @@ pub(crate) fn encode_checkpoint(
 
 /// What [`encode_checkpoint`] wrote: the model string, the system (validated again), the
 /// settings, the engine state and the list-build positions.
-pub(crate) type Decoded = (String, System, Config, EngineState, Vec<f64>);
+pub(crate) type Decoded<L> = (String, System<L>, Config, EngineState, Vec<f64>);
 
-/// Reads a checkpoint of any model of this crate and validates its system.
-pub(crate) fn decode_checkpoint(bytes: &[u8]) -> Result<Decoded> {
-    let (written, payload): (String, Payload) =
+/// Reads a checkpoint of any model of this crate written with law `L` and validates its
+/// system.
+///
+/// Errors: a checkpoint of another law (named in the model string) is refused before its
+/// payload is read.
+pub(crate) fn decode_checkpoint<L: PairLaw>(bytes: &[u8]) -> Result<Decoded<L>> {
+    let model = checkpoint::header(bytes)?.model;
+    let law = model_law(&model);
+    if law != L::NAME {
+        return Err(Error::checkpoint(format!(
+            "holds a {model} run of pair law '{law}', not '{}'; resume it with the law \
+             type that wrote it",
+            L::NAME
+        )));
+    }
+    let (written, payload): (String, Payload<L>) =
         checkpoint::decode_any_model(bytes, env!("CARGO_PKG_NAME"), env!("CARGO_PKG_VERSION"))?;
     payload
         .system
@@ -149,13 +181,13 @@ impl State {
     }
 }
 
-/// A molecular-dynamics run of a [`System`] on a chosen backend.
+/// A molecular-dynamics run of a [`System`] with pair law `L` on a chosen backend.
 ///
 /// ```
 /// use simkit_backend::{Backend, Simulation};
-/// use simkit_md::{Config, Dim, Md, PairParams, PairTable, System};
+/// use simkit_md::{Config, Dim, LennardJones, Md, PairTable, System};
 /// # fn main() -> simkit_backend::Result<()> {
-/// let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5))?;
+/// let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5))?;
 /// let mut sys = System::new(Dim::Three, [0.0; 3], [6.0; 3], [true; 3], vec![1.0], table)?;
 /// // Two atoms 1.5 sigma apart attract each other.
 /// sys.add_particle(0, [2.0, 3.0, 3.0], [0.0; 3])?;
@@ -169,14 +201,14 @@ impl State {
 /// # Ok(())
 /// # }
 /// ```
-pub struct Md {
+pub struct Md<L = LennardJones> {
     engine: Box<dyn Engine>,
-    system: System,
+    system: System<L>,
     config: Config,
     dt: f64,
 }
 
-impl Md {
+impl<L: PairLaw> Md<L> {
     /// Validates the system and settings and builds the backend.
     ///
     /// Errors: invalid settings or a time step over the safe bound (see
@@ -184,12 +216,12 @@ impl Md {
     /// failure (the GPU computes in `f32` whatever [`Config::precision`] says, and refuses
     /// a cell of the neighbour grid, at least `max r_c` wide, holding more particles than
     /// the adapter's loop limit allows: [`Error::Unsupported`]).
-    pub fn new(system: &System, config: &Config, backend: Backend<'_>) -> Result<Self> {
+    pub fn new(system: &System<L>, config: &Config, backend: Backend<'_>) -> Result<Self> {
         Self::build(system, config, backend, None)
     }
 
     fn build(
-        system: &System,
+        system: &System<L>,
         config: &Config,
         backend: Backend<'_>,
         saved: Option<(&EngineState, &[f64])>,
@@ -198,16 +230,16 @@ impl Md {
         let engine: Box<dyn Engine> = match backend {
             Backend::Cpu => match (system.dim(), config.precision) {
                 (Dim::Two, Precision::F64) => {
-                    Box::new(CpuEngine::<2, f64>::new(system, config, dt, saved)?)
+                    Box::new(CpuEngine::<2, f64, L>::new(system, config, dt, saved)?)
                 }
                 (Dim::Two, Precision::F32) => {
-                    Box::new(CpuEngine::<2, f32>::new(system, config, dt, saved)?)
+                    Box::new(CpuEngine::<2, f32, L>::new(system, config, dt, saved)?)
                 }
                 (Dim::Three, Precision::F64) => {
-                    Box::new(CpuEngine::<3, f64>::new(system, config, dt, saved)?)
+                    Box::new(CpuEngine::<3, f64, L>::new(system, config, dt, saved)?)
                 }
                 (Dim::Three, Precision::F32) => {
-                    Box::new(CpuEngine::<3, f32>::new(system, config, dt, saved)?)
+                    Box::new(CpuEngine::<3, f32, L>::new(system, config, dt, saved)?)
                 }
             },
             #[cfg(feature = "gpu")]
@@ -233,7 +265,7 @@ impl Md {
     }
 
     /// The system the run started from.
-    pub fn system(&self) -> &System {
+    pub fn system(&self) -> &System<L> {
         &self.system
     }
 
@@ -254,7 +286,7 @@ impl Md {
     }
 }
 
-impl Simulation for Md {
+impl<L: PairLaw> Simulation for Md<L> {
     type State = State;
 
     /// Advances `steps` steps, checking the state every [`Config::check_every`] steps and
@@ -284,7 +316,7 @@ impl Simulation for Md {
 /// the last list build; on the GPU from the same cell order, since the cell list is
 /// rebuilt from the same positions. A checkpoint resumes on the backend and precision that
 /// wrote it.
-impl Restart for Md {
+impl<L: PairLaw> Restart for Md<L> {
     fn checkpoint(&mut self) -> Result<Vec<u8>> {
         let engine = self.engine.save()?;
         encode_checkpoint(
@@ -298,7 +330,7 @@ impl Restart for Md {
 
     fn resume(bytes: &[u8], backend: Backend<'_>) -> Result<Self> {
         let (written, system, config, engine, list) = decode_checkpoint(bytes)?;
-        let want = model_name(backend.is_gpu(), config.precision, system.dim().axes());
+        let want = model_name::<L>(backend.is_gpu(), config.precision, system.dim().axes());
         if written != want {
             return Err(Error::checkpoint(format!(
                 "holds a {} run, and {} on this backend would be a {want} run; resume it on \

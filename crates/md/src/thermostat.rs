@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 use simkit_backend::rng::rng_uniform;
 use simkit_backend::{Error, Result};
 
-use crate::System;
+use crate::{PairLaw, System};
 
 /// A Langevin thermostat (BAOAB splitting; see the crate guide `docs/md.md`).
 ///
@@ -63,7 +63,11 @@ pub(crate) fn check_target(what: &str, temperature: f64, gamma: f64) -> Result<(
 /// The Ornstein–Uhlenbeck coefficients `(c1, amplitude)` of every species for time step
 /// `dt`: `c1 = exp(-gamma dt)`, `amplitude = sqrt((1 - c1^2) T / m)`; `(1, 0)` for a frozen
 /// species (its velocities stay zero).
-pub(crate) fn ou_coefficients(system: &System, global: &Langevin, dt: f64) -> Vec<(f64, f64)> {
+pub(crate) fn ou_coefficients<L: PairLaw>(
+    system: &System<L>,
+    global: &Langevin,
+    dt: f64,
+) -> Vec<(f64, f64)> {
     system
         .masses()
         .iter()

@@ -2,10 +2,10 @@
 
 use glam::{DVec3, Vec3};
 use simkit_backend::{Backend, Simulation};
-use simkit_md::{Config, Dim, Md, PairParams, PairTable, System};
+use simkit_md::{Config, Dim, LennardJones, Md, PairTable, System};
 
 fn table() -> PairTable {
-    PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5)).unwrap()
+    PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5)).unwrap()
 }
 
 #[test]

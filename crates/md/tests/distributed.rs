@@ -7,7 +7,7 @@ mod decomposed;
 
 use simkit_backend::comm::Comm;
 use simkit_backend::{Backend, Error, Precision, Restart, Simulation};
-use simkit_md::{Config, DistributedMd, Integrator, Md, PairParams, PairTable, State, scenes};
+use simkit_md::{Config, DistributedMd, Integrator, LennardJones, Md, PairTable, State, scenes};
 
 use decomposed::{cases, state_bits};
 
@@ -37,7 +37,8 @@ fn agrees_with_md_to_rounding_after_100_steps() {
         let mut md = Md::new(&system, &config, Backend::Cpu).expect("md");
         md.step(steps).expect("step");
         let bytes = md.checkpoint().expect("checkpoint");
-        let mut dist = DistributedMd::resume(&bytes, Comm::serial()).expect("resume");
+        let mut dist =
+            DistributedMd::<LennardJones>::resume(&bytes, Comm::serial()).expect("resume");
         let (d0, e0) = (
             md.diagnostics().expect("diagnostics"),
             dist.diagnostics().expect("diagnostics"),
@@ -97,7 +98,7 @@ fn long_run_statistics_agree_with_md() {
     // must agree is the statistics. The yardstick is how far Md itself moves when one
     // position moves by 1e-12: the scatter of rounding-level perturbations.
     let (steps, every) = (3000, 50);
-    let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5)).expect("table");
+    let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5)).expect("table");
     let system = scenes::fcc_lattice([4; 3], 0.8442, 1.44, table, &[0], 3).expect("system");
     let config = Config::with_dt(0.005);
     let n = system.particle_count() as f64;
@@ -168,7 +169,7 @@ fn checkpoints_move_between_md_and_distributed_md() {
         let mut dist = DistributedMd::new(&system, &config, Comm::serial()).expect("new");
         dist.step(60).expect("step");
         let bytes = dist.checkpoint().expect("checkpoint");
-        let mut md = Md::resume(&bytes, Backend::Cpu).expect("Md resumes it");
+        let mut md = Md::<LennardJones>::resume(&bytes, Backend::Cpu).expect("Md resumes it");
         assert_eq!(md.steps_done(), 60, "{name}");
         same_state(
             &md.state().expect("state"),
@@ -181,7 +182,8 @@ fn checkpoints_move_between_md_and_distributed_md() {
         let mut md = Md::new(&system, &config, Backend::Cpu).expect("md");
         md.step(60).expect("step");
         let bytes = md.checkpoint().expect("checkpoint");
-        let mut dist = DistributedMd::resume(&bytes, Comm::serial()).expect("resumes Md's");
+        let mut dist =
+            DistributedMd::<LennardJones>::resume(&bytes, Comm::serial()).expect("resumes Md's");
         same_state(
             &dist.state().expect("state"),
             &md.state().expect("state"),
@@ -201,8 +203,9 @@ fn checkpoints_move_between_md_and_distributed_md() {
     let dir = tempfile::tempdir().expect("dir");
     let path = dir.path().join("run.ckpt");
     dist.write_checkpoint(&path).expect("write");
-    let again = DistributedMd::resume(&std::fs::read(&path).expect("read"), Comm::serial())
-        .expect("resume");
+    let again =
+        DistributedMd::<LennardJones>::resume(&std::fs::read(&path).expect("read"), Comm::serial())
+            .expect("resume");
     assert_eq!(again.steps_done(), 30);
 }
 
@@ -250,7 +253,7 @@ fn refuses_what_it_does_not_offer_and_bad_inputs() {
     let e = DistributedMd::new(&system, &bad, Comm::serial()).expect_err("NaN skin");
     assert!(e.to_string().contains("skin"), "{e}");
     // Two atoms on top of each other: the initial check, as Md's.
-    let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5)).expect("table");
+    let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5)).expect("table");
     let mut s = simkit_md::System::new(
         simkit_md::Dim::Three,
         [0.0; 3],
@@ -267,7 +270,7 @@ fn refuses_what_it_does_not_offer_and_bad_inputs() {
     // An f32 or GPU Md checkpoint is another model; garbage is no checkpoint.
     let mut md = Md::new(&system, &f32, Backend::Cpu).expect("md");
     let bytes = md.checkpoint().expect("checkpoint");
-    let e = DistributedMd::resume(&bytes, Comm::serial()).expect_err("f32 model");
+    let e = DistributedMd::<LennardJones>::resume(&bytes, Comm::serial()).expect_err("f32 model");
     assert!(e.to_string().contains("f64"), "{e}");
-    assert!(DistributedMd::resume(b"not a checkpoint", Comm::serial()).is_err());
+    assert!(DistributedMd::<LennardJones>::resume(b"not a checkpoint", Comm::serial()).is_err());
 }

@@ -6,7 +6,8 @@
 use simkit_backend::testing::{backends, check_restart};
 use simkit_backend::{Backend, Error, Result, Simulation};
 use simkit_md::{
-    Config, Dim, GpuKernel, Integrator, Langevin, Md, PairParams, PairTable, State, System, scenes,
+    Config, Dim, GpuKernel, Integrator, Langevin, LennardJones, Md, PairTable, State, System,
+    scenes,
 };
 
 fn gpus(test: &str) -> Vec<Backend<'static>> {
@@ -22,13 +23,13 @@ fn with(kernel: GpuKernel, config: Config) -> Config {
 
 /// The Lennard-Jones liquid of in.lj, 4 x 6^3 = 864 atoms (4 cells per axis).
 fn liquid() -> System {
-    let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5)).unwrap();
+    let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5)).unwrap();
     scenes::fcc_lattice([6; 3], 0.8442, 1.44, table, &[0], 7).unwrap()
 }
 
 /// 256 atoms of the liquid in a box closed on every face (reflecting walls).
 fn closed_box() -> System {
-    let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5)).unwrap();
+    let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5)).unwrap();
     let open = scenes::fcc_lattice([4; 3], 0.7, 1.0, table.clone(), &[0], 3).unwrap();
     let (lo, len) = (open.lo(), open.lengths());
     let mut sys = System::new(
@@ -49,7 +50,7 @@ fn closed_box() -> System {
 
 /// Two species in a 2D box with reflecting walls along x and a periodic y.
 fn walls_2d() -> System {
-    let table = PairTable::uniform(2, PairParams::lj(1.0, 1.0, 2.5)).unwrap();
+    let table = PairTable::uniform(2, LennardJones::new(1.0, 1.0, 2.5)).unwrap();
     let mut sys = System::new(
         Dim::Two,
         [0.0; 3],
@@ -167,7 +168,7 @@ fn cell_block_runs_are_reproducible() -> Result<()> {
 
 /// Non-interacting particles (eps = 0, cutoff 2.5) in a periodic cube of side `side`.
 fn free_particles(side: f64, at: &[([f64; 3], [f64; 3])]) -> System {
-    let table = PairTable::uniform(1, PairParams::lj(0.0, 1.0, 2.5)).unwrap();
+    let table = PairTable::uniform(1, LennardJones::new(0.0, 1.0, 2.5)).unwrap();
     let mut sys =
         System::new(Dim::Three, [0.0; 3], [side; 3], [true; 3], vec![1.0], table).unwrap();
     for (x, v) in at {
@@ -316,7 +317,7 @@ fn cell_block_restart_is_bit_exact() {
 /// run stepped to the same point.
 #[test]
 fn a_cell_block_blow_up_is_rolled_back() -> Result<()> {
-    let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5))?;
+    let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5))?;
     let sys = scenes::fcc_lattice([3; 3], 0.8442, 1.44, table, &[0], 7)?;
     let config = Config {
         allow_unstable_dt: true,

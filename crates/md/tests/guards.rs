@@ -3,10 +3,10 @@
 use approx::abs_diff_eq;
 use simkit_backend::testing::backends;
 use simkit_backend::{Backend, Error, Result, Simulation};
-use simkit_md::{Config, Dim, Md, PairParams, PairTable, System, scenes};
+use simkit_md::{Config, Dim, LennardJones, Md, PairTable, System, scenes};
 
 fn liquid() -> Result<System> {
-    let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5))?;
+    let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5))?;
     scenes::fcc_lattice([3; 3], 0.8442, 1.44, table, &[0], 7)
 }
 
@@ -104,7 +104,7 @@ fn the_check_does_not_perturb_a_stable_run() -> Result<()> {
 
 #[test]
 fn particles_on_top_of_each_other_are_refused() -> Result<()> {
-    let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5))?;
+    let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5))?;
     let mut sys = System::new(Dim::Three, [0.0; 3], [10.0; 3], [true; 3], vec![1.0], table)?;
     sys.add_particle(0, [1.0, 1.0, 1.0], [0.0; 3])?;
     sys.add_particle(0, [1.0, 1.0, 1.0], [0.0; 3])?;
@@ -118,7 +118,7 @@ fn particles_on_top_of_each_other_are_refused() -> Result<()> {
 #[test]
 fn a_particle_thrown_through_a_closed_box_is_a_blow_up() -> Result<()> {
     // Faster than a box length per step: the reflection cannot bring it back.
-    let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5))?;
+    let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5))?;
     let mut sys = System::new(
         Dim::Three,
         [0.0; 3],
@@ -151,7 +151,7 @@ fn a_particle_thrown_through_a_closed_box_is_a_blow_up() -> Result<()> {
 
 #[test]
 fn both_backends_refuse_the_same_initial_states() -> Result<()> {
-    let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5))?;
+    let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5))?;
     let mut sys = System::new(Dim::Three, [0.0; 3], [10.0; 3], [true; 3], vec![1.0], table)?;
     sys.add_particle(0, [1.0, 1.0, 1.0], [0.0; 3])?;
     sys.add_particle(0, [1.0, 1.0, 1.0], [0.0; 3])?;
@@ -198,7 +198,7 @@ fn a_thermostatted_blow_up_rolls_back_the_random_stream_too() -> Result<()> {
 /// is a blow-up, not a state with infinite diagnostics.
 #[test]
 fn an_overflowing_kinetic_energy_is_a_blow_up() -> Result<()> {
-    let p = PairParams::new(0.1, 0.3, 0.0, 1.289, 1.85);
+    let p = LennardJones::weighted(0.1, 0.3, 0.0, 1.289, 1.85);
     let table = PairTable::uniform(2, p)?;
     let mut sys = System::new(
         Dim::Two,

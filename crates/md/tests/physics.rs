@@ -1,21 +1,28 @@
-//! Physics checks: second-order energy conservation of both integrators, reflecting walls,
+//! Physics checks: second-order energy conservation of both integrators (Lennard-Jones and
+//! Morse), reflecting walls,
 //! the Verlet-list skin (results the same to rounding), the CPU's independence of the
 //! thread count, 2D, the energy shift.
 
 use approx::{abs_diff_eq, assert_abs_diff_eq};
 use simkit_backend::{Backend, Precision, Result, Simulation};
-use simkit_md::{Config, Dim, Integrator, Md, PairParams, PairTable, System, scenes};
+use simkit_md::{
+    Config, Dim, Integrator, LennardJones, Md, Morse, PairLaw, PairTable, System, scenes,
+};
 
 /// A 32-atom Lennard-Jones cluster (2^3 FCC cells at density 1, T = 0.5) in the middle of
 /// a closed box of 30, with a cutoff (12) longer than the cluster: no pair ever crosses the
 /// cutoff, so the energy is smooth and the integrator error is all there is.
 fn cluster() -> Result<System> {
-    let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 12.0))?;
+    cluster_of(PairTable::uniform(1, LennardJones::new(1.0, 1.0, 12.0))?)
+}
+
+/// The atoms of [`cluster`] with pair table `table` (every cutoff beyond the cluster).
+fn cluster_of<L: PairLaw>(table: PairTable<L>) -> Result<System<L>> {
     let lattice = scenes::fcc_lattice(
         [2; 3],
         1.0,
         0.5,
-        PairTable::uniform(1, PairParams::lj(1.0, 1.0, 1.0))?,
+        PairTable::uniform(1, LennardJones::new(1.0, 1.0, 1.0))?,
         &[0],
         3,
     )?;
@@ -37,7 +44,7 @@ fn cluster() -> Result<System> {
 }
 
 /// Largest |E(t) - E(0)| over `t = 0.04 k`, `t <= 1`, at time step `dt`.
-fn energy_error(sys: &System, integrator: Integrator, dt: f64) -> Result<f64> {
+fn energy_error<L: PairLaw>(sys: &System<L>, integrator: Integrator, dt: f64) -> Result<f64> {
     let config = Config {
         integrator,
         ..Config::with_dt(dt)
@@ -73,6 +80,19 @@ fn energy_error_is_second_order_in_dt_for_both_integrators() -> Result<()> {
     Ok(())
 }
 
+/// The same with the Morse law (a well of depth 1 at the lattice's neighbour distance,
+/// alpha = 3): the integrator's order does not depend on the law.
+#[test]
+fn energy_error_is_second_order_in_dt_with_the_morse_law() -> Result<()> {
+    let sys = cluster_of(PairTable::uniform(1, Morse::new(1.0, 3.0, 1.12, 12.0))?)?;
+    let coarse = energy_error(&sys, Integrator::VelocityVerlet, 0.004)?;
+    let fine = energy_error(&sys, Integrator::VelocityVerlet, 0.001)?;
+    let order = (coarse / fine).ln() / 4f64.ln();
+    eprintln!("Morse: |dE| {coarse:.3e} at dt 0.004, {fine:.3e} at dt 0.001: order {order:.3}");
+    assert!((1.8..=2.2).contains(&order), "order {order}");
+    Ok(())
+}
+
 #[test]
 fn the_two_integrators_follow_the_same_trajectory() -> Result<()> {
     // Leapfrog with fused kicks is velocity Verlet up to rounding.
@@ -102,7 +122,7 @@ fn the_two_integrators_follow_the_same_trajectory() -> Result<()> {
 
 #[test]
 fn a_particle_reflects_off_a_closed_wall_with_its_speed() -> Result<()> {
-    let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5))?;
+    let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5))?;
     let mut sys = System::new(
         Dim::Three,
         [0.0; 3],
@@ -131,7 +151,7 @@ fn periodic_wrap_and_skin_change_the_trajectory_by_rounding_only() -> Result<()>
     // The list skin decides when the list is rebuilt, and a rebuild sorts the particles by
     // cell, which changes the order of the force sums: every skin gives the same trajectory
     // to rounding (1e-16 per step, grown by the chaotic dynamics over 200 steps).
-    let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5))?;
+    let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5))?;
     let sys = scenes::fcc_lattice([4; 3], 0.8442, 1.44, table, &[0], 11)?;
     let run = |skin| -> Result<simkit_md::State> {
         let config = Config {
@@ -171,7 +191,7 @@ fn periodic_wrap_and_skin_change_the_trajectory_by_rounding_only() -> Result<()>
 fn cpu_results_do_not_depend_on_the_thread_count() -> Result<()> {
     // 864 atoms of two species: four blocks of the half list, whose reactions cross block
     // boundaries; the same bits on 1, 2 and 3 threads, in both precisions.
-    let table = PairTable::uniform(2, PairParams::lj(1.0, 1.0, 2.5))?;
+    let table = PairTable::uniform(2, LennardJones::new(1.0, 1.0, 2.5))?;
     let sys = scenes::fcc_lattice([6; 3], 0.8442, 1.44, table, &[0, 1], 5)?;
     for precision in [Precision::F64, Precision::F32] {
         let config = Config {
@@ -206,7 +226,7 @@ fn cpu_results_do_not_depend_on_the_thread_count() -> Result<()> {
 
 #[test]
 fn two_dimensional_runs_conserve_energy_and_momentum() -> Result<()> {
-    let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5))?;
+    let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5))?;
     let mut sys = System::new(
         Dim::Two,
         [0.0; 3],
@@ -255,7 +275,7 @@ fn two_dimensional_runs_conserve_energy_and_momentum() -> Result<()> {
 
 #[test]
 fn the_shift_moves_the_energy_by_phi_at_the_cutoff_per_pair() -> Result<()> {
-    let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5))?;
+    let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5))?;
     let mut sys = System::new(Dim::Three, [0.0; 3], [10.0; 3], [true; 3], vec![1.0], table)?;
     sys.add_particle(0, [1.0, 1.0, 1.0], [0.0; 3])?;
     sys.add_particle(0, [2.2, 1.0, 1.0], [0.0; 3])?;
@@ -268,10 +288,10 @@ fn the_shift_moves_the_energy_by_phi_at_the_cutoff_per_pair() -> Result<()> {
             .diagnostics()
             .map(|d| d.potential)
     };
-    let phi = PairParams::lj(1.0, 1.0, 2.5);
+    let phi = LennardJones::new(1.0, 1.0, 2.5);
     let (plain, shifted) = (pe(false)?, pe(true)?);
-    assert_abs_diff_eq!(plain, phi.phi(1.2), epsilon = 1e-14);
-    assert!((plain - shifted - phi.phi(2.5)).abs() < 1e-14);
+    assert_abs_diff_eq!(plain, phi.energy(1.2), epsilon = 1e-14);
+    assert!((plain - shifted - phi.energy(2.5)).abs() < 1e-14);
     Ok(())
 }
 
@@ -282,7 +302,7 @@ fn species_temperatures_and_default_dt() -> Result<()> {
     // The stiffest pair is gas-gas (sigma 0.5, purely repulsive, reduced mass 1/2).
     let g = simkit_md::time_step_guide(&sys).unwrap();
     assert_eq!(g.pair, (0, 0));
-    let k = PairParams::repulsive(1.0, 0.5, 2.0).curvature(0.5);
+    let k = LennardJones::repulsive(1.0, 0.5, 2.0).curvature(0.5);
     let period = 2.0 * std::f64::consts::PI * (0.5 / k).sqrt();
     assert_abs_diff_eq!(g.period, period, epsilon = 1e-15);
     assert_eq!(md.dt(), period / simkit_md::DEFAULT_STEPS_PER_PERIOD);

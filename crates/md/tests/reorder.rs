@@ -5,10 +5,10 @@
 
 use approx::assert_abs_diff_eq;
 use simkit_backend::{Backend, Error, Result, Simulation};
-use simkit_md::{Config, Md, PairParams, PairTable, State, System, scenes};
+use simkit_md::{Config, LennardJones, Md, PairTable, State, System, scenes};
 
 fn liquid() -> Result<System> {
-    let table = PairTable::uniform(2, PairParams::lj(1.0, 1.0, 2.5))?;
+    let table = PairTable::uniform(2, LennardJones::new(1.0, 1.0, 2.5))?;
     scenes::fcc_lattice([4; 3], 0.8442, 1.44, table, &[0, 1], 3)
 }
 
@@ -95,7 +95,7 @@ fn unshuffle<T: Copy + Default>(idx: &[usize], v: &[T]) -> Vec<T> {
 /// stepped exactly there, and names a particle by its system index.
 #[test]
 fn a_blow_up_rolls_back_bit_for_bit() -> Result<()> {
-    let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5))?;
+    let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5))?;
     let sys = scenes::fcc_lattice([3; 3], 0.8442, 1.44, table, &[0], 7)?;
     let config = Config {
         allow_unstable_dt: true,

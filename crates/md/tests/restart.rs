@@ -2,7 +2,7 @@
 
 use simkit_backend::testing::{backends, check_restart};
 use simkit_backend::{Backend, Error, Precision, Restart, Result, Simulation, checkpoint};
-use simkit_md::{Config, Dim, Integrator, Langevin, Md, PairParams, PairTable, System, scenes};
+use simkit_md::{Config, Dim, Integrator, Langevin, LennardJones, Md, PairTable, System, scenes};
 
 fn mix() -> System {
     scenes::three_phase_mix([6; 3], 0.4, 1.0, 9).unwrap()
@@ -18,7 +18,7 @@ fn mix_frozen() -> System {
 }
 
 fn box_2d() -> System {
-    let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5)).unwrap();
+    let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5)).unwrap();
     let mut sys = System::new(
         Dim::Two,
         [0.0; 3],
@@ -110,7 +110,7 @@ fn restart_is_bit_exact() {
 fn the_clock_and_the_step_count_are_restored() -> Result<()> {
     let mut md = Md::new(&box_2d(), &Config::with_dt(0.004), Backend::Cpu)?;
     md.step(25)?;
-    let again = Md::resume(&md.checkpoint()?, Backend::Cpu)?;
+    let again = Md::<LennardJones>::resume(&md.checkpoint()?, Backend::Cpu)?;
     assert_eq!(again.steps_done(), 25);
     let mut again = again;
     assert_eq!(again.state()?.time, md.state()?.time);
@@ -125,11 +125,14 @@ fn bad_checkpoints_are_refused_with_a_checkpoint_error() -> Result<()> {
     let bytes = md.checkpoint()?;
     let is_ckpt = |r: Result<Md>| matches!(r, Err(Error::Checkpoint { .. }));
     // Truncated, corrupted.
-    assert!(is_ckpt(Md::resume(&bytes[..bytes.len() / 2], Backend::Cpu)));
+    assert!(is_ckpt(Md::<LennardJones>::resume(
+        &bytes[..bytes.len() / 2],
+        Backend::Cpu
+    )));
     let mut bad = bytes.clone();
     let k = bad.len() - 40;
     bad[k] ^= 0x10;
-    assert!(is_ckpt(Md::resume(&bad, Backend::Cpu)));
+    assert!(is_ckpt(Md::<LennardJones>::resume(&bad, Backend::Cpu)));
     // Another package, another model with this package's name, garbage payload.
     let other = checkpoint::encode(
         "simkit-dem",
@@ -137,14 +140,14 @@ fn bad_checkpoints_are_refused_with_a_checkpoint_error() -> Result<()> {
         "Dem<cpu f64, 2>",
         &1u8,
     )?;
-    assert!(is_ckpt(Md::resume(&other, Backend::Cpu)));
+    assert!(is_ckpt(Md::<LennardJones>::resume(&other, Backend::Cpu)));
     let garbage = checkpoint::encode(
         "simkit-md",
         env!("CARGO_PKG_VERSION"),
         "Md<cpu f64, 2>",
         &[7u8; 5],
     )?;
-    assert!(is_ckpt(Md::resume(&garbage, Backend::Cpu)));
+    assert!(is_ckpt(Md::<LennardJones>::resume(&garbage, Backend::Cpu)));
     // A checkpoint whose model does not match its settings (f32 label on an f64 run).
     let header = checkpoint::header(&bytes)?;
     assert_eq!(header.model, "Md<cpu f64, 2>");
@@ -157,7 +160,9 @@ fn bad_checkpoints_are_refused_with_a_checkpoint_error() -> Result<()> {
     let crc_at = relabelled.len() - 4;
     let crc = crc32(&relabelled[..crc_at]);
     relabelled[crc_at..].copy_from_slice(&crc.to_le_bytes());
-    let e = Md::resume(&relabelled, Backend::Cpu).err().unwrap();
+    let e = Md::<LennardJones>::resume(&relabelled, Backend::Cpu)
+        .err()
+        .unwrap();
     assert!(matches!(e, Error::Checkpoint { .. }), "{e}");
     assert!(e.to_string().contains("f32"), "{e}");
     Ok(())

@@ -13,8 +13,8 @@ use proptest::test_runner::{
 use simkit_backend::comm::Comm;
 use simkit_backend::{Backend, Error, Precision, Restart, Simulation};
 use simkit_md::{
-    Config, Dim, DistributedMd, GpuKernel, Integrator, Langevin, Md, PairParams, PairTable, System,
-    scenes,
+    Config, Dim, DistributedMd, GpuKernel, Integrator, Langevin, LennardJones, Md, PairTable,
+    System, scenes,
 };
 
 const SEED: [u8; 32] = *b"simkit-md robustness seed 2026!!";
@@ -56,7 +56,7 @@ fn pos_num(lo: f64, hi: f64) -> impl Strategy<Value = f64> {
     prop_oneof![3 => lo..hi, 1 => num()]
 }
 
-fn params() -> impl Strategy<Value = PairParams> {
+fn params() -> impl Strategy<Value = LennardJones> {
     (
         pos_num(0.1, 2.0),
         pos_num(0.3, 1.5),
@@ -64,7 +64,7 @@ fn params() -> impl Strategy<Value = PairParams> {
         pos_num(0.0, 2.0),
         pos_num(0.5, 3.0),
     )
-        .prop_map(|(eps, sigma, a, b, r_c)| PairParams::new(eps, sigma, a, b, r_c))
+        .prop_map(|(eps, sigma, a, b, r_c)| LennardJones::weighted(eps, sigma, a, b, r_c))
 }
 
 /// An error must say something (the name and the fix).
@@ -105,7 +105,7 @@ fn pair_tables_accept_valid_entries_and_refuse_the_rest() {
                     let c = t.coefficients::<f32>(true);
                     for (k, c) in c.iter().enumerate() {
                         let r2 = c.rc2 * 0.5;
-                        let (f, e) = simkit_md::pair_force_energy(c, r2);
+                        let (f, e) = <LennardJones as simkit_md::PairLaw>::force_energy(c, r2);
                         prop_assert!(f.is_finite() && e.is_finite(), "entry {k}: {c:?}");
                     }
                 }
@@ -138,7 +138,7 @@ fn systems_refuse_bad_boxes_masses_and_particles() {
             0usize..3,
         ),
         |(dim, lo, len, periodic, masses, particles, cut)| {
-            let table = PairTable::uniform(2, PairParams::lj(1.0, 1.0, 2.5)).unwrap();
+            let table = PairTable::uniform(2, LennardJones::new(1.0, 1.0, 2.5)).unwrap();
             let mut sys = match System::new(dim, lo, len, periodic, masses, table) {
                 Ok(s) => s,
                 Err(e) => return clear(&e),
@@ -173,7 +173,7 @@ fn precision() -> impl Strategy<Value = Precision> {
 /// 2D), species 1 frozen or not. `None` when a builder refused the input with a clear error.
 fn system(
     dim: Dim,
-    p: PairParams,
+    p: LennardJones,
     particles: &[(u32, [f64; 3], [f64; 3])],
     periodic: [bool; 3],
     frozen: bool,
@@ -397,7 +397,7 @@ fn distributed_runs_step_to_a_finite_state_or_a_clear_error() {
             let bytes = sim
                 .checkpoint()
                 .map_err(|e| TestCaseError::fail(e.to_string()))?;
-            let again = DistributedMd::resume(&bytes, Comm::serial())
+            let again = DistributedMd::<LennardJones>::resume(&bytes, Comm::serial())
                 .map_err(|e| TestCaseError::fail(e.to_string()))?;
             prop_assert_eq!(again.steps_done(), sim.steps_done());
             Ok(())
@@ -483,7 +483,7 @@ fn garbled_and_truncated_checkpoints_are_refused() {
         [3; 3],
         0.3,
         1.0,
-        PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5)).unwrap(),
+        PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5)).unwrap(),
         &[0],
         1,
     )
@@ -504,7 +504,7 @@ fn garbled_and_truncated_checkpoints_are_refused() {
             } else {
                 return Ok(());
             }
-            match Md::resume(&b, Backend::Cpu) {
+            match Md::<LennardJones>::resume(&b, Backend::Cpu) {
                 Ok(mut m) => {
                     // Only an unchanged payload passes the checksum.
                     prop_assert!(false, "accepted a damaged checkpoint");
@@ -516,7 +516,7 @@ fn garbled_and_truncated_checkpoints_are_refused() {
                 }
             }
             // The same bytes are Md's format for DistributedMd too.
-            match DistributedMd::resume(&b, Comm::serial()) {
+            match DistributedMd::<LennardJones>::resume(&b, Comm::serial()) {
                 Ok(_) => prop_assert!(false, "DistributedMd accepted a damaged checkpoint"),
                 Err(e) => {
                     prop_assert!(matches!(e, Error::Checkpoint { .. }), "{e}");
@@ -543,7 +543,7 @@ fn lattices_refuse_bad_sizes_before_allocating() {
             prop::collection::vec(0u32..3, 0..3),
         ),
         |(cells, density, temperature, species)| {
-            let table = PairTable::uniform(2, PairParams::lj(1.0, 1.0, 1.0)).unwrap();
+            let table = PairTable::uniform(2, LennardJones::new(1.0, 1.0, 1.0)).unwrap();
             match scenes::fcc_lattice(cells, density, temperature, table, &species, 3) {
                 Ok(s) => {
                     prop_assert!(s.particle_count() <= 4 * 27);

@@ -7,7 +7,7 @@
 use approx::abs_diff_eq;
 use simkit_backend::testing::backends;
 use simkit_backend::{Backend, Result, Simulation};
-use simkit_md::{Config, Langevin, Md, PairParams, PairTable, System, scenes};
+use simkit_md::{Config, Langevin, LennardJones, Md, PairTable, System, scenes};
 
 /// Mean and standard error of the mean of `x` from `blocks` block averages.
 fn block_mean(x: &[f64], blocks: usize) -> (f64, f64) {
@@ -29,8 +29,8 @@ fn block_mean(x: &[f64], blocks: usize) -> (f64, f64) {
 /// to its target within three standard errors.
 #[test]
 fn kinetic_temperature_relaxes_to_the_target_per_species_and_per_axis() -> Result<()> {
-    let mut table = PairTable::uniform(2, PairParams::lj(1.0, 1.0, 2.5))?;
-    table.set(0, 1, PairParams::lj(0.0, 1.0, 2.5))?;
+    let mut table = PairTable::uniform(2, LennardJones::new(1.0, 1.0, 2.5))?;
+    table.set(0, 1, LennardJones::new(0.0, 1.0, 2.5))?;
     let mut sys = scenes::fcc_lattice([5; 3], 0.8, 1.44, table, &[0, 1], 4)?;
     let masses = [1.0, 2.0];
     let mut with_mass = System::new(
@@ -105,7 +105,7 @@ fn kinetic_temperature_relaxes_to_the_target_per_species_and_per_axis() -> Resul
 #[test]
 fn configurational_temperature_matches_the_target() -> Result<()> {
     let rc = 2.5;
-    let table = PairTable::uniform(1, PairParams::repulsive(1.0, 1.0, rc))?;
+    let table = PairTable::uniform(1, LennardJones::repulsive(1.0, 1.0, rc))?;
     let sys = scenes::fcc_lattice([4; 3], 0.8, 1.0, table, &[0], 8)?;
     let l = sys.lengths();
     let config = Config {
@@ -161,7 +161,7 @@ fn configurational_temperature_matches_the_target() -> Result<()> {
 #[test]
 fn frozen_particles_do_not_move_bit_for_bit() -> Result<()> {
     let name = "frozen_particles_do_not_move_bit_for_bit";
-    let table = PairTable::uniform(2, PairParams::lj(1.0, 1.0, 2.5))?;
+    let table = PairTable::uniform(2, LennardJones::new(1.0, 1.0, 2.5))?;
     let mut sys = scenes::fcc_lattice([4; 3], 0.8442, 1.44, table, &[0, 1], 5)?;
     sys.set_frozen(1, true)?;
     for backend in backends(name) {
@@ -225,9 +225,9 @@ fn mobile_force(md: &mut Md, species: &[u32], frozen: u32) -> Result<[f64; 3]> {
 #[test]
 fn mobile_momentum_changes_only_through_forces_from_frozen_particles() -> Result<()> {
     for coupled in [true, false] {
-        let mut table = PairTable::uniform(2, PairParams::lj(1.0, 1.0, 2.5))?;
+        let mut table = PairTable::uniform(2, LennardJones::new(1.0, 1.0, 2.5))?;
         if !coupled {
-            table.set(0, 1, PairParams::lj(0.0, 1.0, 2.5))?;
+            table.set(0, 1, LennardJones::new(0.0, 1.0, 2.5))?;
         }
         let free = scenes::fcc_lattice([4; 3], 0.8442, 1.0, table, &[0, 1], 6)?;
         let mut sys = free.clone();
@@ -294,7 +294,7 @@ fn mobile_momentum_changes_only_through_forces_from_frozen_particles() -> Result
 /// backend alike (the settings are checked before any backend is built).
 #[test]
 fn bad_thermostat_settings_and_species_are_refused() -> Result<()> {
-    let table = PairTable::uniform(2, PairParams::lj(1.0, 1.0, 2.5))?;
+    let table = PairTable::uniform(2, LennardJones::new(1.0, 1.0, 2.5))?;
     let mut sys = scenes::fcc_lattice([3; 3], 0.5, 1.0, table, &[0, 1], 1)?;
     for bad in [f64::NAN, -1.0, f64::INFINITY, 1e31] {
         for l in [Langevin::new(bad, 1.0, 0), Langevin::new(1.0, bad, 0)] {

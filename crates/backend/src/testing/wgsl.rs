@@ -89,16 +89,81 @@ pub fn eval_wgsl<I: Pod, O: Pod>(
     if inputs.is_empty() {
         return Ok(Vec::new());
     }
+    let input = GpuBuffer::from_slice(ctx, "law inputs", inputs)?;
+    run_harness(
+        ctx,
+        sources,
+        &[("x", input_type, input.binding())],
+        output_type,
+        expression,
+        inputs.len(),
+    )
+}
+
+/// [`eval_wgsl`] with two inputs per evaluation, `x` from `inputs` and `y` from `args`
+/// (WGSL types `types.0` and `types.1`), e.g. a law's coefficient struct and the distance
+/// it is evaluated at: `"md_pair_force_energy(x, y)"`. Both slices have one entry per
+/// evaluation.
+///
+/// Errors: slices of different lengths, and those of [`eval_wgsl`].
+pub fn eval_wgsl2<A: Pod, B: Pod, O: Pod>(
+    ctx: &GpuContext,
+    sources: &[&str],
+    types: (&str, &str),
+    output_type: &str,
+    expression: &str,
+    inputs: &[A],
+    args: &[B],
+) -> Result<Vec<O>> {
+    if inputs.len() != args.len() {
+        return Err(Error::invalid(
+            "eval_wgsl2 arguments",
+            args.len(),
+            format!("must be as many as the inputs ({})", inputs.len()),
+        ));
+    }
+    if inputs.is_empty() {
+        return Ok(Vec::new());
+    }
+    let a = GpuBuffer::from_slice(ctx, "law inputs", inputs)?;
+    let b = GpuBuffer::from_slice(ctx, "law arguments", args)?;
+    run_harness(
+        ctx,
+        sources,
+        &[("x", types.0, a.binding()), ("y", types.1, b.binding())],
+        output_type,
+        expression,
+        inputs.len(),
+    )
+}
+
+/// Runs `expression` once per index `i < count` with each input `(name, WGSL type,
+/// buffer)` bound as `name = law_in_<k>[i]`, and downloads the outputs.
+fn run_harness<O: Pod>(
+    ctx: &GpuContext,
+    sources: &[&str],
+    inputs: &[(&str, &str, wgpu::BindingResource<'_>)],
+    output_type: &str,
+    expression: &str,
+    count: usize,
+) -> Result<Vec<O>> {
+    let mut decls = String::new();
+    let mut lets = String::new();
+    for (k, (name, ty, _)) in inputs.iter().enumerate() {
+        decls += &format!("@group(0) @binding({k}) var<storage, read> law_in_{k}: array<{ty}>;\n");
+        lets += &format!("let {name} = law_in_{k}[i];\n");
+    }
+    let out = inputs.len();
     let harness = format!(
-        "@group(0) @binding(0) var<storage, read> law_in: array<{input_type}>;\n\
-         @group(0) @binding(1) var<storage, read_write> law_out: array<{output_type}>;\n\
+        "{decls}\
+         @group(0) @binding({out}) var<storage, read_write> law_out: array<{output_type}>;\n\
          @compute @workgroup_size(64)\n\
          fn law_main(@builtin(workgroup_id) wid: vec3<u32>, \
                      @builtin(num_workgroups) nwg: vec3<u32>, \
                      @builtin(local_invocation_index) lid: u32) {{\n\
              let i = linear_workgroup(wid, nwg) * 64u + lid;\n\
-             if i >= arrayLength(&law_in) {{ return; }}\n\
-             let x = law_in[i];\n\
+             if i >= arrayLength(&law_out) {{ return; }}\n\
+             {lets}\
              law_out[i] = {expression};\n\
          }}\n"
     );
@@ -115,11 +180,13 @@ pub fn eval_wgsl<I: Pod, O: Pod>(
             constants: &[],
         },
     )?;
-    let input = GpuBuffer::from_slice(ctx, "law inputs", inputs)?;
-    let output = GpuBuffer::<O>::zeroed(ctx, "law outputs", inputs.len())?;
-    let bind = kernel.bind(ctx, &[input.binding(), output.binding()])?;
+    let output = GpuBuffer::<O>::zeroed(ctx, "law outputs", count)?;
+    let mut resources: Vec<wgpu::BindingResource<'_>> =
+        inputs.iter().map(|(_, _, b)| b.clone()).collect();
+    resources.push(output.binding());
+    let bind = kernel.bind(ctx, &resources)?;
     run_pass(ctx, "law under test", |pass| {
-        kernel.dispatch_items(ctx, pass, &bind, inputs.len() as u64)
+        kernel.dispatch_items(ctx, pass, &bind, count as u64)
     })?;
     output.download(ctx)
 }

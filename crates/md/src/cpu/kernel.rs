@@ -5,9 +5,10 @@
 //! register of `f32`, two of `f64`; on the `in.lj` liquid 16 measured about 12 % faster
 //! than 8 in `f64` and 32 much slower in both): a gather fills lane arrays with the
 //! separations and the coefficients of the species pair (`coeff[s_i * n_species + s_j]`,
-//! no branch on the species), one loop over the lanes evaluates [`pair_force_energy`] (the
-//! law of every CPU path, called as is; the compiler turns its cutoff test into a lane
-//! mask and the loop into vector instructions), and a scalar loop subtracts the reactions
+//! no branch on the species), one loop over the lanes evaluates the law's
+//! [`PairLaw::force_energy`] (the law of every CPU path, called as is and inlined: the
+//! kernel is compiled for each law; the compiler turns the cutoff test into a lane mask and
+//! the loop into vector instructions), and a scalar loop subtracts the reactions
 //! from the partners. Lane `l` of `i`'s accumulators sums partners `l, l + W, ...`; the
 //! lanes are added in order at the end, then the cross-image partners one by one. The
 //! full chunks need no tail handling; the last, short chunk runs at width `W / 2` when it
@@ -25,7 +26,7 @@
 use simkit_backend::Real;
 use simkit_neighbor::HalfListBlock;
 
-use crate::table::{PairCoeff, pair_force_energy};
+use crate::PairLaw;
 
 /// Partners per chunk (`W` in the module doc).
 const LANES: usize = 16;
@@ -79,13 +80,13 @@ impl Kernel {
 
 /// What the kernel reads: positions and species in slot order, the flat species-pair
 /// table.
-pub(crate) struct Inputs<'a, T, const D: usize> {
+pub(crate) struct Inputs<'a, T: Real, const D: usize, L: PairLaw> {
     /// Positions (not wrapped since the list build: the list holds each pair's image).
     pub pos: &'a [[T; D]],
     /// Species per slot.
     pub species: &'a [u32],
     /// Coefficients, entry `si * n_species + sj`.
-    pub coeff: &'a [PairCoeff<T>],
+    pub coeff: &'a [L::Coeff<T>],
     /// Number of species.
     pub n_species: usize,
     /// A separation beyond every cutoff (for the unused lanes).
@@ -101,24 +102,24 @@ pub(crate) struct Inputs<'a, T, const D: usize> {
 /// # Safety
 /// Every partner `j` of `nb` must satisfy `j < pos.len()` and `j < nb.start() +
 /// local.len()` (`local.len() >= nb.reach() - nb.start()`), and `nb.end() <= pos.len()`.
-pub(crate) unsafe fn block_forces<T: Real, const D: usize>(
+pub(crate) unsafe fn block_forces<T: Real, const D: usize, L: PairLaw>(
     kernel: Kernel,
-    inp: &Inputs<'_, T, D>,
+    inp: &Inputs<'_, T, D, L>,
     nb: &HalfListBlock<T, D>,
     local: &mut [[T; D]],
     ew: &mut [[T; 2]],
     energy: bool,
 ) {
     // SAFETY: passed on from the caller.
-    unsafe { dispatch::<T, D, LANES, { LANES / 2 }>(kernel, inp, nb, local, ew, energy) }
+    unsafe { dispatch::<T, D, L, LANES, { LANES / 2 }>(kernel, inp, nb, local, ew, energy) }
 }
 
 /// # Safety
 /// As [`block_forces`].
 #[inline(always)]
-unsafe fn dispatch<T: Real, const D: usize, const W: usize, const H: usize>(
+unsafe fn dispatch<T: Real, const D: usize, L: PairLaw, const W: usize, const H: usize>(
     kernel: Kernel,
-    inp: &Inputs<'_, T, D>,
+    inp: &Inputs<'_, T, D, L>,
     nb: &HalfListBlock<T, D>,
     local: &mut [[T; D]],
     ew: &mut [[T; 2]],
@@ -127,12 +128,12 @@ unsafe fn dispatch<T: Real, const D: usize, const W: usize, const H: usize>(
     match kernel {
         #[cfg(target_arch = "x86_64")]
         // SAFETY: `Kernel::detect` only returns Avx512 when the CPU has these features.
-        Kernel::Avx512 => unsafe { lanes_avx512::<T, D, W, H>(inp, nb, local, ew, energy) },
+        Kernel::Avx512 => unsafe { lanes_avx512::<T, D, L, W, H>(inp, nb, local, ew, energy) },
         #[cfg(target_arch = "x86_64")]
         // SAFETY: `Kernel::detect` only returns Avx2 (or better) when the CPU has AVX2, FMA.
-        Kernel::Avx2 => unsafe { lanes_avx2::<T, D, W, H>(inp, nb, local, ew, energy) },
+        Kernel::Avx2 => unsafe { lanes_avx2::<T, D, L, W, H>(inp, nb, local, ew, energy) },
         // SAFETY: as [`block_forces`].
-        _ => unsafe { lanes::<T, D, W, H>(inp, nb, local, ew, energy) },
+        _ => unsafe { lanes::<T, D, L, W, H>(inp, nb, local, ew, energy) },
     }
 }
 
@@ -142,15 +143,15 @@ unsafe fn dispatch<T: Real, const D: usize, const W: usize, const H: usize>(
 /// The CPU must have AVX-512F, AVX-512VL, AVX2 and FMA; and as [`block_forces`].
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
-unsafe fn lanes_avx512<T: Real, const D: usize, const W: usize, const H: usize>(
-    inp: &Inputs<'_, T, D>,
+unsafe fn lanes_avx512<T: Real, const D: usize, L: PairLaw, const W: usize, const H: usize>(
+    inp: &Inputs<'_, T, D, L>,
     nb: &HalfListBlock<T, D>,
     local: &mut [[T; D]],
     ew: &mut [[T; 2]],
     energy: bool,
 ) {
     // SAFETY: passed on from the caller.
-    unsafe { lanes::<T, D, W, H>(inp, nb, local, ew, energy) };
+    unsafe { lanes::<T, D, L, W, H>(inp, nb, local, ew, energy) };
 }
 
 /// [`lanes`] compiled for AVX2.
@@ -159,15 +160,15 @@ unsafe fn lanes_avx512<T: Real, const D: usize, const W: usize, const H: usize>(
 /// The CPU must have AVX2 and FMA; and as [`block_forces`].
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn lanes_avx2<T: Real, const D: usize, const W: usize, const H: usize>(
-    inp: &Inputs<'_, T, D>,
+unsafe fn lanes_avx2<T: Real, const D: usize, L: PairLaw, const W: usize, const H: usize>(
+    inp: &Inputs<'_, T, D, L>,
     nb: &HalfListBlock<T, D>,
     local: &mut [[T; D]],
     ew: &mut [[T; 2]],
     energy: bool,
 ) {
     // SAFETY: passed on from the caller.
-    unsafe { lanes::<T, D, W, H>(inp, nb, local, ew, energy) };
+    unsafe { lanes::<T, D, L, W, H>(inp, nb, local, ew, energy) };
 }
 
 /// The kernel body (see the module doc), `W` lanes; the coefficient gather is left out
@@ -176,8 +177,8 @@ unsafe fn lanes_avx2<T: Real, const D: usize, const W: usize, const H: usize>(
 /// # Safety
 /// As [`block_forces`].
 #[inline(always)]
-unsafe fn lanes<T: Real, const D: usize, const W: usize, const H: usize>(
-    inp: &Inputs<'_, T, D>,
+unsafe fn lanes<T: Real, const D: usize, L: PairLaw, const W: usize, const H: usize>(
+    inp: &Inputs<'_, T, D, L>,
     nb: &HalfListBlock<T, D>,
     local: &mut [[T; D]],
     ew: &mut [[T; 2]],
@@ -186,10 +187,10 @@ unsafe fn lanes<T: Real, const D: usize, const W: usize, const H: usize>(
     // SAFETY: passed on from the caller.
     unsafe {
         match (inp.n_species == 1, energy) {
-            (true, true) => body::<T, D, W, H, true, true>(inp, nb, local, ew),
-            (true, false) => body::<T, D, W, H, true, false>(inp, nb, local, ew),
-            (false, true) => body::<T, D, W, H, false, true>(inp, nb, local, ew),
-            (false, false) => body::<T, D, W, H, false, false>(inp, nb, local, ew),
+            (true, true) => body::<T, D, L, W, H, true, true>(inp, nb, local, ew),
+            (true, false) => body::<T, D, L, W, H, true, false>(inp, nb, local, ew),
+            (false, true) => body::<T, D, L, W, H, false, true>(inp, nb, local, ew),
+            (false, false) => body::<T, D, L, W, H, false, false>(inp, nb, local, ew),
         }
     }
 }
@@ -200,12 +201,13 @@ unsafe fn lanes<T: Real, const D: usize, const W: usize, const H: usize>(
 unsafe fn body<
     T: Real,
     const D: usize,
+    L: PairLaw,
     const W: usize,
     const H: usize,
     const SINGLE: bool,
     const ENERGY: bool,
 >(
-    inp: &Inputs<'_, T, D>,
+    inp: &Inputs<'_, T, D, L>,
     nb: &HalfListBlock<T, D>,
     local: &mut [[T; D]],
     ew: &mut [[T; 2]],
@@ -230,7 +232,7 @@ unsafe fn body<
             let idx: &[u32; W] = chunk.try_into().unwrap_or_else(|_| unreachable!());
             // SAFETY: passed on from the caller.
             unsafe {
-                chunk_forces::<T, D, W, W, SINGLE, ENERGY>(
+                chunk_forces::<T, D, L, W, W, SINGLE, ENERGY>(
                     inp, row, xi, idx, W, start, local, &mut acc,
                 )
             };
@@ -243,7 +245,7 @@ unsafe fn body<
             let idx: [u32; W] = std::array::from_fn(|l| rest.get(l).copied().unwrap_or(i as u32));
             // SAFETY: passed on from the caller.
             unsafe {
-                chunk_forces::<T, D, W, W, SINGLE, ENERGY>(
+                chunk_forces::<T, D, L, W, W, SINGLE, ENERGY>(
                     inp, row, xi, &idx, cnt, start, local, &mut acc,
                 )
             };
@@ -251,7 +253,7 @@ unsafe fn body<
             let idx: [u32; H] = std::array::from_fn(|l| rest.get(l).copied().unwrap_or(i as u32));
             // SAFETY: passed on from the caller.
             unsafe {
-                chunk_forces::<T, D, H, W, SINGLE, ENERGY>(
+                chunk_forces::<T, D, L, H, W, SINGLE, ENERGY>(
                     inp, row, xi, &idx, cnt, start, local, &mut acc,
                 )
             };
@@ -272,7 +274,7 @@ unsafe fn body<
             for x in s {
                 r2 += x * x;
             }
-            let (fr, pe) = pair_force_energy(&row[species[j] as usize], r2);
+            let (fr, pe) = L::force_energy(&row[species[j] as usize], r2);
             let fj = &mut local[j - start];
             for d in 0..D {
                 let f = fr * s[d];
@@ -314,13 +316,14 @@ struct Acc<T, const D: usize, const W: usize> {
 unsafe fn chunk_forces<
     T: Real,
     const D: usize,
+    L: PairLaw,
     const C: usize,
     const W: usize,
     const SINGLE: bool,
     const ENERGY: bool,
 >(
-    inp: &Inputs<'_, T, D>,
-    row: &[PairCoeff<T>],
+    inp: &Inputs<'_, T, D, L>,
+    row: &[L::Coeff<T>],
     xi: [T; D],
     idx: &[u32; C],
     cnt: usize,
@@ -340,12 +343,11 @@ unsafe fn chunk_forces<
         }
     }
     let c0 = row[0];
-    let [mut c12, mut c6, mut rc2, mut shift] = [c0.c12, c0.c6, c0.rc2, c0.shift].map(|x| [x; C]);
+    let mut cs = [c0; C];
     if !SINGLE {
         for (l, &j) in idx[..cnt].iter().enumerate() {
             // SAFETY: `j < pos.len() == species.len()` (the caller's guarantee).
-            let c = &row[unsafe { *species.get_unchecked(j as usize) } as usize];
-            (c12[l], c6[l], rc2[l], shift[l]) = (c.c12, c.c6, c.rc2, c.shift);
+            cs[l] = row[unsafe { *species.get_unchecked(j as usize) } as usize];
         }
     }
     let pad2 = inp.pad * inp.pad;
@@ -357,13 +359,8 @@ unsafe fn chunk_forces<
             r2 += s[l] * s[l];
         }
         let r2 = if cnt == C || l < cnt { r2 } else { pad2 };
-        let c = PairCoeff {
-            c12: c12[l],
-            c6: c6[l],
-            rc2: rc2[l],
-            shift: shift[l],
-        };
-        let (fr, e) = pair_force_energy(&c, r2);
+        let c = if SINGLE { &c0 } else { &cs[l] };
+        let (fr, e) = L::force_energy(c, r2);
         for d in 0..D {
             fp[d][l] = fr * sep[d][l];
             acc.f[d][l] += fp[d][l];
@@ -386,7 +383,7 @@ unsafe fn chunk_forces<
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::table::{PairParams, PairTable};
+    use crate::{LennardJones, LjCoeff, PairTable};
     use simkit_neighbor::BlockedHalfList;
 
     /// A dense random 3-species liquid, sorted and listed; returns the sorted positions,
@@ -412,11 +409,11 @@ mod tests {
     }
 
     fn table() -> PairTable {
-        let mut t = PairTable::uniform(3, PairParams::lj(1.0, 1.0, 2.5)).unwrap();
-        t.set(0, 1, PairParams::new(0.7, 0.9, 1.2, 0.8, 2.2))
+        let mut t = PairTable::uniform(3, LennardJones::new(1.0, 1.0, 2.5)).unwrap();
+        t.set(0, 1, LennardJones::weighted(0.7, 0.9, 1.2, 0.8, 2.2))
             .unwrap();
-        t.set(1, 2, PairParams::repulsive(1.5, 0.8, 1.3)).unwrap();
-        t.set(2, 2, PairParams::lj(0.5, 1.1, 2.7)).unwrap();
+        t.set(1, 2, LennardJones::repulsive(1.5, 0.8, 1.3)).unwrap();
+        t.set(2, 2, LennardJones::new(0.5, 1.1, 2.7)).unwrap();
         t
     }
 
@@ -428,10 +425,10 @@ mod tests {
         pos: &[[T; 3]],
         species: &[u32],
         list: &BlockedHalfList<T, 3>,
-        coeff: &[PairCoeff<T>],
+        coeff: &[LjCoeff<T>],
         energy: bool,
     ) -> (Vec<[T; 3]>, Vec<[T; 2]>) {
-        let inp = Inputs {
+        let inp = Inputs::<T, 3, LennardJones> {
             pos,
             species,
             coeff,
@@ -486,8 +483,10 @@ mod tests {
                     x - l * (x / l).round()
                 });
                 let r2 = s.iter().map(|x| x * x).sum();
-                let (fr, _) =
-                    pair_force_energy(&c64[species[i] as usize * 3 + species[j] as usize], r2);
+                let (fr, _) = LennardJones::force_energy(
+                    &c64[species[i] as usize * 3 + species[j] as usize],
+                    r2,
+                );
                 for d in 0..3 {
                     f[d] += fr * s[d];
                 }

@@ -40,9 +40,8 @@ use simkit_neighbor::BlockedHalfList;
 use crate::config::Integrator;
 use crate::diagnostics::assemble;
 use crate::engine::{Engine, EngineState};
-use crate::table::PairCoeff;
 use crate::thermostat::{gaussians, ou_coefficients};
-use crate::{Config, Diagnostics, State, System};
+use crate::{Config, Diagnostics, PairLaw, State, System};
 
 pub(crate) use kernel::Kernel;
 
@@ -64,13 +63,13 @@ struct Snapshot<T, const D: usize> {
 }
 
 /// The CPU engine for dimension `D` and precision `T`.
-pub(crate) struct CpuEngine<const D: usize, T: Real> {
-    system: System,
+pub(crate) struct CpuEngine<const D: usize, T: Real, L: PairLaw> {
+    system: System<L>,
     dt: f64,
     integrator: Integrator,
     check_every: u32,
     n_species: usize,
-    coeff: Vec<PairCoeff<T>>,
+    coeff: Vec<L::Coeff<T>>,
     /// `1 / m` per species, `0` for a frozen species (its forces are not integrated).
     inv_mass: Vec<T>,
     /// The Langevin thermostat: seed and `(c1, amplitude)` per species.
@@ -109,11 +108,11 @@ pub(crate) struct CpuEngine<const D: usize, T: Real> {
     snap: Snapshot<T, D>,
 }
 
-impl<const D: usize, T: Real> CpuEngine<D, T> {
+impl<const D: usize, T: Real, L: PairLaw> CpuEngine<D, T, L> {
     /// Builds the engine from a validated system at `dt`; `saved` is a checkpointed state
     /// with the positions of its last list build (system order, flat).
     pub fn new(
-        system: &System,
+        system: &System<L>,
         config: &Config,
         dt: f64,
         saved: Option<(&EngineState, &[f64])>,
@@ -400,7 +399,7 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
         if beyond(moved2, self.rebuild2) {
             self.rebuild()?;
         }
-        let inp = kernel::Inputs {
+        let inp = kernel::Inputs::<T, D, L> {
             pos: &self.pos,
             species: &self.species,
             coeff: &self.coeff,
@@ -749,7 +748,7 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
 /// periodic length is below twice that (the system guarantees at least twice `max r_c`):
 /// a pair must be within range in one image only. The list is rebuilt when a particle has
 /// moved more than half of `range - max r_c`.
-pub(crate) fn list_range(system: &System, skin: f64) -> f64 {
+pub(crate) fn list_range<L: PairLaw>(system: &System<L>, skin: f64) -> f64 {
     let (len, per) = (system.lengths(), system.periodic());
     (0..system.dim().axes())
         .filter(|&d| per[d])
@@ -834,7 +833,7 @@ fn flat_in_system_order<T: Real, const D: usize>(v: &[[T; D]], order: &[u32]) ->
     out
 }
 
-impl<const D: usize, T: Real> Engine for CpuEngine<D, T> {
+impl<const D: usize, T: Real, L: PairLaw> Engine for CpuEngine<D, T, L> {
     fn step(&mut self, steps: u32) -> Result<()> {
         simkit_backend::pool::on_pool(|| self.guarded(steps))
     }
@@ -906,7 +905,7 @@ impl<const D: usize, T: Real> Engine for CpuEngine<D, T> {
     }
 
     fn model(&self) -> String {
-        crate::sim::model_name(false, T::PRECISION, D)
+        crate::sim::model_name::<L>(false, T::PRECISION, D)
     }
 
     fn save(&mut self) -> Result<EngineState> {

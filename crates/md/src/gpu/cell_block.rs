@@ -14,7 +14,7 @@ use simkit_backend::gpu::{DISPATCH_WGSL, Uniform, run_pass};
 use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Result};
 use simkit_neighbor::{AnyGpuCellList, CELLS_WGSL};
 
-use super::{GpuParams, LAW_WGSL, PARAMS_WGSL};
+use super::{GpuParams, PARAMS_WGSL};
 
 const BLOCK_WGSL: &str = simkit_backend::wgsl!("block.wgsl");
 const FILL_WGSL: &str = simkit_backend::wgsl!("block_fill.wgsl");
@@ -31,14 +31,18 @@ const SLOT_GRANULE: u32 = 8;
 /// Bytes of workgroup memory per slot in the force kernel (a position and an id).
 const STAGE_BYTES_PER_SLOT: u32 = 20;
 
-/// The engine's buffers the force kernel binds.
-pub(super) struct ForceInputs<'a> {
+/// The engine's buffers the force kernel binds, and the law's WGSL.
+pub(super) struct ForceInputs<'a, C: bytemuck::Pod> {
+    /// The pair law (`struct MdCoeff`, `md_pair_force_energy`).
+    pub law: &'static str,
     /// Run parameters.
     pub params: &'a Uniform<GpuParams>,
     /// Positions (`w`: species).
     pub pos: &'a GpuBuffer<[f32; 4]>,
-    /// Pair table and per-species entries.
-    pub table: &'a GpuBuffer<[f32; 4]>,
+    /// Pair coefficients, entry `si * n_species + sj`.
+    pub coeff: &'a GpuBuffer<C>,
+    /// Per species: `(1 / mass, c1, amplitude, 0)`.
+    pub species: &'a GpuBuffer<[f32; 4]>,
     /// Accelerations (`w`: pair energy sum).
     pub acc: &'a GpuBuffer<[f32; 4]>,
     /// Velocities.
@@ -75,6 +79,7 @@ fn auto_slots(particles: usize, cells: usize, fullest: u32) -> u32 {
 
 fn kernel(
     ctx: &GpuContext,
+    law: &str,
     cap: &str,
     src: &str,
     entry: &str,
@@ -90,7 +95,7 @@ fn kernel(
                 DISPATCH_WGSL,
                 CELLS_WGSL,
                 PARAMS_WGSL,
-                LAW_WGSL,
+                law,
                 cap,
                 BLOCK_WGSL,
                 src,
@@ -109,12 +114,12 @@ impl CellBlock {
     ///
     /// Errors: a requested capacity of 0, below the fullest initial cell or over the
     /// device's workgroup limits; an automatic capacity over those limits.
-    pub fn new(
+    pub fn new<C: bytemuck::Pod>(
         ctx: &GpuContext,
         full: AnyGpuCellList,
         n: usize,
         requested: Option<u32>,
-        inputs: &ForceInputs<'_>,
+        inputs: &ForceInputs<'_, C>,
         steps: u64,
         kicks: [f64; 2],
     ) -> Result<Self> {
@@ -167,7 +172,7 @@ impl CellBlock {
         ];
         let health = GpuBuffer::<f32>::zeroed(ctx, HEALTH_LABEL, 2)?;
         let cells = full.buffers();
-        let fill = kernel(ctx, &cap, FILL_WGSL, "md_block_fill", 64, 0.0)?;
+        let fill = kernel(ctx, inputs.law, &cap, FILL_WGSL, "md_block_fill", 64, 0.0)?;
         let fill_set = |s: usize| {
             fill.bind(
                 ctx,
@@ -182,7 +187,15 @@ impl CellBlock {
             )
         };
         let fill_bind = [fill_set(0)?, fill_set(1)?];
-        let update = kernel(ctx, &cap, UPDATE_WGSL, "md_block_update", slots, 0.0)?;
+        let update = kernel(
+            ctx,
+            inputs.law,
+            &cap,
+            UPDATE_WGSL,
+            "md_block_update",
+            slots,
+            0.0,
+        )?;
         let update_set = |s: usize| {
             update.bind(
                 ctx,
@@ -207,17 +220,34 @@ impl CellBlock {
                     counts[s].binding(),
                     lists[s].binding(),
                     inputs.pos.binding(),
-                    inputs.table.binding(),
+                    inputs.coeff.binding(),
+                    inputs.species.binding(),
                     inputs.acc.binding(),
                     inputs.vel.binding(),
                     inputs.vir.binding(),
                 ],
             )
         };
-        let force = kernel(ctx, &cap, FORCE_WGSL, "md_block_force", slots, kick)?;
+        let force = kernel(
+            ctx,
+            inputs.law,
+            &cap,
+            FORCE_WGSL,
+            "md_block_force",
+            slots,
+            kick,
+        )?;
         let force_bind = [force_set(&force, 0)?, force_set(&force, 1)?];
         let set = (steps % 2) as usize;
-        let init = kernel(ctx, &cap, FORCE_WGSL, "md_block_force", slots, start_kick)?;
+        let init = kernel(
+            ctx,
+            inputs.law,
+            &cap,
+            FORCE_WGSL,
+            "md_block_force",
+            slots,
+            start_kick,
+        )?;
         let init_bind = force_set(&init, set)?;
         run_pass(ctx, "md cell-block initial forces", |pass| {
             fill.dispatch_items(ctx, pass, &fill_bind[set], n_cells as u64)?;

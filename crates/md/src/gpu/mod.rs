@@ -47,11 +47,9 @@ use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Precision
 use crate::config::{GpuKernel, Integrator};
 use crate::diagnostics::assemble;
 use crate::engine::{Engine, EngineState};
-use crate::{Config, Diagnostics, Dim, State, System};
+use crate::{Config, Diagnostics, Dim, PairLaw, State, System};
 
 pub(crate) const PARAMS_WGSL: &str = simkit_backend::wgsl!("params.wgsl");
-/// The pair law (twin of [`crate::pair_force_energy`]).
-pub(crate) const LAW_WGSL: &str = simkit_backend::wgsl!("law.wgsl");
 const DRIFT_WGSL: &str = simkit_backend::wgsl!("drift.wgsl");
 const FORCE_WGSL: &str = simkit_backend::wgsl!("force.wgsl");
 /// The Gaussian numbers of the thermostat (twin of `crate::thermostat::gaussians`).
@@ -62,7 +60,7 @@ const TICK_WGSL: &str = simkit_backend::wgsl!("tick.wgsl");
 /// Steps recorded into one command buffer.
 const STEPS_PER_SUBMIT: u32 = 64;
 /// Storage buffers the force kernel binds.
-const STORAGE_BUFFERS_NEEDED: u32 = 8;
+const STORAGE_BUFFERS_NEEDED: u32 = 9;
 
 /// Mirror of `MdParams` in `shaders/params.wgsl`.
 #[repr(C)]
@@ -83,13 +81,13 @@ pub(crate) struct GpuParams {
 }
 
 /// The device cell list of the system's dimension, cells one largest cutoff wide.
-fn cell_list(
+fn cell_list<L: PairLaw>(
     ctx: &GpuContext,
-    sys: &System,
+    sys: &System<L>,
     pos: &GpuBuffer<[f32; 4]>,
     n: usize,
 ) -> Result<AnyGpuCellList> {
-    fn grid<const D: usize>(sys: &System) -> Result<CellGrid<D>> {
+    fn grid<const D: usize, L: PairLaw>(sys: &System<L>) -> Result<CellGrid<D>> {
         let (lo, len, per) = (sys.lo(), sys.lengths(), sys.periodic());
         Ok(CellGrid::new(
             std::array::from_fn(|d| lo[d]),
@@ -100,16 +98,17 @@ fn cell_list(
         .with_out_of_box(OutOfBox::Clamp))
     }
     Ok(match sys.dim() {
-        Dim::Two => AnyGpuCellList::Two(GpuCellList::with_count(ctx, &grid::<2>(sys)?, pos, n)?),
+        Dim::Two => AnyGpuCellList::Two(GpuCellList::with_count(ctx, &grid::<2, L>(sys)?, pos, n)?),
         Dim::Three => {
-            AnyGpuCellList::Three(GpuCellList::with_count(ctx, &grid::<3>(sys)?, pos, n)?)
+            AnyGpuCellList::Three(GpuCellList::with_count(ctx, &grid::<3, L>(sys)?, pos, n)?)
         }
     })
 }
 
 /// Buffers only the kernels touch (held so they live as long as the bind groups).
-struct BoundOnly {
-    _table: GpuBuffer<[f32; 4]>,
+struct BoundOnly<L: PairLaw> {
+    _coeff: GpuBuffer<L::Gpu>,
+    _species: GpuBuffer<[f32; 4]>,
     _params: Uniform<GpuParams>,
     _tick: GpuBuffer<u32>,
 }
@@ -125,9 +124,9 @@ enum Forces {
     CellBlock(Box<CellBlock>),
 }
 
-pub(crate) struct GpuEngine {
+pub(crate) struct GpuEngine<L: PairLaw> {
     ctx: GpuContext,
-    system: System,
+    system: System<L>,
     dt: f64,
     integrator: Integrator,
     check_every: u32,
@@ -143,11 +142,18 @@ pub(crate) struct GpuEngine {
     tick: Option<(Kernel, wgpu::BindGroup)>,
     guard: GpuGuard,
     steps: u64,
-    _bound: BoundOnly,
+    _bound: BoundOnly<L>,
 }
 
-fn kernel(ctx: &GpuContext, src: &[&str], entry: &str, consts: &[(&str, f64)]) -> Result<Kernel> {
-    let mut sources = vec![DISPATCH_WGSL, CELLS_WGSL, PARAMS_WGSL, LAW_WGSL];
+/// A kernel of `src` after the shared pieces and the law's WGSL `law`.
+fn kernel(
+    ctx: &GpuContext,
+    law: &str,
+    src: &[&str],
+    entry: &str,
+    consts: &[(&str, f64)],
+) -> Result<Kernel> {
+    let mut sources = vec![DISPATCH_WGSL, CELLS_WGSL, PARAMS_WGSL, law];
     sources.extend_from_slice(src);
     Kernel::new(
         ctx,
@@ -161,12 +167,12 @@ fn kernel(ctx: &GpuContext, src: &[&str], entry: &str, consts: &[(&str, f64)]) -
     )
 }
 
-impl GpuEngine {
+impl<L: PairLaw> GpuEngine<L> {
     /// The engine for a validated system at `dt`, at its initial state or, with `saved`,
     /// at a checkpointed one.
     pub fn new(
         ctx: &GpuContext,
-        system: &System,
+        system: &System<L>,
         config: &Config,
         dt: f64,
         saved: Option<&EngineState>,
@@ -277,27 +283,33 @@ impl GpuEngine {
         let vel = GpuBuffer::from_slice(ctx, "md vel", &pad(vel_h))?;
         let acc = GpuBuffer::<[f32; 4]>::zeroed(ctx, "md acc", n.max(1))?;
         let vir = GpuBuffer::<f32>::zeroed(ctx, "md vir", n.max(1))?;
-        let mut table: Vec<[f32; 4]> = system
+        let coeff: Vec<L::Gpu> = system
             .table()
             .coefficients::<f32>(config.shift)
             .iter()
-            .map(|c| [c.c12, c.c6, c.rc2, c.shift])
+            .map(L::gpu)
             .collect();
+        let coeff = GpuBuffer::from_slice(ctx, "md pair coefficients", &coeff)?;
         // Per species: 1 / mass (0 for a frozen species, whose forces are not integrated)
         // and the thermostat's (c1, amplitude).
         let ou = config
             .thermostat
             .map(|l| crate::thermostat::ou_coefficients(system, &l, dt));
-        table.extend(system.masses().iter().enumerate().map(|(s, &m)| {
-            let im = if system.frozen()[s] {
-                0.0
-            } else {
-                (1.0 / m) as f32
-            };
-            let (c1, amp) = ou.as_ref().map_or((1.0, 0.0), |c| c[s]);
-            [im, c1 as f32, amp as f32, 0.0]
-        }));
-        let table = GpuBuffer::from_slice(ctx, "md table", &table)?;
+        let species_info: Vec<[f32; 4]> = system
+            .masses()
+            .iter()
+            .enumerate()
+            .map(|(s, &m)| {
+                let im = if system.frozen()[s] {
+                    0.0
+                } else {
+                    (1.0 / m) as f32
+                };
+                let (c1, amp) = ou.as_ref().map_or((1.0, 0.0), |c| c[s]);
+                [im, c1 as f32, amp as f32, 0.0]
+            })
+            .collect();
+        let species_info = GpuBuffer::from_slice(ctx, "md species", &species_info)?;
         let uniform = Uniform::new(ctx, "md params", &params);
         let cells = cell_list(ctx, system, &pos, n)?;
         // The device step counter keying the thermostat's random numbers (mod 2^32).
@@ -305,6 +317,7 @@ impl GpuEngine {
         let (drift, tick) = if config.thermostat.is_some() {
             let k = kernel(
                 ctx,
+                L::WGSL,
                 &[RNG_WGSL, NOISE_WGSL, DRIFT_WGSL, LANGEVIN_WGSL],
                 "md_drift_langevin",
                 &[],
@@ -316,15 +329,15 @@ impl GpuEngine {
                     pos.binding(),
                     vel.binding(),
                     acc.binding(),
-                    table.binding(),
+                    species_info.binding(),
                     tick_buf.binding(),
                 ],
             )?;
-            let t = kernel(ctx, &[TICK_WGSL], "md_tick", &[])?;
+            let t = kernel(ctx, L::WGSL, &[TICK_WGSL], "md_tick", &[])?;
             let tb = t.bind(ctx, &[tick_buf.binding()])?;
             ((k, b), Some((t, tb)))
         } else {
-            let k = kernel(ctx, &[DRIFT_WGSL], "md_drift", &[])?;
+            let k = kernel(ctx, L::WGSL, &[DRIFT_WGSL], "md_drift", &[])?;
             let b = k.bind(
                 ctx,
                 &[
@@ -362,14 +375,21 @@ impl GpuEngine {
                     sorted_ids.binding(),
                     sorted_pos.binding(),
                     wrapped.binding(),
-                    table.binding(),
+                    coeff.binding(),
+                    species_info.binding(),
                     acc.binding(),
                     vel.binding(),
                     vir.binding(),
                 ];
-                let k = kernel(ctx, &[FORCE_WGSL], "md_force", &[("KICK", kick)])?;
+                let k = kernel(ctx, L::WGSL, &[FORCE_WGSL], "md_force", &[("KICK", kick)])?;
                 let b = k.bind(ctx, &force_resources)?;
-                let init = kernel(ctx, &[FORCE_WGSL], "md_force", &[("KICK", start_kick)])?;
+                let init = kernel(
+                    ctx,
+                    L::WGSL,
+                    &[FORCE_WGSL],
+                    "md_force",
+                    &[("KICK", start_kick)],
+                )?;
                 let init_bind = init.bind(ctx, &force_resources)?;
                 let mut encoder = ctx.encoder("md init");
                 record_pass(&mut encoder, "md init forces", |pass| {
@@ -385,9 +405,11 @@ impl GpuEngine {
             }
             GpuKernel::CellBlock { slots } => {
                 let inputs = ForceInputs {
+                    law: L::WGSL,
                     params: &uniform,
                     pos: &pos,
-                    table: &table,
+                    coeff: &coeff,
+                    species: &species_info,
                     acc: &acc,
                     vel: &vel,
                     vir: &vir,
@@ -436,7 +458,8 @@ impl GpuEngine {
             guard,
             steps,
             _bound: BoundOnly {
-                _table: table,
+                _coeff: coeff,
+                _species: species_info,
                 _params: uniform,
                 _tick: tick_buf,
             },
@@ -513,7 +536,7 @@ impl GpuEngine {
     }
 }
 
-impl Engine for GpuEngine {
+impl<L: PairLaw> Engine for GpuEngine<L> {
     fn step(&mut self, steps: u32) -> Result<()> {
         let ctx = &self.ctx;
         self.guard.begin(ctx)?;
@@ -671,7 +694,7 @@ impl Engine for GpuEngine {
     }
 
     fn model(&self) -> String {
-        crate::sim::model_name(true, Precision::F32, self.axes)
+        crate::sim::model_name::<L>(true, Precision::F32, self.axes)
     }
 
     fn save(&mut self) -> Result<EngineState> {

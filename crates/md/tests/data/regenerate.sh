@@ -11,7 +11,7 @@
 set -eu
 cd "$(dirname "$0")"
 LMP=${LMP:-lmp}
-for deck in lj_liquid three_species; do
+for deck in lj_liquid three_species morse yukawa mie buck wca; do
     "$LMP" -in "$deck.in" -log none -screen none
     rm -f "$deck.data"
 done

@@ -7,7 +7,8 @@ use simkit_backend::comm::Comm;
 use simkit_backend::rng::rng_uniform;
 use simkit_backend::{Error, Simulation};
 use simkit_md::{
-    Config, Dim, DistributedMd, Integrator, Langevin, PairParams, PairTable, State, System, scenes,
+    Config, Dim, DistributedMd, Integrator, Langevin, LennardJones, PairTable, State, System,
+    scenes,
 };
 
 /// A pseudo-random number in `[-0.5, 0.5)` keyed by `(stream, index)`.
@@ -61,7 +62,7 @@ fn lattice(
 /// LAMMPS's `in.lj` liquid in a 6 x 4 x 4 FCC box (384 atoms, 10.1 x 6.7 x 6.7, periodic),
 /// energy shifted.
 pub fn lj_liquid() -> (System, Config) {
-    let table = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5)).unwrap();
+    let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5)).unwrap();
     let system = scenes::fcc_lattice([6, 4, 4], 0.8442, 1.44, table, &[0], 5).unwrap();
     let config = Config {
         dt: Some(0.005),
@@ -74,13 +75,13 @@ pub fn lj_liquid() -> (System, Config) {
 /// 2D, closed along x and periodic along y, two mobile species (masses 1 and 2, their own
 /// table entries) around a frozen column of a third: leapfrog.
 pub fn walled_2d() -> (System, Config) {
-    let mut t = PairTable::uniform(3, PairParams::lj(1.0, 1.0, 2.5)).unwrap();
-    t.set(1, 1, PairParams::lj(1.2, 0.9, 2.2)).unwrap();
-    t.set(0, 1, PairParams::new(1.0, 1.0, 1.0, 0.5, 2.0))
+    let mut t = PairTable::uniform(3, LennardJones::new(1.0, 1.0, 2.5)).unwrap();
+    t.set(1, 1, LennardJones::new(1.2, 0.9, 2.2)).unwrap();
+    t.set(0, 1, LennardJones::weighted(1.0, 1.0, 1.0, 0.5, 2.0))
         .unwrap();
-    t.set(0, 2, PairParams::repulsive(1.0, 1.0, 1.5)).unwrap();
-    t.set(1, 2, PairParams::lj(0.5, 1.0, 2.5)).unwrap();
-    t.set(2, 2, PairParams::repulsive(1.0, 1.0, 1.2)).unwrap();
+    t.set(0, 2, LennardJones::repulsive(1.0, 1.0, 1.5)).unwrap();
+    t.set(1, 2, LennardJones::new(0.5, 1.0, 2.5)).unwrap();
+    t.set(2, 2, LennardJones::repulsive(1.0, 1.0, 1.2)).unwrap();
     let mut s = System::new(
         Dim::Two,
         [0.0; 3],
@@ -108,10 +109,10 @@ pub fn walled_2d() -> (System, Config) {
 /// 3D, periodic along x and z, closed along y, three species with their own cutoffs,
 /// the Langevin thermostat with a per-species target for species 2; velocity Verlet.
 pub fn langevin_3d() -> (System, Config) {
-    let mut t = PairTable::uniform(3, PairParams::lj(1.0, 1.0, 2.5)).unwrap();
-    t.set(0, 0, PairParams::repulsive(1.0, 0.8, 1.6)).unwrap();
-    t.set(0, 1, PairParams::repulsive(1.0, 1.0, 2.0)).unwrap();
-    t.set(1, 2, PairParams::lj(0.7, 1.05, 2.4)).unwrap();
+    let mut t = PairTable::uniform(3, LennardJones::new(1.0, 1.0, 2.5)).unwrap();
+    t.set(0, 0, LennardJones::repulsive(1.0, 0.8, 1.6)).unwrap();
+    t.set(0, 1, LennardJones::repulsive(1.0, 1.0, 2.0)).unwrap();
+    t.set(1, 2, LennardJones::new(0.7, 1.05, 2.4)).unwrap();
     let mut s = System::new(
         Dim::Three,
         [-1.0, 2.0, 0.5],
@@ -140,7 +141,7 @@ pub fn langevin_3d() -> (System, Config) {
 /// A hot 2D Lennard-Jones gas, periodic along both axes (particles cross the periodic
 /// faces and the region corners); velocity Verlet.
 pub fn hot_gas_2d() -> (System, Config) {
-    let t = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5)).unwrap();
+    let t = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5)).unwrap();
     let mut s = System::new(
         Dim::Two,
         [0.0; 3],
@@ -243,8 +244,9 @@ pub fn check_all(comm: &Comm) -> Result<usize, String> {
         )?;
         // Swap: the one-process checkpoint goes on on `comm`, and `comm`'s on one process.
         let cm = many.checkpoint().map_err(err)?;
-        let mut many_resumed = DistributedMd::resume(&c1, comm.clone()).map_err(err)?;
-        let mut one_resumed = DistributedMd::resume(&cm, serial).map_err(err)?;
+        let mut many_resumed =
+            DistributedMd::<LennardJones>::resume(&c1, comm.clone()).map_err(err)?;
+        let mut one_resumed = DistributedMd::<LennardJones>::resume(&cm, serial).map_err(err)?;
         for sim in [&mut one, &mut many, &mut many_resumed, &mut one_resumed] {
             sim.step(steps - half).map_err(err)?;
         }
@@ -308,7 +310,7 @@ pub fn check_all(comm: &Comm) -> Result<usize, String> {
 /// Pairs of atoms thrown at each other far too fast for the time step: the run stops on
 /// every rank with the one-process error, rolled back to the same step.
 pub fn blow_up(comm: &Comm) -> Result<usize, String> {
-    let t = PairTable::uniform(1, PairParams::lj(1.0, 1.0, 2.5)).unwrap();
+    let t = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5)).unwrap();
     let mut system = System::new(
         Dim::Two,
         [0.0; 3],
