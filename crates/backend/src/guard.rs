@@ -9,7 +9,10 @@
 //! returns [`Error::BlowUp`] naming the step, the first bad particle or cell, and the likely
 //! cause. `check_every = 0` turns the interval checks off (the end-of-call check stays).
 //!
-//! The CPU side is [`chunks`] and [`first_non_finite`]; the GPU side is
+//! The CPU side is one loop, [`run_guarded`], over any state that implements [`Guarded`]
+//! (keep a copy, advance a stretch, check, put the copy back), with [`chunks`] for the
+//! stretches and [`first_non_finite`] for the usual check; every CPU engine of every crate
+//! runs its `step(n)` through it, single-process and distributed alike. The GPU side is
 //! [`crate::gpu::GpuGuard`], which checks and copies on the device without a round trip per
 //! stretch.
 //!
@@ -22,7 +25,7 @@
 
 use rayon::prelude::*;
 
-use crate::{Error, Real};
+use crate::{Error, Real, Result};
 
 /// Default interval, in steps, of the finite-state check (about 1 % of a step's work or less
 /// in every crate: one pass over the state and one copy of it per interval).
@@ -66,6 +69,100 @@ pub fn end_step(done: u64, steps: u32) -> crate::Result<u64> {
             format!("{done} steps are done: the step counter would overflow"),
         )
     })
+}
+
+/// Why a stretch of steps or its check stopped the run (see [`Guarded`]).
+#[derive(Debug)]
+pub enum Halt {
+    /// The run broke at step `step`: `what` names the first bad value (e.g. `"particle
+    /// 17: position x = NaN"`), `cause` the likely cause and its fix. [`run_guarded`] puts
+    /// the kept state back and returns [`Error::BlowUp`].
+    BlowUp {
+        /// The step at which the failure was found.
+        step: u64,
+        /// What was found.
+        what: String,
+        /// The likely cause.
+        cause: String,
+    },
+    /// An error returned as it is after the kept state is put back (a failed exchange, or
+    /// a blow-up the engine described itself).
+    Error(Error),
+}
+
+impl From<Error> for Halt {
+    fn from(e: Error) -> Self {
+        Halt::Error(e)
+    }
+}
+
+/// The outcome of a check at step `step` that found `failure` (`(what, cause)`, see
+/// [`Halt::BlowUp`]), or passed (`None`).
+///
+/// Errors: [`Halt::BlowUp`] for a failure.
+pub fn verdict(step: u64, failure: Option<(String, String)>) -> std::result::Result<(), Halt> {
+    match failure {
+        None => Ok(()),
+        Some((what, cause)) => Err(Halt::BlowUp { step, what, cause }),
+    }
+}
+
+/// A simulation state that [`run_guarded`] advances in checked stretches.
+pub trait Guarded {
+    /// Steps done since the start of the run.
+    fn steps_done(&self) -> u64;
+
+    /// Keeps a copy of the current state (with its step count): the state a failure in
+    /// the coming stretch puts back.
+    fn keep(&mut self) -> Result<()>;
+
+    /// Advances `n >= 1` steps without checks, counting them in
+    /// [`steps_done`](Guarded::steps_done).
+    fn advance(&mut self, n: u32) -> std::result::Result<(), Halt>;
+
+    /// Checks the state reached by the stretch.
+    fn check(&mut self) -> std::result::Result<(), Halt>;
+
+    /// Puts the kept state back (the step count included).
+    fn restore(&mut self) -> Result<()>;
+
+    /// Runs between two stretches of one call, after the check passed (e.g. a stability
+    /// bound that depends on the fields). Nothing by default.
+    fn between(&mut self) -> Result<()> {
+        Ok(())
+    }
+}
+
+/// Advances `g` by `steps` steps in the stretches of [`chunks`] (ending on multiples of
+/// `every`, counted from step 0, and at the end of the call): before each stretch the
+/// state is kept, after it checked; a stretch or check that fails puts the kept state back
+/// and returns the failure ([`Error::BlowUp`] naming the step, what was found, the cause
+/// and the step rolled back to). `steps = 0` does nothing.
+///
+/// Errors: a step count that would overflow the counter ([`end_step`], before any step),
+/// the failures above, and errors of `keep`, `restore` and `between`.
+pub fn run_guarded<G: Guarded + ?Sized>(g: &mut G, steps: u32, every: u32) -> Result<()> {
+    end_step(g.steps_done(), steps)?;
+    let mut stretches = chunks(g.steps_done(), steps, every).peekable();
+    while let Some(n) = stretches.next() {
+        g.keep()?;
+        let halted = g.advance(n).and_then(|()| g.check());
+        match halted {
+            Ok(()) => {}
+            Err(Halt::BlowUp { step, what, cause }) => {
+                g.restore()?;
+                return Err(blow_up(step, g.steps_done(), what, cause));
+            }
+            Err(Halt::Error(e)) => {
+                g.restore()?;
+                return Err(e);
+            }
+        }
+        if stretches.peek().is_some() {
+            g.between()?;
+        }
+    }
+    Ok(())
 }
 
 /// Index of the first value that is NaN or infinite, if any (in parallel for long slices).
@@ -131,6 +228,91 @@ mod tests {
             out
         };
         assert_eq!(ends(&[200]), ends(&[13, 87, 50, 50]));
+    }
+
+    /// A counter that "blows up" at step `bad` (found by the check after the stretch),
+    /// logging the guard's calls.
+    struct Toy {
+        steps: u64,
+        kept: u64,
+        bad: u64,
+        log: Vec<String>,
+    }
+
+    impl Guarded for Toy {
+        fn steps_done(&self) -> u64 {
+            self.steps
+        }
+        fn keep(&mut self) -> Result<()> {
+            self.kept = self.steps;
+            self.log.push(format!("keep {}", self.steps));
+            Ok(())
+        }
+        fn advance(&mut self, n: u32) -> std::result::Result<(), Halt> {
+            self.steps += u64::from(n);
+            Ok(())
+        }
+        fn check(&mut self) -> std::result::Result<(), Halt> {
+            if self.steps >= self.bad {
+                return Err(Halt::BlowUp {
+                    step: self.steps,
+                    what: "x = NaN".into(),
+                    cause: "dt".into(),
+                });
+            }
+            Ok(())
+        }
+        fn restore(&mut self) -> Result<()> {
+            self.steps = self.kept;
+            self.log.push(format!("restore {}", self.steps));
+            Ok(())
+        }
+        fn between(&mut self) -> Result<()> {
+            self.log.push(format!("between {}", self.steps));
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn the_guarded_loop_keeps_checks_and_rolls_back() {
+        let mut t = Toy {
+            steps: 95,
+            kept: 0,
+            bad: u64::MAX,
+            log: Vec::new(),
+        };
+        run_guarded(&mut t, 165, 100).unwrap();
+        assert_eq!(t.steps, 260);
+        assert_eq!(
+            t.log,
+            [
+                "keep 95",
+                "between 100",
+                "keep 100",
+                "between 200",
+                "keep 200"
+            ]
+        );
+        t.bad = 330;
+        t.log.clear();
+        let e = run_guarded(&mut t, 200, 100).unwrap_err();
+        assert!(matches!(
+            e,
+            Error::BlowUp {
+                step: 400,
+                rolled_back_to: 300,
+                ..
+            }
+        ));
+        assert_eq!(t.steps, 300);
+        assert_eq!(t.log.last().map(String::as_str), Some("restore 300"));
+        // Overflow is refused before stepping; zero steps do nothing.
+        t.steps = u64::MAX - 3;
+        assert!(run_guarded(&mut t, 5, 100).is_err());
+        assert_eq!(t.steps, u64::MAX - 3);
+        t.log.clear();
+        run_guarded(&mut t, 0, 100).unwrap();
+        assert!(t.log.is_empty());
     }
 
     #[test]

@@ -48,6 +48,7 @@ pub mod error;
 #[cfg(feature = "gpu")]
 pub mod gpu;
 pub mod guard;
+pub mod particles;
 pub mod pool;
 pub mod prefix;
 mod real;

@@ -16,17 +16,17 @@
 use multiversion::multiversion;
 use rayon::prelude::*;
 
-use simkit_backend::guard::{blow_up, chunks, first_non_finite};
+use simkit_backend::guard::{Guarded, Halt, first_non_finite, run_guarded, verdict};
 use simkit_backend::{Real, Result};
 
-use simkit_neighbor::{BlockedHalfList, HalfListBlock};
+use simkit_neighbor::{BlockedHalfList, HalfListBlock, wrap_periodic};
 
-use crate::engine::EngineState;
 use crate::prepared::Prepared;
 use crate::{
     ContactCoefficients, Integrator, State, cylinder_overlap, friction_force, normal_force,
     pair_index, plane_overlap, reduced_mass,
 };
+use simkit_backend::particles::Dynamics;
 
 /// Below this particle count the CPU passes run on the calling thread: for small systems
 /// waking the rayon pool several times per step costs more than the work (the blocks, and
@@ -449,7 +449,7 @@ fn permute<X: Copy + Send + Sync>(v: &mut Vec<X>, order: &[u32], parallel: bool)
 impl<const D: usize, T: Real> CpuEngine<D, T> {
     /// The engine for `prep`, at its initial state or, with `saved`, at a checkpointed
     /// one.
-    pub fn new(prep: Prepared, saved: Option<&EngineState>) -> Result<Self> {
+    pub fn new(prep: Prepared, saved: Option<&Dynamics>) -> Result<Self> {
         let n = prep.n;
         let cv = |a: &[f64; 3]| -> [T; D] { std::array::from_fn(|d| T::from_f64(a[d])) };
         let lo: [f64; D] = std::array::from_fn(|d| prep.lo[d]);
@@ -524,39 +524,15 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
             None => e.rebuild()?,
             Some(s) => e.load(s)?,
         }
-        e.keep();
+        Guarded::keep(&mut e)?;
         Ok(e)
-    }
-
-    /// Copies the state into the guard's snapshot (a memcpy per array).
-    fn keep(&mut self) {
-        let (s, p) = (&mut self.snap, &self.p);
-        s.pos.clone_from(&p.pos);
-        s.vel.clone_from(&p.vel);
-        s.acc.clone_from(&p.acc);
-        s.aux.clone_from(&p.aux);
-        s.reference.clone_from(&p.reference);
-        s.id.clone_from(&p.id);
-        (s.time, s.started, s.steps) = (self.time, self.started, self.steps);
-    }
-
-    /// Puts the state back to the guard's snapshot.
-    fn restore(&mut self) -> Result<()> {
-        let (s, p) = (&self.snap, &mut self.p);
-        p.pos.clone_from(&s.pos);
-        p.vel.clone_from(&s.vel);
-        p.acc.clone_from(&s.acc);
-        p.aux.clone_from(&s.aux);
-        p.reference.clone_from(&s.reference);
-        p.id.clone_from(&s.id);
-        (self.time, self.started, self.steps) = (s.time, s.started, s.steps);
-        self.relist()
     }
 
     /// Sets the state from a checkpoint (validated: lengths, a permutation of the
     /// particles).
-    fn load(&mut self, s: &EngineState) -> Result<()> {
-        s.check(self.prep.n, D)?;
+    fn load(&mut self, s: &Dynamics) -> Result<()> {
+        let n = self.prep.n;
+        s.check(n, D, &["pos", "vel", "acc", "aux", "reference"])?;
         let arrays = |v: &[f64]| -> Vec<[T; D]> {
             v.chunks_exact(D)
                 .map(|c| std::array::from_fn(|d| T::from_f64(c[d])))
@@ -568,7 +544,7 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
         p.acc = arrays(&s.acc);
         p.aux = arrays(&s.aux);
         p.reference = arrays(&s.reference);
-        p.id.clone_from(&s.id);
+        p.id = (0..n).map(|k| s.particle(k) as u32).collect();
         (self.time, self.started, self.steps) = (s.time, s.started, s.steps);
         self.relist()
     }
@@ -603,7 +579,7 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
     /// The blow-up check of the current state: `(what, cause)` of the first failure, in
     /// the order non-finite position, non-finite velocity, particle outside the box by
     /// more than its radius, contact deeper than `max_overlap` of the smaller radius.
-    fn check(&self) -> Option<(String, String)> {
+    fn first_failure(&self) -> Option<(String, String)> {
         let p = &self.p;
         for (name, v) in [("position", &p.pos), ("velocity", &p.vel)] {
             if let Some(k) = first_non_finite(v.as_flattened()) {
@@ -725,8 +701,8 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
         }
     }
 
-    /// Advances `steps` steps without checks.
-    fn advance(&mut self, steps: u32) -> Result<()> {
+    /// Advances `steps` steps without checks (the step count is the caller's).
+    fn advance_unchecked(&mut self, steps: u32) -> Result<()> {
         match self.prep.integrator {
             Integrator::VelocityVerlet => self.advance_velocity_verlet(steps),
             Integrator::PositionVerlet => {
@@ -738,33 +714,17 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
         }
     }
 
-    /// `steps` steps in stretches ending on multiples of `check_every`, each followed by
-    /// the blow-up check; a failed check puts the state back to the last one that passed.
-    fn guarded(&mut self, steps: u32) -> Result<()> {
-        for n in chunks(self.steps, steps, self.prep.check_every) {
-            self.advance(n)?;
-            self.steps += u64::from(n);
-            if let Some((what, cause)) = self.check() {
-                let bad = self.steps;
-                self.restore()?;
-                return Err(blow_up(bad, self.steps, what, cause));
-            }
-            self.keep();
-        }
-        Ok(())
-    }
-
     /// The dynamic state for a checkpoint.
-    fn to_saved(&self) -> EngineState {
+    fn to_saved(&self) -> Dynamics {
         let flat =
             |v: &[[T; D]]| -> Vec<f64> { v.as_flattened().iter().map(|x| x.to_f64()).collect() };
         let p = &self.p;
-        EngineState {
+        Dynamics {
             steps: self.steps,
             time: self.time,
             started: self.started,
             width: D as u32,
-            id: p.id.clone(),
+            order: p.id.clone(),
             pos: flat(&p.pos),
             vel: flat(&p.vel),
             acc: flat(&p.acc),
@@ -1108,27 +1068,63 @@ pub(crate) fn max_displacement2<T: Real, const D: usize>(x: &[[T; D]], r: &[[T; 
     m2
 }
 
-/// Wraps the periodic coordinates of `x` into `[lo, lo + len)`.
+/// Wraps the periodic coordinates of `x` into `[lo, lo + len)` ([`wrap_periodic`]).
+#[inline(always)]
 pub(crate) fn wrap<T: Real, const D: usize>(
     x: &mut [T; D],
     per: [bool; D],
     lo: [T; D],
     len: [T; D],
 ) {
-    for d in 0..D {
-        if per[d] {
-            if x[d] < lo[d] {
-                x[d] += len[d];
-            } else if x[d] >= lo[d] + len[d] {
-                x[d] = x[d] - len[d];
-            }
-        }
+    wrap_periodic(x, lo, std::array::from_fn(|d| lo[d] + len[d]), len, per);
+}
+
+/// The blow-up guard's view of the engine (see [`simkit_backend::guard`]).
+impl<const D: usize, T: Real> Guarded for CpuEngine<D, T> {
+    fn steps_done(&self) -> u64 {
+        self.steps
+    }
+
+    /// Copies the state into the guard's snapshot (a memcpy per array).
+    fn keep(&mut self) -> Result<()> {
+        let (s, p) = (&mut self.snap, &self.p);
+        s.pos.clone_from(&p.pos);
+        s.vel.clone_from(&p.vel);
+        s.acc.clone_from(&p.acc);
+        s.aux.clone_from(&p.aux);
+        s.reference.clone_from(&p.reference);
+        s.id.clone_from(&p.id);
+        (s.time, s.started, s.steps) = (self.time, self.started, self.steps);
+        Ok(())
+    }
+
+    fn advance(&mut self, n: u32) -> std::result::Result<(), Halt> {
+        self.advance_unchecked(n)?;
+        self.steps += u64::from(n);
+        Ok(())
+    }
+
+    fn check(&mut self) -> std::result::Result<(), Halt> {
+        verdict(self.steps, self.first_failure())
+    }
+
+    fn restore(&mut self) -> Result<()> {
+        let (s, p) = (&self.snap, &mut self.p);
+        p.pos.clone_from(&s.pos);
+        p.vel.clone_from(&s.vel);
+        p.acc.clone_from(&s.acc);
+        p.aux.clone_from(&s.aux);
+        p.reference.clone_from(&s.reference);
+        p.id.clone_from(&s.id);
+        (self.time, self.started, self.steps) = (s.time, s.started, s.steps);
+        self.relist()
     }
 }
 
 impl<const D: usize, T: Real> crate::engine::Engine for CpuEngine<D, T> {
     fn step(&mut self, steps: u32) -> Result<()> {
-        let run = |e: &mut Self| e.guarded(steps);
+        let every = self.prep.check_every;
+        let run = |e: &mut Self| run_guarded(e, steps, every);
         if self.parallel {
             // The whole loop on a pool thread: no hand-over to the pool per pass.
             simkit_backend::pool::on_pool(|| run(self))
@@ -1160,6 +1156,7 @@ impl<const D: usize, T: Real> crate::engine::Engine for CpuEngine<D, T> {
             time: self.time,
             positions,
             velocities,
+            species: self.prep.species.clone(),
         })
     }
 
@@ -1175,7 +1172,7 @@ impl<const D: usize, T: Real> crate::engine::Engine for CpuEngine<D, T> {
         format!("Dem<cpu {}, {D}>", T::WGSL)
     }
 
-    fn save(&mut self) -> Result<EngineState> {
+    fn save(&mut self) -> Result<Dynamics> {
         Ok(self.to_saved())
     }
 

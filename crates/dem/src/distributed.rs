@@ -1,20 +1,21 @@
 //! [`DistributedDem`]: the CPU run over the ranks of a [`Comm`] by spatial decomposition,
 //! with results that do not depend on the rank count.
 
-use std::hash::{Hash, Hasher};
-
 use rayon::prelude::*;
 
 use simkit_backend::comm::{Comm, ParticleDomain};
-use simkit_backend::guard::{blow_up, chunks};
+use simkit_backend::guard::{Guarded, Halt, run_guarded, verdict};
+use simkit_backend::particles::Dynamics;
 use simkit_backend::{Error, Precision, Result, Simulation};
-use simkit_neighbor::GhostedList;
+use simkit_neighbor::{
+    ByDim, DistributedRun, Finding, GhostedList, RECORD, RankParticles, RankRun, RankView,
+    agree_inputs, by_dim, distributed_accessors,
+};
 
 use crate::cpu::{
     AXES, ForceInput, WallT, contact_force, drift_velocity_verlet, max_displacement2, wall_force,
     walls_of, wrap,
 };
-use crate::engine::EngineState;
 use crate::prepared::Prepared;
 use crate::sim::{decode, encode, model_name};
 use crate::{Config, ContactCoefficients, Diagnostics, Integrator, Scene, State, diagnostics};
@@ -22,10 +23,12 @@ use crate::{Config, ContactCoefficients, Diagnostics, Integrator, Scene, State, 
 /// Owned particles per rayon task of the per-particle passes.
 const CHUNK: usize = 1024;
 
-/// A particle as it travels between ranks (migration, checkpoint gather): scene index,
-/// then position, velocity, acceleration, predicted velocity and list-build position, three
-/// components each (`z = 0` in 2D).
-type Record = [f64; 16];
+/// The shared column of [`RankParticles`] (owned and ghosts): the velocities the dashpots
+/// read, predicted at the force time.
+const AUX: usize = 0;
+/// The owned columns: velocities and accelerations.
+const VEL: usize = 0;
+const ACC: usize = 1;
 
 /// Granular DEM over the ranks of a [`Comm`] (CPU, `f64`, velocity Verlet): spatial
 /// decomposition with ghost particles, results independent of the rank count.
@@ -74,36 +77,14 @@ type Record = [f64; 16];
 /// # }
 /// ```
 pub struct DistributedDem {
-    comm: Comm,
+    run: DistributedRun<Engine<2>, Engine<3>>,
     scene: Scene,
     config: Config,
-    engine: Engines,
-}
-
-/// The engine in the scene's dimension.
-enum Engines {
-    Two(Engine<2>),
-    Three(Engine<3>),
-}
-
-/// Runs `$body` with `$e` bound to the engine, whatever its dimension.
-macro_rules! with_engine {
-    ($engines:expr, $e:ident => $body:expr) => {
-        match $engines {
-            Engines::Two($e) => $body,
-            Engines::Three($e) => $body,
-        }
-    };
 }
 
 impl std::fmt::Debug for DistributedDem {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("DistributedDem")
-            .field("comm", &self.comm)
-            .field("particles", &self.len())
-            .field("owned", &self.owned())
-            .field("steps", &self.steps_done())
-            .finish()
+        self.run.debug(f, "DistributedDem")
     }
 }
 
@@ -145,61 +126,36 @@ impl DistributedDem {
         Self::build(&saved.scene, &saved.config, comm, Some(&saved.engine))
     }
 
-    fn build(
-        scene: &Scene,
-        config: &Config,
-        comm: Comm,
-        saved: Option<&EngineState>,
-    ) -> Result<Self> {
+    fn build(scene: &Scene, config: &Config, comm: Comm, saved: Option<&Dynamics>) -> Result<Self> {
         let prep = comm.agree(prepare(scene, config))?;
-        // A digest of everything the ranks must agree on: the scene and settings as a
-        // checkpoint stores them (with the state, when resuming).
-        let mut h = std::collections::hash_map::DefaultHasher::new();
-        let empty = EngineState {
-            steps: 0,
-            time: 0.0,
-            started: false,
-            width: 0,
-            id: Vec::new(),
-            pos: Vec::new(),
-            vel: Vec::new(),
-            acc: Vec::new(),
-            aux: Vec::new(),
-            reference: Vec::new(),
-        };
-        encode(scene, config, "", saved.cloned().unwrap_or(empty))?.hash(&mut h);
-        comm.check_same(
-            h.finish(),
-            "DistributedDem inputs",
-            "every rank must pass the same scene and configuration (or checkpoint)",
-        )?;
+        // Everything the ranks must agree on: the scene and settings as a checkpoint stores
+        // them (with the state, when resuming).
+        let encoded = comm.agree(encode(
+            scene,
+            config,
+            "",
+            saved.cloned().unwrap_or_default(),
+        ))?;
+        agree_inputs(&comm, &encoded, "DistributedDem inputs")?;
         let engine = if prep.axes == 2 {
-            Engines::Two(comm.agree(Engine::new(prep, &comm))?)
+            ByDim::Two(comm.agree(Engine::new(prep, &comm))?)
         } else {
-            Engines::Three(comm.agree(Engine::new(prep, &comm))?)
+            ByDim::Three(comm.agree(Engine::new(prep, &comm))?)
         };
-        let mut sim = Self {
-            comm,
+        let mut run = DistributedRun::new(comm, engine);
+        let (engine, comm) = run.parts();
+        by_dim!(engine, e => comm.agree(match saved {
+            None => e.start(comm),
+            Some(s) => e.load(comm, s),
+        }))?;
+        Ok(Self {
+            run,
             scene: scene.clone(),
             config: *config,
-            engine,
-        };
-        let comm = &sim.comm;
-        with_engine!(&mut sim.engine, e => {
-            let start = match saved {
-                None => e.start(comm),
-                Some(s) => e.load(comm, s),
-            };
-            comm.agree(start)?;
-            e.keep();
-        });
-        Ok(sim)
+        })
     }
 
-    /// The communicator.
-    pub fn comm(&self) -> &Comm {
-        &self.comm
-    }
+    distributed_accessors!();
 
     /// The scene the run started from.
     pub fn scene(&self) -> &Scene {
@@ -209,48 +165,6 @@ impl DistributedDem {
     /// The configuration.
     pub fn config(&self) -> &Config {
         &self.config
-    }
-
-    /// The time step in use.
-    pub fn dt(&self) -> f64 {
-        with_engine!(&self.engine, e => e.prep.dt)
-    }
-
-    /// Simulated time.
-    pub fn time(&self) -> f64 {
-        with_engine!(&self.engine, e => e.time)
-    }
-
-    /// Number of particles (all ranks).
-    pub fn len(&self) -> usize {
-        with_engine!(&self.engine, e => e.prep.n)
-    }
-
-    /// Whether the scene has no particles (never: scenes are not empty).
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    /// Particles this rank owns (integrates) now.
-    pub fn owned(&self) -> usize {
-        with_engine!(&self.engine, e => e.owned)
-    }
-
-    /// Ghost copies this rank holds now (particles of its neighbours and periodic images
-    /// within the list range of its region).
-    pub fn ghosts(&self) -> usize {
-        with_engine!(&self.engine, e => e.pos.len() - e.owned)
-    }
-
-    /// Regions along x and y, `[p_x, p_y]`.
-    pub fn dims(&self) -> [usize; 2] {
-        with_engine!(&self.engine, e => e.list.domain().dims())
-    }
-
-    /// Neighbour-list builds so far (each with a migration), counted since this object was
-    /// made (a resume counts one).
-    pub fn list_builds(&self) -> u64 {
-        with_engine!(&self.engine, e => e.builds)
     }
 
     /// Diagnostics of the current state (as [`crate::Dem::diagnostics`], from the gathered
@@ -275,12 +189,12 @@ impl DistributedDem {
                 format!("must equal the particle count {n}"),
             ));
         }
-        with_engine!(&self.engine, e => diagnostics::compute(&e.prep, state.time, &state.positions, &state.velocities))
+        by_dim!(self.run.engine(), e => diagnostics::compute(&e.prep, state.time, &state.positions, &state.velocities))
     }
 
     /// Vertical displacement of the vibrating walls at time `t`.
     pub fn wall_displacement(&self, t: f64) -> f64 {
-        with_engine!(&self.engine, e => e.prep.wall_motion(t).0)
+        by_dim!(self.run.engine(), e => e.prep.wall_motion(t).0)
     }
 
     /// The complete state in the single-process checkpoint format (the particles in scene
@@ -290,27 +204,9 @@ impl DistributedDem {
     ///
     /// Errors: a failed exchange.
     pub fn checkpoint(&mut self) -> Result<Vec<u8>> {
-        let engine = with_engine!(&self.engine, e => e.gather_state(&self.comm))?;
-        let axes = self.scene.dim().axes();
-        let bytes = match engine {
-            Some(s) => Some(encode(
-                &self.scene,
-                &self.config,
-                &model_name(false, Precision::F64, axes),
-                s,
-            )?),
-            None => None,
-        };
-        self.comm.broadcast_from_root(bytes)
-    }
-
-    /// Writes [`DistributedDem::checkpoint`] to `path` from rank 0, atomically. Collective.
-    ///
-    /// Errors: a failed exchange or write (on every rank).
-    pub fn write_checkpoint(&mut self, path: impl AsRef<std::path::Path>) -> Result<()> {
-        let bytes = self.checkpoint()?;
-        let mine = self.comm.is_root().then_some(bytes.as_slice());
-        self.comm.write_from_root(path.as_ref(), mine)
+        let model = model_name(false, Precision::F64, self.scene.dim().axes());
+        let (scene, config) = (&self.scene, &self.config);
+        self.run.checkpoint(|d| encode(scene, config, &model, d))
     }
 }
 
@@ -323,41 +219,18 @@ impl Simulation for DistributedDem {
     /// index, or the deepest overlap) with the run rolled back everywhere to the last state
     /// that passed. Collective.
     fn step(&mut self, steps: u32) -> Result<()> {
-        let comm = &self.comm;
-        with_engine!(&mut self.engine, e => e.guarded(comm, steps))
+        self.run.step(steps)
     }
 
     /// The state of all particles in scene order (periodic coordinates wrapped), gathered
     /// on rank 0 and sent to every rank. Collective.
     fn state(&mut self) -> Result<State> {
-        let comm = &self.comm;
-        let s = with_engine!(&self.engine, e => e.gather_state(comm))?;
-        let flat = s.map(|s| {
-            let mut v = Vec::with_capacity(1 + 6 * s.id.len());
-            v.push(s.time);
-            let w = s.width as usize;
-            for k in 0..s.id.len() {
-                let mut x = [0.0; 3];
-                x[..w].copy_from_slice(&s.pos[k * w..(k + 1) * w]);
-                with_engine!(&self.engine, e => e.wrap3(&mut x));
-                v.extend_from_slice(&x);
-                let mut u = [0.0; 3];
-                u[..w].copy_from_slice(&s.vel[k * w..(k + 1) * w]);
-                v.extend_from_slice(&u);
-            }
-            v
-        });
-        let v = comm.broadcast_from_root(flat)?;
-        let rows = v[1..].chunks_exact(6);
-        Ok(State {
-            time: v[0],
-            positions: rows.clone().map(|r| [r[0], r[1], r[2]]).collect(),
-            velocities: rows.map(|r| [r[3], r[4], r[5]]).collect(),
-        })
+        let species = by_dim!(self.run.engine(), e => e.prep.species.clone());
+        self.run.state(&species)
     }
 
     fn steps_done(&self) -> u64 {
-        with_engine!(&self.engine, e => e.steps)
+        self.run.steps()
     }
 
     fn backend_name(&self) -> String {
@@ -365,7 +238,7 @@ impl Simulation for DistributedDem {
         let plural = if threads == 1 { "" } else { "s" };
         format!(
             "cpu f64 ({} ranks, {threads} thread{plural} each)",
-            self.comm.size()
+            self.run.comm().size()
         )
     }
 }
@@ -389,54 +262,28 @@ fn prepare(scene: &Scene, config: &Config) -> Result<Prepared> {
     Ok(prep)
 }
 
-/// The owned particles at the last check that passed, and the clock.
-#[derive(Default)]
-struct Snapshot<const D: usize> {
-    id: Vec<u32>,
-    pos: Vec<[f64; D]>,
-    vel: Vec<[f64; D]>,
-    acc: Vec<[f64; D]>,
-    aux: Vec<[f64; D]>,
-    reference: Vec<[f64; D]>,
-    time: f64,
-    started: bool,
-    steps: u64,
-}
-
 /// What a blow-up check found on a rank, as the ranks exchange it: `[kind, id, a, b, c]`
 /// with kind 0 (non-finite position: a = axis, b = value), 1 (non-finite velocity), 2
 /// (outside the box: a = axis, b = coordinate), 3 (overlap: a = ratio, b = 0 for a particle
 /// or 1 for a wall, c = its index), 4 (nothing).
-type Finding = [f64; 5];
-
 const NOTHING: Finding = [4.0, 0.0, 0.0, 0.0, 0.0];
 
-/// This rank's part of the run in dimension `D`.
+/// This rank's part of the run in dimension `D`: its particles ([`RankParticles`]) and
+/// the contact law's inputs.
 struct Engine<const D: usize> {
     prep: Prepared,
-    /// The decomposition, the ghosts and the full lists (partners by scene index).
-    list: GhostedList<D>,
+    p: RankParticles<D, ()>,
     time: f64,
     started: bool,
     steps: u64,
-    builds: u64,
-    /// Owned particles at the front of the local arrays, ghosts after them.
-    owned: usize,
-    /// Scene index, owned then ghosts.
-    id: Vec<u32>,
-    /// Positions, owned then ghosts (owned: not wrapped since the list build).
-    pos: Vec<[f64; D]>,
-    /// Velocities the dashpots read (predicted at the force time), owned then ghosts.
-    aux: Vec<[f64; D]>,
+    /// The clock of the guard's copy: time, started, steps.
+    kept: (f64, bool, u64),
+    /// Radius, mass and species of every local entry (owned, then ghosts), and `1 / m` of
+    /// the owned particles, from the scene by global index after every list build.
     radius: Vec<f64>,
     mass: Vec<f64>,
     species: Vec<u32>,
-    /// Owned only.
-    vel: Vec<[f64; D]>,
-    acc: Vec<[f64; D]>,
     inv_mass: Vec<f64>,
-    reference: Vec<[f64; D]>,
-    snap: Snapshot<D>,
     coeff: Vec<ContactCoefficients>,
     walls: Vec<WallT<f64>>,
     gravity: [f64; D],
@@ -469,175 +316,88 @@ where
         gravity[prep.vertical] = -prep.gravity;
         let r_max = prep.cutoff / 2.0;
         let periodic_z = (D == 3 && prep.periodic[2]).then_some((prep.lo[2], prep.len[2]));
+        let (lo, len, periodic): ([f64; D], [f64; D], [bool; D]) = (
+            std::array::from_fn(|d| prep.lo[d]),
+            std::array::from_fn(|d| prep.len[d]),
+            std::array::from_fn(|d| prep.periodic[d]),
+        );
+        let list = GhostedList::new(domain, periodic_z, range)?;
         Ok(Self {
-            list: GhostedList::new(domain, periodic_z, range)?,
+            p: RankParticles::new(list, (lo, len, periodic), vec![(); prep.n], 1, 2)?,
             time: 0.0,
             started: false,
             steps: 0,
-            builds: 0,
-            owned: 0,
-            id: Vec::new(),
-            pos: Vec::new(),
-            aux: Vec::new(),
+            kept: (0.0, false, 0),
             radius: Vec::new(),
             mass: Vec::new(),
             species: Vec::new(),
-            vel: Vec::new(),
-            acc: Vec::new(),
             inv_mass: Vec::new(),
-            reference: Vec::new(),
-            snap: Snapshot::default(),
             coeff: prep.coeff.clone(),
             walls: walls_of::<f64, D>(&prep),
             gravity,
-            periodic: std::array::from_fn(|d| prep.periodic[d]),
-            lo: std::array::from_fn(|d| prep.lo[d]),
-            len: std::array::from_fn(|d| prep.len[d]),
+            periodic,
+            lo,
+            len,
             cut2: (r_max + r_max) * (r_max + r_max),
             rebuild_dist2: 0.25 * prep.skin * prep.skin,
             prep,
         })
     }
 
-    fn xy(x: &[f64; D]) -> [f64; 2] {
-        [x[0], x[1]]
-    }
-
-    /// Wraps the periodic coordinates of a 3-vector (the first `D` used).
-    fn wrap3(&self, x: &mut [f64; 3]) {
-        let mut y: [f64; D] = std::array::from_fn(|d| x[d]);
-        wrap(&mut y, self.periodic, self.lo, self.len);
-        x[..D].copy_from_slice(&y);
+    /// The scene's radius, mass and species of every local entry (after a list build).
+    fn sync(&mut self) {
+        let (p, ids) = (&self.prep, self.p.id());
+        self.radius = ids.iter().map(|&i| p.radius[i as usize]).collect();
+        self.mass = ids.iter().map(|&i| p.mass[i as usize]).collect();
+        self.species = ids.iter().map(|&i| p.species[i as usize]).collect();
+        self.inv_mass = self.mass[..self.p.owned()]
+            .iter()
+            .map(|m| 1.0 / m)
+            .collect();
     }
 
     /// The initial state: every rank takes the scene's particles in its region.
     fn start(&mut self, comm: &Comm) -> Result<()> {
-        let mut owned = Vec::new();
-        for i in 0..self.prep.n {
-            let mut x: [f64; D] = std::array::from_fn(|d| self.prep.positions[i][d]);
-            wrap(&mut x, self.periodic, self.lo, self.len);
-            if self.list.domain().owner(Self::xy(&x)) == comm.rank() {
-                owned.push(i);
-            }
+        let prep = &self.prep;
+        let mine = self
+            .p
+            .start(comm, |i| std::array::from_fn(|d| prep.positions[i][d]));
+        for (k, &i) in mine.iter().enumerate() {
+            let v = std::array::from_fn(|d| self.prep.velocities[i][d]);
+            self.p.set(false, VEL, k, v);
         }
-        let n = owned.len();
-        self.take(&owned);
-        for (k, &i) in owned.iter().enumerate() {
-            self.pos[k] = std::array::from_fn(|d| self.prep.positions[i][d]);
-            self.vel[k] = std::array::from_fn(|d| self.prep.velocities[i][d]);
-        }
-        self.acc = vec![[0.0; D]; n];
-        self.aux = vec![[0.0; D]; n];
-        self.reference.clone_from(&self.pos);
-        self.rebuild(comm)
-    }
-
-    /// Sets the owned scene indices and their constants (the dynamic arrays sized, not
-    /// filled).
-    fn take(&mut self, ids: &[usize]) {
-        let p = &self.prep;
-        self.owned = ids.len();
-        self.id = ids.iter().map(|&i| i as u32).collect();
-        self.radius = ids.iter().map(|&i| p.radius[i]).collect();
-        self.mass = ids.iter().map(|&i| p.mass[i]).collect();
-        self.inv_mass = ids.iter().map(|&i| 1.0 / p.mass[i]).collect();
-        self.species = ids.iter().map(|&i| p.species[i]).collect();
-        self.pos.resize(ids.len(), [0.0; D]);
-        self.vel.resize(ids.len(), [0.0; D]);
+        self.p.rebuild(comm)?;
+        self.sync();
+        Ok(())
     }
 
     /// A checkpointed state: every rank takes the particles whose list-build position lies
     /// in its region (where the run that wrote it had them).
-    fn load(&mut self, comm: &Comm, s: &EngineState) -> Result<()> {
+    fn load(&mut self, comm: &Comm, s: &Dynamics) -> Result<()> {
         let n = self.prep.n;
-        s.check(n, D)?;
-        let at = |v: &[f64], k: usize| -> [f64; D] { std::array::from_fn(|d| v[k * D + d]) };
-        let mine: Vec<usize> = (0..n)
-            .filter(|&k| self.list.domain().owner(Self::xy(&at(&s.reference, k))) == comm.rank())
-            .collect();
-        let ids: Vec<usize> = mine.iter().map(|&k| s.id[k] as usize).collect();
-        self.take(&ids);
-        self.pos = mine.iter().map(|&k| at(&s.pos, k)).collect();
-        self.vel = mine.iter().map(|&k| at(&s.vel, k)).collect();
-        self.acc = mine.iter().map(|&k| at(&s.acc, k)).collect();
-        self.aux = mine.iter().map(|&k| at(&s.aux, k)).collect();
-        self.reference = mine.iter().map(|&k| at(&s.reference, k)).collect();
-        (self.time, self.started, self.steps) = (s.time, s.started, s.steps);
-        self.relist(comm)
-    }
-
-    /// Wraps the owned positions, sends every particle to the rank that owns it now, and
-    /// makes the ghosts and lists anew.
-    fn rebuild(&mut self, comm: &Comm) -> Result<()> {
-        let n = self.owned;
-        let out: Vec<Record> = (0..n)
-            .map(|k| {
-                let mut x = self.pos[k];
-                wrap(&mut x, self.periodic, self.lo, self.len);
-                self.record(k, &x)
-            })
-            .collect();
-        let got = self.list.domain().migrate(comm, out, |r| [r[1], r[2]])?;
-        let ids: Vec<usize> = got.iter().map(|r| r[0] as usize).collect();
-        let bad = ids.iter().find(|&&i| i >= self.prep.n).map(|&i| {
-            Error::invalid(
-                "migrated particle index",
-                i,
-                format!("must be below the particle count {}", self.prep.n),
-            )
-        });
-        // Every rank stops, not only the one that received it.
-        comm.agree(bad.map_or(Ok(()), Err))?;
-        self.take(&ids);
-        let part = |o: usize| -> Vec<[f64; D]> {
-            got.iter()
-                .map(|r| std::array::from_fn(|d| r[o + d]))
-                .collect()
-        };
-        self.pos = part(1);
-        self.vel = part(4);
-        self.acc = part(7);
-        self.aux = part(10);
-        self.reference.clone_from(&self.pos);
-        self.relist(comm)
-    }
-
-    /// Ghosts and lists from the list-build positions of the owned particles, then the
-    /// ghosts refreshed with the current positions and velocities.
-    fn relist(&mut self, comm: &Comm) -> Result<()> {
-        let n = self.owned;
-        self.list.build(comm, &self.reference, &self.id[..n])?;
-        let p = &self.prep;
-        let ghosts = &self.list.ids()[n..];
-        let bad = ghosts.iter().find(|&&i| i as usize >= p.n).map(|&i| {
-            Error::invalid(
-                "ghost particle index",
-                i,
-                format!("must be below the particle count {}", p.n),
-            )
-        });
-        comm.agree(bad.map_or(Ok(()), Err))?;
-        for &i in ghosts {
-            let i = i as usize;
-            self.id.push(i as u32);
-            self.radius.push(p.radius[i]);
-            self.mass.push(p.mass[i]);
-            self.species.push(p.species[i]);
+        s.check(n, D, &["pos", "vel", "acc", "aux", "reference"])?;
+        let at = |v: &[f64], k: usize| -> [f64; D] { Dynamics::at(v, k) };
+        let mine = self
+            .p
+            .load(comm, n, |k| at(&s.reference, k), |k| s.particle(k));
+        for (k, &slot) in mine.iter().enumerate() {
+            self.p.set_position(k, at(&s.pos, slot));
+            self.p.set(false, VEL, k, at(&s.vel, slot));
+            self.p.set(false, ACC, k, at(&s.acc, slot));
+            self.p.set(true, AUX, k, at(&s.aux, slot));
         }
-        self.pos.resize(self.list.len(), [0.0; D]);
-        self.aux.resize(self.list.len(), [0.0; D]);
-        self.refresh(comm)?;
-        self.builds += 1;
+        (self.time, self.started, self.steps) = (s.time, s.started, s.steps);
+        self.p.relist(comm)?;
+        self.sync();
         Ok(())
     }
 
-    /// Sends the owned positions and predicted velocities to the ranks that hold them as
-    /// ghosts.
-    fn refresh(&mut self, comm: &Comm) -> Result<()> {
-        self.list.refresh(comm, &mut self.pos, true)?;
-        self.list.refresh(comm, &mut self.aux, false)
+    /// A list build with migration ([`RankParticles::rebuild`]).
+    fn rebuild(&mut self, comm: &Comm) -> Result<()> {
+        self.p.rebuild(comm)?;
+        self.sync();
+        Ok(())
     }
-
     /// Forces at the current time from the positions and predicted velocities into
     /// `acc` (as accelerations).
     fn forces(&mut self) {
@@ -650,9 +410,10 @@ where
 
     fn forces_variant<const FRICTION: bool>(&mut self) {
         let (zw, vw) = self.prep.wall_motion(self.time);
+        let parts = self.p.parts();
         let inp = ForceInput {
-            pos: &self.pos,
-            vel: &self.aux,
+            pos: parts.pos,
+            vel: &parts.shared[AUX],
             radius: &self.radius,
             mass: &self.mass,
             species: &self.species,
@@ -669,8 +430,8 @@ where
             cut2: self.cut2,
             block: usize::MAX,
         };
-        let (list, inv_mass) = (&self.list, &self.inv_mass);
-        self.acc
+        let (list, inv_mass) = (parts.list, &self.inv_mass);
+        parts.cols[ACC]
             .par_chunks_mut(CHUNK)
             .enumerate()
             .for_each(|(c, acc)| {
@@ -706,9 +467,10 @@ where
             return Ok(());
         }
         if !self.started {
-            let n = self.owned;
-            self.aux[..n].copy_from_slice(&self.vel);
-            self.refresh(comm)?;
+            let parts = self.p.parts();
+            let n = parts.owned;
+            parts.shared[AUX][..n].copy_from_slice(&parts.cols[VEL]);
+            self.p.refresh(comm)?;
             self.forces();
             self.started = true;
         }
@@ -716,14 +478,18 @@ where
         let h = 0.5 * dt;
         for _ in 0..steps {
             // A list build migrates particles: the owned count changes between steps.
-            let n = self.owned;
             let max2 = {
-                let (pos, aux) = (&mut self.pos[..n], &mut self.aux[..n]);
+                let parts = self.p.parts();
+                let n = parts.owned;
+                let (pos, aux) = (&mut parts.pos[..n], &mut parts.shared[AUX][..n]);
+                let [vel, acc] = parts.cols else {
+                    unreachable!("dem's columns")
+                };
                 pos.par_chunks_mut(CHUNK)
-                    .zip(self.vel.par_chunks_mut(CHUNK))
+                    .zip(vel.par_chunks_mut(CHUNK))
                     .zip(aux.par_chunks_mut(CHUNK))
-                    .zip(self.acc.par_chunks(CHUNK))
-                    .zip(self.reference.par_chunks(CHUNK))
+                    .zip(acc.par_chunks(CHUNK))
+                    .zip(parts.reference.par_chunks(CHUNK))
                     .map(|((((x, v), vp), a), r)| {
                         drift_velocity_verlet(
                             x.as_flattened_mut(),
@@ -741,12 +507,14 @@ where
             if comm.all_max(max2)? > self.rebuild_dist2 {
                 self.rebuild(comm)?;
             } else {
-                self.refresh(comm)?;
+                self.p.refresh(comm)?;
             }
             self.forces();
-            self.vel
-                .par_chunks_mut(CHUNK)
-                .zip(self.acc.par_chunks(CHUNK))
+            let [vel, acc] = self.p.parts().cols else {
+                unreachable!("dem's columns")
+            };
+            vel.par_chunks_mut(CHUNK)
+                .zip(acc.par_chunks(CHUNK))
                 .for_each(|(v, a)| {
                     for (v, a) in v.iter_mut().zip(a) {
                         for d in 0..D {
@@ -758,46 +526,17 @@ where
         Ok(())
     }
 
-    /// `steps` steps in stretches ending on multiples of `check_every`, each followed by
-    /// the blow-up check on every rank; a failure anywhere rolls every rank back.
-    fn guarded(&mut self, comm: &Comm, steps: u32) -> Result<()> {
-        for n in chunks(self.steps, steps, self.prep.check_every) {
-            if let Err(e) = self.advance(comm, n) {
-                // A list build that failed on every rank (particles that jumped a region,
-                // positions a grid cannot hold): the run blew up within the stretch.
-                let bad = self.steps + u64::from(n);
-                self.restore(comm)?;
-                return Err(blow_up(
-                    bad,
-                    self.steps,
-                    format!("the neighbour-list build failed: {e}"),
-                    self.prep.non_finite_cause(),
-                ));
-            }
-            self.steps += u64::from(n);
-            let all = comm.all_gather(&[self.check()])?;
-            let worst = all.iter().copied().fold(NOTHING, worse);
-            if worst[0] < 4.0 {
-                let bad = self.steps;
-                self.restore(comm)?;
-                let (what, cause) = self.describe(&worst);
-                return Err(blow_up(bad, self.steps, what, cause));
-            }
-            self.keep();
-        }
-        Ok(())
-    }
-
     /// This rank's first finding: non-finite position, non-finite velocity, a particle
     /// outside the box by more than its radius (each the smallest scene index of its
     /// kind), the deepest contact over `max_overlap`.
     fn check(&self) -> Finding {
-        let n = self.owned;
+        let (p, n) = (&self.p, self.p.owned());
+        let (pos, id) = (p.pos(), p.id());
         let mut found = NOTHING;
-        for (kind, v) in [(0.0, &self.pos[..n]), (1.0, &self.vel[..])] {
+        for (kind, v) in [(0.0, &pos[..n]), (1.0, p.col(VEL))] {
             for (k, x) in v.iter().enumerate() {
                 if let Some(d) = (0..D).find(|&d| !x[d].is_finite()) {
-                    found = worse(found, [kind, f64::from(self.id[k]), d as f64, x[d], 0.0]);
+                    found = worse(found, [kind, f64::from(id[k]), d as f64, x[d], 0.0]);
                 }
             }
         }
@@ -807,10 +546,10 @@ where
         for d in (0..D).filter(|&d| !self.periodic[d]) {
             let lo = self.prep.lo[d];
             let hi = lo + self.prep.len[d];
-            for (k, x) in self.pos[..n].iter().enumerate() {
+            for (k, x) in pos[..n].iter().enumerate() {
                 let r = self.radius[k];
                 if x[d] < lo - r || x[d] > hi + r {
-                    found = worse(found, [2.0, f64::from(self.id[k]), d as f64, x[d], 0.0]);
+                    found = worse(found, [2.0, f64::from(id[k]), d as f64, x[d], 0.0]);
                 }
             }
         }
@@ -820,15 +559,15 @@ where
         let (zw, _) = self.prep.wall_motion(self.time);
         let vert = self.prep.vertical;
         for i in 0..n {
-            let (xi, ri) = (self.pos[i], self.radius[i]);
-            let id = f64::from(self.id[i]);
-            for &j in self.list.partners(i) {
+            let (xi, ri) = (pos[i], self.radius[i]);
+            let me = f64::from(id[i]);
+            for &j in p.list().partners(i) {
                 let j = j as usize;
-                let r2: f64 = (0..D).map(|d| (xi[d] - self.pos[j][d]).powi(2)).sum();
+                let r2: f64 = (0..D).map(|d| (xi[d] - pos[j][d]).powi(2)).sum();
                 let rj = self.radius[j];
                 let ratio = (ri + rj - r2.sqrt()) / ri.min(rj);
                 if ratio > self.prep.max_overlap {
-                    found = worse(found, [3.0, id, ratio, 0.0, f64::from(self.id[j])]);
+                    found = worse(found, [3.0, me, ratio, 0.0, f64::from(id[j])]);
                 }
             }
             let mut x = xi;
@@ -837,7 +576,7 @@ where
                 let at = if wt.wrap { x } else { xi };
                 let ratio = pw.overlap(&at, ri, zw, vert) / ri;
                 if ratio > self.prep.max_overlap {
-                    found = worse(found, [3.0, id, ratio, 1.0, w as f64]);
+                    found = worse(found, [3.0, me, ratio, 1.0, w as f64]);
                 }
             }
         }
@@ -886,81 +625,24 @@ where
         }
     }
 
-    /// Copies the owned state into the guard's snapshot.
-    fn keep(&mut self) {
-        let (s, n) = (&mut self.snap, self.owned);
-        s.id.clone_from(&self.id);
-        s.id.truncate(n);
-        s.pos.clone_from(&self.pos);
-        s.pos.truncate(n);
-        s.aux.clone_from(&self.aux);
-        s.aux.truncate(n);
-        s.vel.clone_from(&self.vel);
-        s.acc.clone_from(&self.acc);
-        s.reference.clone_from(&self.reference);
-        (s.time, s.started, s.steps) = (self.time, self.started, self.steps);
-    }
-
-    /// Puts every rank back to its snapshot (the particles it owned then) and remakes
-    /// ghosts and lists from the list-build positions, so the lists are those the run had.
-    fn restore(&mut self, comm: &Comm) -> Result<()> {
-        let s = &self.snap;
-        let ids: Vec<usize> = s.id.iter().map(|&i| i as usize).collect();
-        let (pos, vel, acc, aux, reference) = (
-            s.pos.clone(),
-            s.vel.clone(),
-            s.acc.clone(),
-            s.aux.clone(),
-            s.reference.clone(),
-        );
-        (self.time, self.started, self.steps) = (s.time, s.started, s.steps);
-        self.take(&ids);
-        (self.pos, self.vel, self.acc, self.aux, self.reference) = (pos, vel, acc, aux, reference);
-        self.relist(comm)
-    }
-
-    /// The record of owned particle `k` with position `x`.
-    fn record(&self, k: usize, x: &[f64; D]) -> Record {
-        let mut r = [0.0; 16];
-        r[0] = f64::from(self.id[k]);
-        let parts = [
-            (1, x),
-            (4, &self.vel[k]),
-            (7, &self.acc[k]),
-            (10, &self.aux[k]),
-            (13, &self.reference[k]),
-        ];
-        for (o, v) in parts {
-            r[o..o + D].copy_from_slice(v);
-        }
-        r
-    }
-
-    /// The dynamic state of all particles in scene order on rank 0 (`None` elsewhere).
-    fn gather_state(&self, comm: &Comm) -> Result<Option<EngineState>> {
-        let n = self.owned;
-        let mine: Vec<Record> = (0..n).map(|k| self.record(k, &self.pos[k])).collect();
-        let total = self.prep.n;
-        let Some(rows) = comm.gather_indexed::<16>(&mine, total)? else {
-            return Ok(None);
-        };
-        let column = |o: usize| -> Vec<f64> {
-            rows.iter()
-                .flat_map(|r| r[o..o + D].iter().copied())
-                .collect()
-        };
-        Ok(Some(EngineState {
-            steps: self.steps,
-            time: self.time,
-            started: self.started,
-            width: D as u32,
-            id: (0..total as u32).collect(),
-            pos: column(1),
-            vel: column(4),
-            acc: column(7),
-            aux: column(10),
-            reference: column(13),
-        }))
+    /// Every particle's record on rank 0 in scene order (`None` elsewhere): position as the
+    /// run holds it, velocity, acceleration, predicted velocity, list-build position.
+    fn gather(&self, comm: &Comm) -> Result<Option<Vec<[f64; RECORD]>>> {
+        let p = &self.p;
+        let (vel, acc, aux) = (p.col(VEL), p.col(ACC), p.shared(AUX));
+        p.gather(comm, |k| {
+            let mut r = [0.0; RECORD - 1];
+            for (o, v) in [
+                (0, &p.pos()[k]),
+                (3, &vel[k]),
+                (6, &acc[k]),
+                (9, &aux[k]),
+                (12, &p.reference()[k]),
+            ] {
+                r[o..o + D].copy_from_slice(v);
+            }
+            r
+        })
     }
 }
 
@@ -977,4 +659,119 @@ fn worse(a: Finding, b: Finding) -> Finding {
         return a;
     }
     if b[1] < a[1] { b } else { a }
+}
+
+/// The blow-up guard's view of a rank's engine (see [`simkit_backend::guard`]): every
+/// decision is taken by all ranks together.
+struct Checked<'a, const D: usize> {
+    e: &'a mut Engine<D>,
+    comm: &'a Comm,
+}
+
+impl<const D: usize> Guarded for Checked<'_, D>
+where
+    [f64; D]: bytemuck::Pod,
+{
+    fn steps_done(&self) -> u64 {
+        self.e.steps
+    }
+
+    fn keep(&mut self) -> Result<()> {
+        let e = &mut *self.e;
+        e.p.keep();
+        e.kept = (e.time, e.started, e.steps);
+        Ok(())
+    }
+
+    fn advance(&mut self, n: u32) -> std::result::Result<(), Halt> {
+        // A list build that failed on every rank (particles that jumped a region,
+        // positions a grid cannot hold): the run blew up within the stretch.
+        self.e.advance(self.comm, n).map_err(|err| Halt::BlowUp {
+            step: self.e.steps + u64::from(n),
+            what: format!("the neighbour-list build failed: {err}"),
+            cause: self.e.prep.non_finite_cause(),
+        })?;
+        self.e.steps += u64::from(n);
+        Ok(())
+    }
+
+    fn check(&mut self) -> std::result::Result<(), Halt> {
+        let found = RankParticles::<D, ()>::findings(self.comm, self.e.check(), NOTHING, worse)?;
+        let failure = (found[0] < NOTHING[0]).then(|| self.e.describe(&found));
+        verdict(self.e.steps, failure)
+    }
+
+    fn restore(&mut self) -> Result<()> {
+        let e = &mut *self.e;
+        e.p.restore(self.comm)?;
+        e.sync();
+        (e.time, e.started, e.steps) = e.kept;
+        Ok(())
+    }
+}
+
+impl<const D: usize> RankRun for Engine<D>
+where
+    [f64; D]: bytemuck::Pod,
+{
+    fn view(&self) -> RankView {
+        self.p.view()
+    }
+
+    fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    fn time(&self) -> f64 {
+        self.time
+    }
+
+    fn dt(&self) -> f64 {
+        self.prep.dt
+    }
+
+    fn step(&mut self, comm: &Comm, steps: u32) -> Result<()> {
+        let every = self.prep.check_every;
+        run_guarded(&mut Checked { e: self, comm }, steps, every)
+    }
+
+    fn gather_motion(&self, comm: &Comm) -> Result<Option<Vec<[f64; 6]>>> {
+        let rows = self.gather(comm)?;
+        Ok(rows.map(|rows| {
+            rows.iter()
+                .map(|r| {
+                    let mut x: [f64; D] = std::array::from_fn(|d| r[1 + d]);
+                    wrap(&mut x, self.periodic, self.lo, self.len);
+                    std::array::from_fn(|c| match c {
+                        0..3 if c < D => x[c],
+                        3..6 if c - 3 < D => r[4 + c - 3],
+                        _ => 0.0,
+                    })
+                })
+                .collect()
+        }))
+    }
+
+    fn gather_dynamics(&self, comm: &Comm) -> Result<Option<Dynamics>> {
+        let rows = self.gather(comm)?;
+        Ok(rows.map(|rows| {
+            let column = |o: usize| -> Vec<f64> {
+                rows.iter()
+                    .flat_map(|r| r[o..o + D].iter().copied())
+                    .collect()
+            };
+            Dynamics {
+                steps: self.steps,
+                time: self.time,
+                started: self.started,
+                width: D as u32,
+                order: Vec::new(),
+                pos: column(1),
+                vel: column(4),
+                acc: column(7),
+                aux: column(10),
+                reference: column(13),
+            }
+        }))
+    }
 }

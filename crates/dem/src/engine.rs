@@ -1,8 +1,7 @@
-//! The backend-neutral engine interface behind [`crate::Dem`], and the engine part of a
-//! checkpoint.
+//! The backend-neutral engine interface behind [`crate::Dem`].
 
-use serde::{Deserialize, Serialize};
 use simkit_backend::Result;
+use simkit_backend::particles::Dynamics;
 
 use crate::State;
 use crate::prepared::Prepared;
@@ -23,89 +22,11 @@ pub(crate) trait Engine: Send {
     fn steps_done(&self) -> u64;
     /// The checkpoint model string (backend kind, precision, dimension).
     fn model(&self) -> String;
-    /// The complete dynamic state (downloaded on the GPU).
-    fn save(&mut self) -> Result<EngineState>;
-}
-
-/// The dynamic state of an engine, as a checkpoint stores it: everything beyond the scene
-/// and the settings that the next steps read. Vectors are flat, `width` values per slot,
-/// and hold the engine's numbers exactly (`f32` widens to `f64` without rounding).
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub(crate) struct EngineState {
-    /// Steps done.
-    pub steps: u64,
-    /// Simulated time (the CPU accumulates `t += dt`; the GPU derives it from `steps`).
-    pub time: f64,
-    /// Whether the first force evaluation has happened (CPU).
-    pub started: bool,
-    /// Values per slot in the vectors below.
-    pub width: u32,
-    /// Scene index of every slot (CPU: the cell-sorted order of the last list build).
-    pub id: Vec<u32>,
-    /// Positions (CPU: not wrapped since the last list build; GPU: `(x, y, z, radius)`).
-    pub pos: Vec<f64>,
-    /// Velocities (GPU: `(vx, vy, vz, mass)`).
-    pub vel: Vec<f64>,
-    /// Accelerations of the last force evaluation (GPU: `w` the deepest overlap ratio).
-    pub acc: Vec<f64>,
-    /// CPU: predicted velocities (velocity Verlet) or last displacements (position
-    /// Verlet); empty on the GPU.
-    pub aux: Vec<f64>,
-    /// CPU: positions at the last list build (the list is rebuilt from them on resume, so
-    /// it is the same list); empty on the GPU.
-    pub reference: Vec<f64>,
-}
-
-impl EngineState {
-    /// Checks that the state fits a scene of `n` particles in `width` dimensions: the
-    /// width, a permutation of the particles as the slot order, and `n * width` values in
-    /// every per-particle vector.
-    ///
-    /// Errors: [`simkit_backend::Error::Checkpoint`] naming the first mismatch.
-    pub fn check(&self, n: usize, width: usize) -> simkit_backend::Result<()> {
-        let bad = |what: String| {
-            simkit_backend::Error::checkpoint(format!(
-                "{what}; the file does not belong to this scene"
-            ))
-        };
-        if self.width as usize != width {
-            return Err(bad(format!(
-                "{} values per particle, expected {width}",
-                self.width
-            )));
-        }
-        if self.id.len() != n {
-            return Err(bad(format!(
-                "{} particle slots for {n} particles",
-                self.id.len()
-            )));
-        }
-        let mut seen = vec![false; n];
-        for &i in &self.id {
-            match seen.get_mut(i as usize) {
-                Some(f) if !*f => *f = true,
-                _ => {
-                    return Err(bad(format!(
-                        "particle order lists {i} twice or out of range"
-                    )));
-                }
-            }
-        }
-        for (v, name) in [
-            (&self.pos, "positions"),
-            (&self.vel, "velocities"),
-            (&self.acc, "accelerations"),
-            (&self.aux, "half-step velocities"),
-            (&self.reference, "list-build positions"),
-        ] {
-            if v.len() != n * width {
-                return Err(bad(format!(
-                    "{name} holds {} values, expected {}",
-                    v.len(),
-                    n * width
-                )));
-            }
-        }
-        Ok(())
-    }
+    /// The complete dynamic state (downloaded on the GPU): CPU: positions (not wrapped
+    /// since the last list build), velocities, accelerations, predicted velocities
+    /// (velocity Verlet) or last displacements (position Verlet) as `aux`, the slot order
+    /// (cell order of the last list build) and the list-build positions, the step count and
+    /// the accumulated time; GPU: `(x, y, z, radius)`, `(vx, vy, vz, mass)`, the
+    /// accelerations with the deepest overlap ratio as `w`, in scene order.
+    fn save(&mut self) -> Result<Dynamics>;
 }

@@ -23,13 +23,16 @@ use simkit_neighbor::{
     OutOfBox,
 };
 
-use simkit_backend::gpu::{DISPATCH_WGSL, GUARD_WGSL, GpuGuard, Uniform, Watch, record_pass};
-use simkit_backend::guard::{blow_up, chunks};
+use simkit_backend::gpu::{
+    DISPATCH_WGSL, GUARD_WGSL, GpuGuard, GuardedRun, Uniform, Watch, record_pass,
+};
+use simkit_backend::guard::blow_up;
 use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Precision, Result};
 
 use crate::State;
-use crate::engine::{Engine, EngineState};
+use crate::engine::Engine;
 use crate::prepared::Prepared;
+use simkit_backend::particles::Dynamics;
 
 const PARAMS_WGSL: &str = simkit_backend::wgsl!("params.wgsl");
 const DRIFT_WGSL: &str = simkit_backend::wgsl!("drift.wgsl");
@@ -174,7 +177,7 @@ fn kernel(
 impl GpuEngine {
     /// The engine for `prep`, at its initial state or, with `saved`, at a checkpointed
     /// one.
-    pub fn new(ctx: &GpuContext, prep: Prepared, saved: Option<&EngineState>) -> Result<Self> {
+    pub fn new(ctx: &GpuContext, prep: Prepared, saved: Option<&Dynamics>) -> Result<Self> {
         let have = ctx.limits().max_storage_buffers_per_shader_stage;
         if have < STORAGE_BUFFERS_NEEDED {
             return Err(Error::Unsupported(format!(
@@ -439,33 +442,19 @@ impl GpuEngine {
 type Loaded = (Vec<[f32; 4]>, Vec<[f32; 4]>, Vec<[f32; 4]>);
 
 /// The device arrays of a checkpoint, checked against the particle count.
-fn load(s: &EngineState, n: usize) -> Result<Loaded> {
-    let bad =
-        |what: String| Error::checkpoint(format!("{what}; the file does not belong to this scene"));
-    if s.width != 4 || s.id.len() != n || s.id.iter().enumerate().any(|(k, &i)| i as usize != k) {
-        return Err(bad(format!(
-            "{} slots of {} values, expected {n} slots of 4 in scene order",
-            s.id.len(),
-            s.width
-        )));
+fn load(s: &Dynamics, n: usize) -> Result<Loaded> {
+    s.check(n, 4, &["pos", "vel", "acc"])?;
+    if (0..n).any(|k| s.particle(k) != k) {
+        return Err(Error::checkpoint(
+            "the stored slots are not in scene order; the file does not belong to this scene",
+        ));
     }
-    let arrays = |v: &[f64], name: &str| -> Result<Vec<[f32; 4]>> {
-        if v.len() != 4 * n {
-            return Err(bad(format!(
-                "{name} holds {} values, expected {}",
-                v.len(),
-                4 * n
-            )));
-        }
-        Ok(v.chunks_exact(4)
+    let arrays = |v: &[f64]| -> Vec<[f32; 4]> {
+        v.chunks_exact(4)
             .map(|c| std::array::from_fn(|d| c[d] as f32))
-            .collect())
+            .collect()
     };
-    Ok((
-        arrays(&s.pos, "positions")?,
-        arrays(&s.vel, "velocities")?,
-        arrays(&s.acc, "accelerations")?,
-    ))
+    Ok((arrays(&s.pos), arrays(&s.vel), arrays(&s.acc)))
 }
 
 impl GpuEngine {
@@ -551,38 +540,31 @@ impl Engine for GpuEngine {
         self.check_host.begin = self.steps as u32;
         self.check_params.set(ctx, &self.check_host);
         self.first.upload(ctx, &[u32::MAX])?;
-        self.guard.begin(ctx)?;
-        // The step of every recorded check; the first is the starting state.
-        let mut checks = vec![self.steps];
-        let mut encoder = ctx.encoder("dem steps");
-        self.guard.record(ctx, &mut encoder)?;
-        let mut recorded = 0;
-        for stretch in chunks(self.steps, steps, self.prep.check_every) {
-            for _ in 0..stretch {
-                self.record_step(&mut encoder)?;
-                recorded += 1;
-                if recorded == STEPS_PER_SUBMIT {
-                    ctx.submit(std::mem::replace(&mut encoder, ctx.encoder("dem steps")));
-                    recorded = 0;
-                }
-            }
-            record_pass(&mut encoder, "dem check", |pass| {
-                self.check.0.dispatch_items(ctx, pass, &self.check.1, n)
-            })?;
-            self.guard.record(ctx, &mut encoder)?;
-            let last = checks[checks.len() - 1];
-            checks.push(last + u64::from(stretch));
-        }
-        ctx.submit(encoder);
-        let report = self.guard.report(ctx)?;
-        match report.bad {
-            None => {
-                self.steps = checks[checks.len() - 1];
+        let (check, step) = (&self.check, self.steps);
+        let run = self.guard.run(
+            ctx,
+            step,
+            steps,
+            self.prep.check_every,
+            STEPS_PER_SUBMIT,
+            |encoder, _| self.record_step(encoder),
+            |encoder| {
+                record_pass(encoder, "dem check", |pass| {
+                    check.0.dispatch_items(ctx, pass, &check.1, n)
+                })
+            },
+        )?;
+        match run {
+            GuardedRun::Passed { steps } => {
+                self.steps = steps;
                 Ok(())
             }
-            Some((label, index)) => {
-                let passed = (report.passed as usize).clamp(1, checks.len() - 1);
-                let (good, bad) = (checks[passed - 1], checks[passed]);
+            GuardedRun::Failed {
+                good,
+                bad,
+                label,
+                index,
+            } => {
                 let (what, cause) = self.explain(&label, index)?;
                 self.guard.rollback(ctx)?;
                 self.steps = good;
@@ -607,6 +589,7 @@ impl Engine for GpuEngine {
             time: self.steps as f64 * self.prep.dt,
             positions: pos.iter().map(c).collect(),
             velocities: vel.iter().map(c).collect(),
+            species: self.prep.species.clone(),
         })
     }
 
@@ -626,23 +609,20 @@ impl Engine for GpuEngine {
         crate::sim::model_name(true, Precision::F32, self.prep.axes)
     }
 
-    fn save(&mut self) -> Result<EngineState> {
+    fn save(&mut self) -> Result<Dynamics> {
         self.cells.check(&self.ctx)?;
         let flat = |v: Vec<[f32; 4]>| -> Vec<f64> {
             v.as_flattened().iter().map(|&x| f64::from(x)).collect()
         };
-        let n = self.prep.n;
-        Ok(EngineState {
+        Ok(Dynamics {
             steps: self.steps,
             time: self.steps as f64 * self.prep.dt,
             started: true,
             width: 4,
-            id: (0..n as u32).collect(),
             pos: flat(self.pos.download(&self.ctx)?),
             vel: flat(self.vel.download(&self.ctx)?),
             acc: flat(self.acc.download(&self.ctx)?),
-            aux: Vec::new(),
-            reference: Vec::new(),
+            ..Dynamics::default()
         })
     }
 }

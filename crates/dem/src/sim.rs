@@ -5,10 +5,11 @@ use simkit_backend::{Backend, Error, Restart, Result, Simulation, checkpoint};
 
 use crate::cpu::CpuEngine;
 use crate::diagnostics;
-use crate::engine::{Engine, EngineState};
+use crate::engine::Engine;
 use crate::input::SceneRecord;
 use crate::prepared::Prepared;
-use crate::{Config, Diagnostics, Integrator, Precision, Scene};
+use crate::{Config, Diagnostics, Integrator, Precision, Scene, State};
+use simkit_backend::particles::Dynamics;
 
 /// The checkpoint model string of an engine: backend, precision, dimension.
 pub(crate) fn model_name(gpu: bool, precision: Precision, axes: usize) -> String {
@@ -69,31 +70,7 @@ impl From<ConfigRecord> for Config {
 struct Payload {
     scene: SceneRecord,
     config: ConfigRecord,
-    engine: EngineState,
-}
-
-/// Host-side snapshot: time, positions and velocities (`[x, y, 0]` in 2D), in the scene's
-/// particle order.
-#[derive(Clone, Debug, PartialEq)]
-pub struct State {
-    /// Simulation time.
-    pub time: f64,
-    /// Positions (periodic axes wrapped into the box).
-    pub positions: Vec<[f64; 3]>,
-    /// Velocities at `time`.
-    pub velocities: Vec<[f64; 3]>,
-}
-
-impl State {
-    /// The positions as `glam::DVec3` values (a view, no copy).
-    pub fn positions_dvec3(&self) -> &[glam::DVec3] {
-        simkit_backend::vector::as_dvec3(&self.positions)
-    }
-
-    /// The velocities as `glam::DVec3` values (a view, no copy).
-    pub fn velocities_dvec3(&self) -> &[glam::DVec3] {
-        simkit_backend::vector::as_dvec3(&self.velocities)
-    }
+    engine: Dynamics,
 }
 
 /// A granular DEM simulation of a [`Scene`] on a chosen backend.
@@ -138,7 +115,7 @@ impl Dem {
         scene: &Scene,
         config: &Config,
         backend: Backend<'_>,
-        saved: Option<&EngineState>,
+        saved: Option<&Dynamics>,
     ) -> Result<Self> {
         let single = backend.is_gpu() || config.precision == Precision::F32;
         let prep = Prepared::new(scene, config, single)?;
@@ -262,7 +239,7 @@ pub(crate) struct Saved {
     pub model: String,
     pub scene: Scene,
     pub config: Config,
-    pub engine: EngineState,
+    pub engine: Dynamics,
 }
 
 /// A checkpoint of `engine`'s state for `scene` and `config`, written by `model`.
@@ -270,7 +247,7 @@ pub(crate) fn encode(
     scene: &Scene,
     config: &Config,
     model: &str,
-    engine: EngineState,
+    engine: Dynamics,
 ) -> Result<Vec<u8>> {
     let payload = Payload {
         scene: scene.to_record(),

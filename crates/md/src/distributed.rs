@@ -1,18 +1,19 @@
 //! [`DistributedMd`]: the CPU run over the ranks of a [`Comm`] by spatial decomposition,
 //! with results that do not depend on the rank count.
 
-use std::hash::{Hash, Hasher};
-
 use rayon::prelude::*;
 
 use simkit_backend::comm::{Comm, ParticleDomain};
-use simkit_backend::guard::{blow_up, chunks};
+use simkit_backend::guard::{Guarded, Halt, run_guarded, verdict};
+use simkit_backend::particles::Dynamics;
 use simkit_backend::{Error, Precision, Result, Simulation, max_or_nan};
-use simkit_neighbor::GhostedList;
+use simkit_neighbor::{
+    ByDim, DistributedRun, Finding, GhostedList, RECORD, RankParticles, RankRun, RankView,
+    agree_inputs, by_dim, distributed_accessors,
+};
 
-use crate::cpu::{AXES, Kernel, beyond, kick_slice, list_range, reflect, wrap};
+use crate::cpu::{AXES, Kernel, beyond, kick_slice, list_range, reflect};
 use crate::diagnostics::assemble;
-use crate::engine::EngineState;
 use crate::sim::{decode_checkpoint, encode_checkpoint, model_name};
 use crate::thermostat::{gaussians, ou_coefficients};
 use crate::{Config, Diagnostics, Dim, Integrator, LennardJones, PairLaw, State, System};
@@ -20,10 +21,15 @@ use crate::{Config, Diagnostics, Dim, Integrator, LennardJones, PairLaw, State, 
 /// Owned particles per rayon task of the per-particle passes.
 const CHUNK: usize = 1024;
 
-/// A particle as it travels between ranks (migration, gathers): system index, position,
-/// velocity, acceleration, force (three components each, `z = 0` in 2D), then `phi` and
-/// `r . F` summed over its pairs.
-type Record = [f64; 16];
+/// The owned columns of [`RankParticles`]: velocity (velocity Verlet `v(t)`, leapfrog
+/// `v(t + dt/2)`), acceleration, force, and the sums of `phi` and `r . F` over the
+/// particle's pairs (each pair counted at both ends) in the first two components, at the
+/// last step of each checked stretch.
+const VEL: usize = 0;
+const ACC: usize = 1;
+const FORCE: usize = 2;
+const SUMS: usize = 3;
+const COLS: usize = 4;
 
 /// The likely cause of every blow-up the check finds (as [`crate::Md`]'s CPU backend).
 const CAUSE: &str = "a time step too large for the stiffest pair (see time_step_guide) or \
@@ -87,36 +93,14 @@ const CAUSE: &str = "a time step too large for the stiffest pair (see time_step_
 /// # }
 /// ```
 pub struct DistributedMd<L: PairLaw = LennardJones> {
-    comm: Comm,
+    run: DistributedRun<Engine<2, L>, Engine<3, L>>,
     system: System<L>,
     config: Config,
-    engine: Engines<L>,
-}
-
-/// The engine in the system's dimension.
-enum Engines<L: PairLaw> {
-    Two(Engine<2, L>),
-    Three(Engine<3, L>),
-}
-
-/// Runs `$body` with `$e` bound to the engine, whatever its dimension.
-macro_rules! with_engine {
-    ($engines:expr, $e:ident => $body:expr) => {
-        match $engines {
-            Engines::Two($e) => $body,
-            Engines::Three($e) => $body,
-        }
-    };
 }
 
 impl<L: PairLaw> std::fmt::Debug for DistributedMd<L> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("DistributedMd")
-            .field("comm", &self.comm)
-            .field("particles", &self.len())
-            .field("owned", &self.owned())
-            .field("steps", &self.steps_done())
-            .finish()
+        self.run.debug(f, "DistributedMd")
     }
 }
 
@@ -141,15 +125,15 @@ impl<L: PairLaw> DistributedMd<L> {
     /// uninterrupted distributed run. Collective; every rank passes the same bytes (e.g.
     /// from [`Comm::broadcast_from_root`] of the file rank 0 read).
     ///
-    /// Errors: another crate's or model's checkpoint (`f32`, GPU), a truncated, corrupt or
-    /// inconsistent one (as `Md::resume`), those of [`DistributedMd::new`]. An error on one
-    /// rank is an error on every rank.
+    /// Errors: another crate's or model's checkpoint (`f32`, GPU, another law), a
+    /// truncated, corrupt or inconsistent one (as `Md::resume`), those of
+    /// [`DistributedMd::new`]. An error on one rank is an error on every rank.
     pub fn resume(bytes: &[u8], comm: Comm) -> Result<Self> {
-        let (system, config, engine, list) = comm.agree(decode_checkpoint(bytes).and_then(
-            |(written, system, config, e, l)| {
+        let (system, config, engine) = comm.agree(decode_checkpoint::<L>(bytes).and_then(
+            |(written, system, config, e)| {
                 let want = model_name::<L>(false, Precision::F64, system.dim().axes());
                 if written == want {
-                    Ok((system, config, e, l))
+                    Ok((system, config, e))
                 } else {
                     Err(Error::checkpoint(format!(
                         "holds a {written} run; DistributedMd resumes {want} runs (CPU, \
@@ -158,57 +142,36 @@ impl<L: PairLaw> DistributedMd<L> {
                 }
             },
         ))?;
-        Self::build(&system, &config, comm, Some((&engine, &list)))
+        Self::build(&system, &config, comm, Some(&engine))
     }
 
     fn build(
         system: &System<L>,
         config: &Config,
         comm: Comm,
-        saved: Option<(&EngineState, &Vec<f64>)>,
+        saved: Option<&Dynamics>,
     ) -> Result<Self> {
         let dt = comm.agree(prepare(system, config))?;
-        // A digest of everything the ranks must agree on: the system and settings as a
-        // checkpoint stores them (with the state, when resuming).
-        let mut h = std::collections::hash_map::DefaultHasher::new();
-        let (state, list) = match saved {
-            Some((s, l)) => (s.clone(), l.clone()),
-            None => (
-                EngineState {
-                    steps: 0,
-                    pos: Vec::new(),
-                    vel: Vec::new(),
-                    order: Vec::new(),
-                },
-                Vec::new(),
-            ),
-        };
-        comm.agree(encode_checkpoint(system, config, "", state, list))?
-            .hash(&mut h);
-        comm.check_same(
-            h.finish(),
-            "DistributedMd inputs",
-            "every rank must pass the same system and configuration (or checkpoint)",
-        )?;
+        // Everything the ranks must agree on: the system and settings as a checkpoint
+        // stores them (with the state, when resuming).
+        let state = saved.cloned().unwrap_or_default();
+        let encoded = comm.agree(encode_checkpoint(system, config, "", state))?;
+        agree_inputs(&comm, &encoded, "DistributedMd inputs")?;
         let engine = match system.dim() {
-            Dim::Two => Engines::Two(comm.agree(Engine::new(system, config, dt, &comm))?),
-            Dim::Three => Engines::Three(comm.agree(Engine::new(system, config, dt, &comm))?),
+            Dim::Two => ByDim::Two(comm.agree(Engine::new(system, config, dt, &comm))?),
+            Dim::Three => ByDim::Three(comm.agree(Engine::new(system, config, dt, &comm))?),
         };
-        let mut sim = Self {
-            comm,
+        let mut run = DistributedRun::new(comm, engine);
+        let (engine, comm) = run.parts();
+        by_dim!(engine, e => e.start(comm, system, saved)?);
+        Ok(Self {
+            run,
             system: system.clone(),
             config: *config,
-            engine,
-        };
-        let (comm, system) = (&sim.comm, &sim.system);
-        with_engine!(&mut sim.engine, e => e.start(comm, system, saved)?);
-        Ok(sim)
+        })
     }
 
-    /// The communicator.
-    pub fn comm(&self) -> &Comm {
-        &self.comm
-    }
+    distributed_accessors!();
 
     /// The system the run started from.
     pub fn system(&self) -> &System<L> {
@@ -220,52 +183,10 @@ impl<L: PairLaw> DistributedMd<L> {
         &self.config
     }
 
-    /// The time step in use.
-    pub fn dt(&self) -> f64 {
-        with_engine!(&self.engine, e => e.dt)
-    }
-
-    /// Simulated time (`steps * dt`).
-    pub fn time(&self) -> f64 {
-        with_engine!(&self.engine, e => e.time())
-    }
-
-    /// Number of particles (all ranks).
-    pub fn len(&self) -> usize {
-        self.system.particle_count()
-    }
-
-    /// Whether the system has no particles.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    /// Particles this rank owns (integrates) now.
-    pub fn owned(&self) -> usize {
-        with_engine!(&self.engine, e => e.owned)
-    }
-
-    /// Ghost copies this rank holds now (particles of its neighbours and periodic images
-    /// within the list range of its region).
-    pub fn ghosts(&self) -> usize {
-        with_engine!(&self.engine, e => e.pos.len() - e.owned)
-    }
-
-    /// Regions along x and y, `[p_x, p_y]`.
-    pub fn dims(&self) -> [usize; 2] {
-        with_engine!(&self.engine, e => e.list.domain().dims())
-    }
-
     /// The neighbour-list range: `max r_c + skin`, capped at half the shortest periodic
     /// length (as in [`crate::Md`]); every region is at least this wide.
     pub fn list_range(&self) -> f64 {
-        with_engine!(&self.engine, e => e.range)
-    }
-
-    /// Neighbour-list builds so far (each with a migration), counted since this object was
-    /// made (the start counts one, a resume too).
-    pub fn list_builds(&self) -> u64 {
-        with_engine!(&self.engine, e => e.builds)
+        by_dim!(self.run.engine(), e => e.range)
     }
 
     /// Energies, virial pressure and per-species temperatures of the current state (as
@@ -276,8 +197,9 @@ impl<L: PairLaw> DistributedMd<L> {
     /// Errors: a failed exchange.
     pub fn diagnostics(&mut self) -> Result<Diagnostics> {
         let ns = self.system.table().n_species();
-        let sums = with_engine!(&self.engine, e => e.gather_sums(&self.comm))?;
-        let sums = self.comm.broadcast_from_root(sums)?;
+        let comm = self.run.comm();
+        let sums = by_dim!(self.run.engine(), e => e.gather_sums(comm))?;
+        let sums = comm.broadcast_from_root(sums)?;
         if sums.len() != ns + 2 {
             return Err(Error::invalid(
                 "gathered diagnostics",
@@ -306,7 +228,8 @@ impl<L: PairLaw> DistributedMd<L> {
     ///
     /// Errors: a failed exchange.
     pub fn forces(&mut self) -> Result<Vec<[f64; 3]>> {
-        let rows = with_engine!(&self.engine, e => e.gather(&self.comm))?;
+        let comm = self.run.comm();
+        let rows = by_dim!(self.run.engine(), e => e.gather(comm))?;
         let frozen = self.system.frozen();
         let species = self.system.species();
         let flat = rows.map(|rows| {
@@ -318,7 +241,7 @@ impl<L: PairLaw> DistributedMd<L> {
                 })
                 .collect::<Vec<f64>>()
         });
-        let v = self.comm.broadcast_from_root(flat)?;
+        let v = comm.broadcast_from_root(flat)?;
         Ok(v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
     }
 
@@ -329,28 +252,10 @@ impl<L: PairLaw> DistributedMd<L> {
     ///
     /// Errors: a failed exchange.
     pub fn checkpoint(&mut self) -> Result<Vec<u8>> {
-        let saved = with_engine!(&self.engine, e => e.gather_checkpoint(&self.comm))?;
-        let axes = self.system.dim().axes();
-        let bytes = match saved {
-            Some((state, list)) => Some(encode_checkpoint(
-                &self.system,
-                &self.config,
-                &model_name::<L>(false, Precision::F64, axes),
-                state,
-                list,
-            )?),
-            None => None,
-        };
-        self.comm.broadcast_from_root(bytes)
-    }
-
-    /// Writes [`DistributedMd::checkpoint`] to `path` from rank 0, atomically. Collective.
-    ///
-    /// Errors: a failed exchange or write (on every rank).
-    pub fn write_checkpoint(&mut self, path: impl AsRef<std::path::Path>) -> Result<()> {
-        let bytes = self.checkpoint()?;
-        let mine = self.comm.is_root().then_some(bytes.as_slice());
-        self.comm.write_from_root(path.as_ref(), mine)
+        let model = model_name::<L>(false, Precision::F64, self.system.dim().axes());
+        let (system, config) = (&self.system, &self.config);
+        self.run
+            .checkpoint(|d| encode_checkpoint(system, config, &model, d))
     }
 }
 
@@ -363,44 +268,27 @@ impl<L: PairLaw> Simulation for DistributedMd<L> {
     /// by system index) with the run rolled back everywhere to the last state that passed.
     /// Collective.
     fn step(&mut self, steps: u32) -> Result<()> {
-        let comm = &self.comm;
-        with_engine!(&mut self.engine, e => e.guarded(comm, steps))
+        self.run.step(steps)
     }
 
     /// Time, positions (periodic coordinates wrapped), velocities at the step (leapfrog:
     /// synchronised) and species of all particles in system order, gathered on rank 0 and
     /// sent to every rank. Collective.
     fn state(&mut self) -> Result<State> {
-        let comm = &self.comm;
-        let rows = with_engine!(&self.engine, e => e.gather(comm))?;
-        let flat = rows.map(|rows| {
-            let mut v = Vec::with_capacity(6 * rows.len());
-            for r in &rows {
-                v.extend_from_slice(&r[1..7]);
-            }
-            v
-        });
-        let v = comm.broadcast_from_root(flat)?;
-        let rows = v.chunks_exact(6);
-        Ok(State {
-            time: self.time(),
-            positions: rows.clone().map(|r| [r[0], r[1], r[2]]).collect(),
-            velocities: rows.map(|r| [r[3], r[4], r[5]]).collect(),
-            species: self.system.species().to_vec(),
-        })
+        self.run.state(self.system.species())
     }
 
     fn steps_done(&self) -> u64 {
-        with_engine!(&self.engine, e => e.steps)
+        self.run.steps()
     }
 
     fn backend_name(&self) -> String {
         let threads = rayon::current_num_threads();
         let plural = if threads == 1 { "" } else { "s" };
-        let kernel = with_engine!(&self.engine, e => e.kernel.name());
+        let kernel = by_dim!(self.run.engine(), e => e.kernel.name());
         format!(
             "cpu f64 ({} ranks, {threads} thread{plural} each, full lists, {kernel})",
-            self.comm.size()
+            self.run.comm().size()
         )
     }
 }
@@ -416,27 +304,12 @@ fn prepare<L: PairLaw>(system: &System<L>, config: &Config) -> Result<f64> {
     config.resolve_dt(system)
 }
 
-/// The owned particles at the last check that passed, and the step count.
-#[derive(Default)]
-struct Snapshot<const D: usize> {
-    id: Vec<u32>,
-    pos: Vec<[f64; D]>,
-    vel: Vec<[f64; D]>,
-    acc: Vec<[f64; D]>,
-    force: Vec<[f64; D]>,
-    ew: Vec<[f64; 2]>,
-    reference: Vec<[f64; D]>,
-    steps: u64,
-}
-
-/// What a blow-up check found on a rank, as the ranks exchange it: `[kind, id, axis,
-/// value, extra]`; the kinds in the order of [`crate::Md`]'s check: 0 non-finite
-/// position, 1 velocity, 2 acceleration, 3 leapfrog velocity at the step, 4 outside the
-/// box, 5 farther than skin / 2 from the list-build position (value: the distance), 6
-/// kinetic energy, 7 pair energy, 8 virial (non-finite values), 9 a kinetic energy whose
-/// total over all particles may overflow; [`NOTHING`] (kind 10) when all is well.
-type Finding = [f64; 5];
-
+/// What a blow-up check found on a rank, `[kind, id, axis, value, extra]`; the kinds in
+/// the order of [`crate::Md`]'s check: 0 non-finite position, 1 velocity, 2 acceleration,
+/// 3 leapfrog velocity at the step, 4 outside the box, 5 farther than skin / 2 from the
+/// list-build position (value: the distance), 6 kinetic energy, 7 pair energy, 8 virial
+/// (non-finite values), 9 a kinetic energy whose total over all particles may overflow;
+/// [`NOTHING`] (kind 10) when all is well.
 const NOTHING: Finding = [10.0, 0.0, 0.0, 0.0, 0.0];
 
 /// The finding to report of two: the lower kind, then the smaller system index.
@@ -444,17 +317,13 @@ fn worse(a: Finding, b: Finding) -> Finding {
     if (b[0], b[1]) < (a[0], a[1]) { b } else { a }
 }
 
-/// This rank's part of the run in dimension `D`.
+/// This rank's part of the run in dimension `D`: its particles ([`RankParticles`], the
+/// species as their constants) and what the law and the integrator need.
 struct Engine<const D: usize, L: PairLaw> {
-    /// The decomposition, the ghosts and the full lists (partners by system index).
-    list: GhostedList<D>,
+    p: RankParticles<D, u32>,
     dt: f64,
     integrator: Integrator,
     check_every: u32,
-    /// Particles of the system.
-    n: usize,
-    /// Species of every particle of the system.
-    all_species: Vec<u32>,
     masses: Vec<f64>,
     /// `1 / m` per species, `0` for a frozen species (as in the CPU backend).
     inv_mass: Vec<f64>,
@@ -465,32 +334,13 @@ struct Engine<const D: usize, L: PairLaw> {
     langevin: Option<(u32, Vec<(f64, f64)>)>,
     lo: [f64; D],
     hi: [f64; D],
-    len: [f64; D],
     periodic: [bool; D],
     range: f64,
     /// `((range - r_c) / 2)^2`: a larger squared displacement triggers a list build.
     rebuild2: f64,
     steps: u64,
-    builds: u64,
-    /// Owned particles at the front of the local arrays, ghosts after them.
-    owned: usize,
-    /// System index, owned then ghosts.
-    id: Vec<u32>,
-    /// Species, owned then ghosts.
-    species: Vec<u32>,
-    /// Positions, owned then ghosts (owned: periodic coordinates not wrapped since the
-    /// list build).
-    pos: Vec<[f64; D]>,
-    /// Owned only: velocity Verlet `v(t)`, leapfrog `v(t + dt/2)`.
-    vel: Vec<[f64; D]>,
-    acc: Vec<[f64; D]>,
-    force: Vec<[f64; D]>,
-    /// `sum phi` and `sum r . F` over each owned particle's pairs (each pair counted at
-    /// both ends), at the last step of each checked stretch.
-    ew: Vec<[f64; 2]>,
-    /// Positions at the last list build (wrapped).
-    reference: Vec<[f64; D]>,
-    snap: Snapshot<D>,
+    /// The step count of the guard's copy.
+    kept_steps: u64,
     kernel: Kernel,
 }
 
@@ -515,13 +365,23 @@ where
         )?;
         let frozen = system.frozen().to_vec();
         let periodic_z = (D == 3 && per3[2]).then_some((lo3[2], len3[2]));
+        let (lo, len, periodic): ([f64; D], [f64; D], [bool; D]) = (
+            std::array::from_fn(|d| lo3[d]),
+            std::array::from_fn(|d| len3[d]),
+            std::array::from_fn(|d| per3[d]),
+        );
+        let list = GhostedList::new(domain, periodic_z, range)?;
         Ok(Self {
-            list: GhostedList::new(domain, periodic_z, range)?,
+            p: RankParticles::new(
+                list,
+                (lo, len, periodic),
+                system.species().to_vec(),
+                0,
+                COLS,
+            )?,
             dt,
             integrator: config.integrator,
             check_every: config.check_every,
-            n: system.particle_count(),
-            all_species: system.species().to_vec(),
             masses: system.masses().to_vec(),
             inv_mass: system
                 .masses()
@@ -535,53 +395,52 @@ where
             langevin: config
                 .thermostat
                 .map(|l| (l.seed, ou_coefficients(system, &l, dt))),
-            lo: std::array::from_fn(|d| lo3[d]),
+            lo,
             hi: std::array::from_fn(|d| lo3[d] + len3[d]),
-            len: std::array::from_fn(|d| len3[d]),
-            periodic: std::array::from_fn(|d| per3[d]),
+            periodic,
             range,
             rebuild2: half_skin * half_skin,
             steps: 0,
-            builds: 0,
-            owned: 0,
-            id: Vec::new(),
-            species: Vec::new(),
-            pos: Vec::new(),
-            vel: Vec::new(),
-            acc: Vec::new(),
-            force: Vec::new(),
-            ew: Vec::new(),
-            reference: Vec::new(),
-            snap: Snapshot::default(),
+            kept_steps: 0,
             kernel: Kernel::detect(),
         })
     }
 
-    fn time(&self) -> f64 {
-        self.steps as f64 * self.dt
-    }
-
-    fn wrap(&self, x: &mut [f64; D]) {
-        wrap(x, self.lo, self.hi, self.len, self.periodic);
-    }
-
     /// The initial state (the system's, or a checkpoint's), its forces and the initial
     /// check, as the CPU backend makes them. Collective; an error is every rank's.
-    fn start(
-        &mut self,
-        comm: &Comm,
-        system: &System<L>,
-        saved: Option<(&EngineState, &Vec<f64>)>,
-    ) -> Result<()> {
+    fn start(&mut self, comm: &Comm, system: &System<L>, saved: Option<&Dynamics>) -> Result<()> {
         match saved {
             None => {
-                self.take_system(comm, system);
+                let (positions, velocities) = (system.positions(), system.velocities());
+                let mine = self
+                    .p
+                    .start(comm, |i| std::array::from_fn(|d| positions[i][d]));
+                for (k, &i) in mine.iter().enumerate() {
+                    if !self.frozen[system.species()[i] as usize] {
+                        self.p
+                            .set(false, VEL, k, std::array::from_fn(|d| velocities[i][d]));
+                    }
+                }
                 // Wraps (a no-op for a valid system) and makes ghosts and lists.
-                self.rebuild(comm)?;
+                self.p.rebuild(comm)?;
             }
-            Some((s, list)) => {
-                comm.agree(self.take_saved(comm, s, list))?;
-                self.relist(comm)?;
+            Some(s) => {
+                let n = self.p.total();
+                comm.agree(s.check(n, D, &["pos", "vel", "reference"]))?;
+                let mine = self.p.load(
+                    comm,
+                    n,
+                    |k| Dynamics::at::<D>(&s.reference, k),
+                    |k| s.particle(k),
+                );
+                for (k, &slot) in mine.iter().enumerate() {
+                    self.p.set_position(k, Dynamics::at(&s.pos, slot));
+                    if !self.frozen[self.p.props()[k] as usize] {
+                        self.p.set(false, VEL, k, Dynamics::at(&s.vel, slot));
+                    }
+                }
+                self.steps = s.steps;
+                self.p.relist(comm)?;
                 // A stored position must be one the run could have produced.
                 let found = self.all_findings(comm)?;
                 if found[0] < NOTHING[0] {
@@ -595,8 +454,11 @@ where
         self.forces::<true>(None);
         if saved.is_none() && self.integrator == Integrator::Leapfrog {
             let h = 0.5 * self.dt;
-            let n = self.owned;
-            kick_slice(&mut self.vel[..n], &self.acc[..n], h);
+            let cols = self.p.parts().cols;
+            let [vel, acc, ..] = cols else {
+                unreachable!("md's columns")
+            };
+            kick_slice(vel, acc, h);
         }
         let found = self.all_findings(comm)?;
         if found[0] < NOTHING[0] {
@@ -607,163 +469,7 @@ where
                 format!("{cause}; move the particles apart or lower dt"),
             ));
         }
-        self.keep();
         Ok(())
-    }
-
-    /// This rank takes the system's particles in its region (frozen ones at rest).
-    fn take_system(&mut self, comm: &Comm, system: &System<L>) {
-        let (positions, velocities) = (system.positions(), system.velocities());
-        let mine: Vec<usize> = (0..self.n)
-            .filter(|&i| {
-                let mut x: [f64; D] = std::array::from_fn(|d| positions[i][d]);
-                self.wrap(&mut x);
-                self.list.domain().owner([x[0], x[1]]) == comm.rank()
-            })
-            .collect();
-        self.take(&mine);
-        for (k, &i) in mine.iter().enumerate() {
-            self.pos[k] = std::array::from_fn(|d| positions[i][d]);
-            if !self.frozen[self.all_species[i] as usize] {
-                self.vel[k] = std::array::from_fn(|d| velocities[i][d]);
-            }
-        }
-    }
-
-    /// Sets the owned system indices and their species, and sizes the owned arrays (zero).
-    fn take(&mut self, ids: &[usize]) {
-        let n = ids.len();
-        self.owned = n;
-        self.id = ids.iter().map(|&i| i as u32).collect();
-        self.species = ids.iter().map(|&i| self.all_species[i]).collect();
-        for v in [
-            &mut self.pos,
-            &mut self.vel,
-            &mut self.acc,
-            &mut self.force,
-            &mut self.reference,
-        ] {
-            v.clear();
-            v.resize(n, [0.0; D]);
-        }
-        self.ew.clear();
-        self.ew.resize(n, [0.0; 2]);
-    }
-
-    /// A checkpointed state: every rank takes the particles whose list-build position lies
-    /// in its region (where the run that wrote it had them).
-    fn take_saved(&mut self, comm: &Comm, s: &EngineState, list: &[f64]) -> Result<()> {
-        let n = self.n;
-        for (v, what) in [
-            (s.pos.as_slice(), "positions"),
-            (&s.vel, "velocities"),
-            (list, "list-build positions"),
-        ] {
-            if Some(v.len()) != n.checked_mul(D) {
-                return Err(Error::checkpoint(format!(
-                    "the stored {what} have {} values for {n} particles in {D}D",
-                    v.len()
-                )));
-            }
-            if v.iter().any(|x| !x.is_finite()) {
-                return Err(Error::checkpoint(format!(
-                    "the stored {what} are not finite"
-                )));
-            }
-        }
-        let at = |v: &[f64], k: usize| -> [f64; D] { std::array::from_fn(|d| v[k * D + d]) };
-        let mine: Vec<usize> = (0..n)
-            .filter(|&k| {
-                let r = at(list, k);
-                self.list.domain().owner([r[0], r[1]]) == comm.rank()
-            })
-            .collect();
-        self.take(&mine);
-        for (k, &i) in mine.iter().enumerate() {
-            self.pos[k] = at(&s.pos, i);
-            self.vel[k] = if self.frozen[self.all_species[i] as usize] {
-                [0.0; D]
-            } else {
-                at(&s.vel, i)
-            };
-            self.reference[k] = at(list, i);
-        }
-        self.steps = s.steps;
-        Ok(())
-    }
-
-    /// Wraps the owned positions, sends every particle to the rank that owns it now, and
-    /// makes the ghosts and lists anew.
-    fn rebuild(&mut self, comm: &Comm) -> Result<()> {
-        let n = self.owned;
-        let mut out: Vec<Record> = Vec::with_capacity(n);
-        for k in 0..n {
-            let mut x = self.pos[k];
-            self.wrap(&mut x);
-            let mut r = [0.0; 16];
-            r[0] = f64::from(self.id[k]);
-            r[1..1 + D].copy_from_slice(&x);
-            r[4..4 + D].copy_from_slice(&self.vel[k]);
-            r[7..7 + D].copy_from_slice(&self.acc[k]);
-            r[10..10 + D].copy_from_slice(&self.force[k]);
-            r[13] = self.ew[k][0];
-            r[14] = self.ew[k][1];
-            out.push(r);
-        }
-        let got = self.list.domain().migrate(comm, out, |r| [r[1], r[2]])?;
-        let total = self.n;
-        let bad = got.iter().find(|r| !(r[0] >= 0.0 && r[0] < total as f64));
-        comm.agree(match bad {
-            Some(r) => Err(Error::invalid(
-                "migrated particle index",
-                r[0],
-                format!("must be below the particle count {total}"),
-            )),
-            None => Ok(()),
-        })?;
-        let ids: Vec<usize> = got.iter().map(|r| r[0] as usize).collect();
-        self.take(&ids);
-        for (k, r) in got.iter().enumerate() {
-            self.pos[k] = std::array::from_fn(|d| r[1 + d]);
-            self.vel[k] = std::array::from_fn(|d| r[4 + d]);
-            self.acc[k] = std::array::from_fn(|d| r[7 + d]);
-            self.force[k] = std::array::from_fn(|d| r[10 + d]);
-            self.ew[k] = [r[13], r[14]];
-        }
-        self.reference.clone_from(&self.pos);
-        self.relist(comm)
-    }
-
-    /// Ghosts and lists from the list-build positions of the owned particles, then the
-    /// ghosts refreshed with the current positions.
-    fn relist(&mut self, comm: &Comm) -> Result<()> {
-        let n = self.owned;
-        self.list.build(comm, &self.reference, &self.id[..n])?;
-        self.id.truncate(n);
-        self.species.truncate(n);
-        let ghosts = &self.list.ids()[n..];
-        let bad = ghosts.iter().find(|&&i| i as usize >= self.n).map(|&i| {
-            Error::invalid(
-                "ghost particle index",
-                i,
-                format!("must be below the particle count {}", self.n),
-            )
-        });
-        comm.agree(bad.map_or(Ok(()), Err))?;
-        for &i in ghosts {
-            self.id.push(i);
-            self.species.push(self.all_species[i as usize]);
-        }
-        self.pos.resize(self.list.len(), [0.0; D]);
-        self.refresh(comm)?;
-        self.builds += 1;
-        Ok(())
-    }
-
-    /// Sends the owned positions to the ranks that hold them as ghosts (the periodic
-    /// images shifted).
-    fn refresh(&mut self, comm: &Comm) -> Result<()> {
-        self.list.refresh(comm, &mut self.pos, true)
     }
 
     /// Forces on the owned particles at the current positions (owned and ghosts), the
@@ -772,26 +478,34 @@ where
     /// particle adds its pairs in the order of its list (increasing system index of the
     /// partner), with the CPU backend's pair law.
     fn forces<const ENERGY: bool>(&mut self, kick: Option<f64>) {
-        let n = self.owned;
-        let inp = PairInputs::<D, L> {
-            pos: &self.pos,
-            species: &self.species,
-            coeff: &self.coeff,
-            n_species: self.n_species,
-            pad: 2.0 * self.range,
-            offsets: self.list.csr().0,
-            partners: self.list.csr().1,
+        let pad = 2.0 * self.range;
+        let (kernel, inv_mass, coeff, ns) =
+            (self.kernel, &self.inv_mass, &self.coeff, self.n_species);
+        let parts = self.p.parts();
+        let n = parts.owned;
+        let [vel, acc, force, sums] = parts.cols else {
+            unreachable!("md's columns")
         };
-        let (kernel, species, inv_mass) = (self.kernel, &self.species, &self.inv_mass);
-        self.force[..n]
+        let (offsets, partners) = parts.list.csr();
+        let species = parts.props;
+        let inp = PairInputs::<D, L> {
+            pos: parts.pos,
+            species,
+            coeff,
+            n_species: ns,
+            pad,
+            offsets,
+            partners,
+        };
+        force[..n]
             .par_chunks_mut(CHUNK)
-            .zip(self.acc[..n].par_chunks_mut(CHUNK))
-            .zip(self.vel[..n].par_chunks_mut(CHUNK))
-            .zip(self.ew[..n].par_chunks_mut(CHUNK))
+            .zip(acc.par_chunks_mut(CHUNK))
+            .zip(vel.par_chunks_mut(CHUNK))
+            .zip(sums.par_chunks_mut(CHUNK))
             .enumerate()
-            .for_each(|(c, (((force, acc), vel), ew))| {
+            .for_each(|(c, (((force, acc), vel), sums))| {
                 let first = c * CHUNK;
-                pair_sums::<D, L, ENERGY>(kernel, &inp, first, force, ew);
+                pair_sums::<D, L, ENERGY>(kernel, &inp, first, force, sums);
                 for (k, ((f, a), v)) in force.iter().zip(acc.iter_mut()).zip(vel).enumerate() {
                     let im = inv_mass[species[first + k] as usize];
                     *a = f.map(|x| x * im);
@@ -809,14 +523,15 @@ where
     /// returns this rank's largest squared displacement since the list build (NaN if any
     /// is NaN). The arithmetic of the CPU backend, particle by particle.
     fn move_particles(&mut self, open: Option<f64>) -> f64 {
-        let n = self.owned;
         let (lo, hi, per, dt) = (self.lo, self.hi, self.periodic, self.dt);
-        let (pos, vel, acc, reference) = (
-            &mut self.pos[..n],
-            &mut self.vel[..n],
-            &self.acc[..n],
-            &self.reference[..n],
-        );
+        let step = self.steps as u32;
+        let langevin = &self.langevin;
+        let parts = self.p.parts();
+        let n = parts.owned;
+        let [vel, acc, ..] = parts.cols else {
+            unreachable!("md's columns")
+        };
+        let (pos, reference) = (&mut parts.pos[..n], parts.reference);
         let displacement = |x: &[f64; D], r: &[f64; D]| {
             let mut s2 = 0.0;
             for d in 0..D {
@@ -825,7 +540,7 @@ where
             }
             s2
         };
-        match &self.langevin {
+        match langevin {
             None => pos
                 .par_chunks_mut(CHUNK)
                 .zip(vel.par_chunks_mut(CHUNK))
@@ -850,8 +565,7 @@ where
                 .reduce(|| 0.0, max_or_nan),
             Some((seed, ou)) => {
                 let (seed, h) = (*seed, 0.5 * dt);
-                let step = self.steps as u32;
-                let (species, id) = (&self.species[..n], &self.id[..n]);
+                let (species, id) = (&parts.props[..n], &parts.id[..n]);
                 pos.par_chunks_mut(CHUNK)
                     .zip(vel.par_chunks_mut(CHUNK))
                     .zip(acc.par_chunks(CHUNK))
@@ -889,8 +603,6 @@ where
             Integrator::VelocityVerlet => (Some(0.5 * self.dt), 0.5 * self.dt),
             Integrator::Leapfrog => (None, self.dt),
         };
-        // A list build migrates particles: the owned count changes between steps, so
-        // every pass reads `self.owned` afresh.
         let moved2 = comm.all_max(self.move_particles(open))?;
         // A particle that moved farther than the list range since the build (or to a
         // non-finite position) may have jumped past the next region: the run blew up. The
@@ -906,10 +618,12 @@ where
                 ),
             ));
         }
+        // A list build migrates particles: the owned count changes between steps, so
+        // every pass reads it afresh.
         if beyond(moved2, self.rebuild2) {
-            self.rebuild(comm)?;
+            self.p.rebuild(comm)?;
         } else {
-            self.refresh(comm)?;
+            self.p.refresh(comm)?;
         }
         if energy {
             self.forces::<true>(Some(close));
@@ -920,73 +634,39 @@ where
         Ok(())
     }
 
-    /// `steps` steps in stretches ending on multiples of `check_every`, each followed by
-    /// the blow-up check on every rank; a failure anywhere rolls every rank back.
-    fn guarded(&mut self, comm: &Comm, steps: u32) -> Result<()> {
-        for n in chunks(self.steps, steps, self.check_every) {
-            let mut failed = None;
-            for s in 0..n {
-                // The energies only where the check (and the caller) looks: the last step.
-                if let Err(e) = self.one_step(comm, s + 1 == n) {
-                    failed = Some((self.steps + 1, e.to_string()));
-                    break;
-                }
-            }
-            if let Some((bad, what)) = failed {
-                // A particle that moved too far, or a list build that failed on every rank
-                // (positions a grid cannot hold): the run blew up within the stretch.
-                self.restore(comm)?;
-                return Err(blow_up(bad, self.steps, what, CAUSE));
-            }
-            let found = self.all_findings(comm)?;
-            if found[0] < NOTHING[0] {
-                let bad = self.steps;
-                let (what, cause) = self.describe(&found);
-                self.restore(comm)?;
-                return Err(blow_up(bad, self.steps, what, cause));
-            }
-            self.keep();
-        }
-        Ok(())
-    }
-
     /// Every rank's first finding, the same on every rank. Collective.
     fn all_findings(&self, comm: &Comm) -> Result<Finding> {
-        let all = comm.all_gather(&[self.check()])?;
-        Ok(all.iter().copied().fold(NOTHING, worse))
+        RankParticles::<D, u32>::findings(comm, self.check(), NOTHING, worse)
     }
 
     /// This rank's first finding (the checks of the CPU backend, over the owned
     /// particles; within a kind the smallest system index).
     fn check(&self) -> Finding {
-        let n = self.owned;
+        let p = &self.p;
+        let (vel, acc, sums) = (p.col(VEL), p.col(ACC), p.col(SUMS));
         let mut found = NOTHING;
         let mut note = |f: Finding| found = worse(found, f);
         let h = 0.5 * self.dt;
         let leapfrog = self.integrator == Integrator::Leapfrog;
         // Kinetic energies above this could overflow the total (in any order).
-        let ke_limit = f64::MAX / self.n.max(1) as f64;
-        for k in 0..n {
-            let id = f64::from(self.id[k]);
-            for (kind, v) in [
-                (0.0, &self.pos[k]),
-                (1.0, &self.vel[k]),
-                (2.0, &self.acc[k]),
-            ] {
+        let ke_limit = f64::MAX / p.total().max(1) as f64;
+        for k in 0..p.owned() {
+            let id = f64::from(p.id()[k]);
+            for (kind, v) in [(0.0, &p.pos()[k]), (1.0, &vel[k]), (2.0, &acc[k])] {
                 if let Some(d) = (0..D).find(|&d| !v[d].is_finite()) {
                     note([kind, id, d as f64, v[d], 0.0]);
                 }
             }
             if leapfrog {
                 for d in 0..D {
-                    let u = self.vel[k][d] - self.acc[k][d] * h;
+                    let u = vel[k][d] - acc[k][d] * h;
                     if !u.is_finite() {
                         note([3.0, id, d as f64, u, 0.0]);
                         break;
                     }
                 }
             }
-            let (x, r) = (self.pos[k], self.reference[k]);
+            let (x, r) = (p.pos()[k], p.reference()[k]);
             for d in 0..D {
                 let (lo, hi) = (self.lo[d], self.hi[d]);
                 let (y, out) = if self.periodic[d] {
@@ -1007,9 +687,9 @@ where
             if beyond(s2, self.rebuild2) {
                 note([5.0, id, 0.0, s2.sqrt(), 0.0]);
             }
-            let v2: f64 = self.vel[k].iter().map(|x| x * x).sum();
-            let ke = 0.5 * self.masses[self.species[k] as usize] * v2;
-            for (kind, x) in [(6.0, ke), (7.0, self.ew[k][0]), (8.0, self.ew[k][1])] {
+            let v2: f64 = vel[k].iter().map(|x| x * x).sum();
+            let ke = 0.5 * self.masses[p.props()[k] as usize] * v2;
+            for (kind, x) in [(6.0, ke), (7.0, sums[k][0]), (8.0, sums[k][1])] {
                 if !x.is_finite() {
                     note([kind, id, 0.0, x, 0.0]);
                 }
@@ -1050,72 +730,39 @@ where
             }
             _ => format!(
                 "particle {id}: kinetic energy = {}, the total over {} particles may overflow",
-                f[3], self.n
+                f[3],
+                self.p.total()
             ),
         };
         (what, CAUSE.to_string())
     }
 
-    /// Copies the owned state into the guard's snapshot.
-    fn keep(&mut self) {
-        let (s, n) = (&mut self.snap, self.owned);
-        s.id.clear();
-        s.id.extend_from_slice(&self.id[..n]);
-        s.pos.clear();
-        s.pos.extend_from_slice(&self.pos[..n]);
-        s.vel.clone_from(&self.vel);
-        s.acc.clone_from(&self.acc);
-        s.force.clone_from(&self.force);
-        s.ew.clone_from(&self.ew);
-        s.reference.clone_from(&self.reference);
-        s.steps = self.steps;
-    }
-
-    /// Puts every rank back to its snapshot (the particles it owned then) and remakes
-    /// ghosts and lists from the list-build positions, so the lists are those the run had.
-    fn restore(&mut self, comm: &Comm) -> Result<()> {
-        let ids: Vec<usize> = self.snap.id.iter().map(|&i| i as usize).collect();
-        self.take(&ids);
-        let s = &self.snap;
-        self.pos.clone_from(&s.pos);
-        self.vel.clone_from(&s.vel);
-        self.acc.clone_from(&s.acc);
-        self.force.clone_from(&s.force);
-        self.ew.clone_from(&s.ew);
-        self.reference.clone_from(&s.reference);
-        self.steps = s.steps;
-        self.relist(comm)
-    }
-
     /// Every particle's record on rank 0 in system order (`None` elsewhere): position
     /// wrapped, velocity at the step (leapfrog: synchronised), acceleration, force,
     /// `phi` and `r . F` sums.
-    fn gather(&self, comm: &Comm) -> Result<Option<Vec<Record>>> {
-        let n = self.owned;
+    fn gather(&self, comm: &Comm) -> Result<Option<Vec<[f64; RECORD]>>> {
+        let p = &self.p;
         let h = 0.5 * self.dt;
         let leapfrog = self.integrator == Integrator::Leapfrog;
-        let mine: Vec<Record> = (0..n)
-            .map(|k| {
-                let mut r = [0.0; 16];
-                r[0] = f64::from(self.id[k]);
-                let mut x = self.pos[k];
-                self.wrap(&mut x);
-                for d in 0..D {
-                    r[1 + d] = x[d];
-                    r[4 + d] = if leapfrog {
-                        self.vel[k][d] - self.acc[k][d] * h
-                    } else {
-                        self.vel[k][d]
-                    };
-                    r[7 + d] = self.acc[k][d];
-                    r[10 + d] = self.force[k][d];
-                }
-                r[13] = self.ew[k][0];
-                r[14] = self.ew[k][1];
-                r
-            })
-            .collect();
-        comm.gather_indexed::<16>(&mine, self.n)
+        let (vel, acc, force, sums) = (p.col(VEL), p.col(ACC), p.col(FORCE), p.col(SUMS));
+        p.gather(comm, |k| {
+            let mut r = [0.0; RECORD - 1];
+            let mut x = p.pos()[k];
+            p.wrap(&mut x);
+            for d in 0..D {
+                r[d] = x[d];
+                r[3 + d] = if leapfrog {
+                    vel[k][d] - acc[k][d] * h
+                } else {
+                    vel[k][d]
+                };
+                r[6 + d] = acc[k][d];
+                r[9 + d] = force[k][d];
+            }
+            r[12] = sums[k][0];
+            r[13] = sums[k][1];
+            r
+        })
     }
 
     /// On rank 0: the kinetic energy of every species, the potential energy and the
@@ -1124,10 +771,11 @@ where
         let Some(rows) = self.gather(comm)? else {
             return Ok(None);
         };
+        let species = self.p.table();
         let mut out = vec![0.0; self.n_species + 2];
         let (mut potential, mut virial) = (0.0, 0.0);
         for (i, r) in rows.iter().enumerate() {
-            let s = self.all_species[i] as usize;
+            let s = species[i] as usize;
             let v2: f64 = r[4..4 + D].iter().map(|x| x * x).sum();
             out[s] += 0.5 * self.masses[s] * v2;
             potential += r[13];
@@ -1138,38 +786,120 @@ where
         out[self.n_species + 1] = 0.5 * virial;
         Ok(Some(out))
     }
+}
 
-    /// On rank 0: the engine state (positions as the run holds them, velocities as the
-    /// integrator stores them, system order) and the list-build positions, flat.
-    fn gather_checkpoint(&self, comm: &Comm) -> Result<Option<(EngineState, Vec<f64>)>> {
-        let mine: Vec<Record> = (0..self.owned)
-            .map(|k| {
-                let mut r = [0.0; 16];
-                r[0] = f64::from(self.id[k]);
-                r[1..1 + D].copy_from_slice(&self.pos[k]);
-                r[4..4 + D].copy_from_slice(&self.vel[k]);
-                r[7..7 + D].copy_from_slice(&self.reference[k]);
-                r
-            })
-            .collect();
-        let Some(rows) = comm.gather_indexed::<16>(&mine, self.n)? else {
-            return Ok(None);
-        };
-        let column = |o: usize| -> Vec<f64> {
+/// The blow-up guard's view of a rank's engine (see [`simkit_backend::guard`]): every
+/// decision is taken by all ranks together.
+struct Checked<'a, const D: usize, L: PairLaw> {
+    e: &'a mut Engine<D, L>,
+    comm: &'a Comm,
+}
+
+impl<const D: usize, L: PairLaw> Guarded for Checked<'_, D, L>
+where
+    [f64; D]: bytemuck::Pod,
+{
+    fn steps_done(&self) -> u64 {
+        self.e.steps
+    }
+
+    fn keep(&mut self) -> Result<()> {
+        self.e.p.keep();
+        self.e.kept_steps = self.e.steps;
+        Ok(())
+    }
+
+    fn advance(&mut self, n: u32) -> std::result::Result<(), Halt> {
+        for s in 0..n {
+            // The energies only where the check (and the caller) looks: the last step. A
+            // particle that moved too far, or a list build that failed on every rank
+            // (positions a grid cannot hold): the run blew up within the stretch.
+            self.e
+                .one_step(self.comm, s + 1 == n)
+                .map_err(|err| Halt::BlowUp {
+                    step: self.e.steps + 1,
+                    what: err.to_string(),
+                    cause: CAUSE.to_string(),
+                })?;
+        }
+        Ok(())
+    }
+
+    fn check(&mut self) -> std::result::Result<(), Halt> {
+        let found = self.e.all_findings(self.comm)?;
+        let failure = (found[0] < NOTHING[0]).then(|| self.e.describe(&found));
+        verdict(self.e.steps, failure)
+    }
+
+    fn restore(&mut self) -> Result<()> {
+        self.e.p.restore(self.comm)?;
+        self.e.steps = self.e.kept_steps;
+        Ok(())
+    }
+}
+
+impl<const D: usize, L: PairLaw> RankRun for Engine<D, L>
+where
+    [f64; D]: bytemuck::Pod,
+{
+    fn view(&self) -> RankView {
+        self.p.view()
+    }
+
+    fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    fn time(&self) -> f64 {
+        self.steps as f64 * self.dt
+    }
+
+    fn dt(&self) -> f64 {
+        self.dt
+    }
+
+    fn step(&mut self, comm: &Comm, steps: u32) -> Result<()> {
+        let every = self.check_every;
+        run_guarded(&mut Checked { e: self, comm }, steps, every)
+    }
+
+    fn gather_motion(&self, comm: &Comm) -> Result<Option<Vec<[f64; 6]>>> {
+        let rows = self.gather(comm)?;
+        Ok(rows.map(|rows| {
             rows.iter()
-                .flat_map(|r| r[o..o + D].iter().copied())
+                .map(|r| std::array::from_fn(|c| r[1 + c]))
                 .collect()
-        };
-        Ok(Some((
-            EngineState {
+        }))
+    }
+
+    /// Positions as the run holds them, velocities as the integrator stores them, the
+    /// list-build positions, in system order.
+    fn gather_dynamics(&self, comm: &Comm) -> Result<Option<Dynamics>> {
+        let p = &self.p;
+        let vel = p.col(VEL);
+        let rows = p.gather(comm, |k| {
+            let mut r = [0.0; RECORD - 1];
+            r[..D].copy_from_slice(&p.pos()[k]);
+            r[3..3 + D].copy_from_slice(&vel[k]);
+            r[6..6 + D].copy_from_slice(&p.reference()[k]);
+            r
+        })?;
+        Ok(rows.map(|rows| {
+            let column = |o: usize| -> Vec<f64> {
+                rows.iter()
+                    .flat_map(|r| r[o..o + D].iter().copied())
+                    .collect()
+            };
+            Dynamics {
                 steps: self.steps,
+                time: self.time(),
+                width: D as u32,
                 pos: column(1),
                 vel: column(4),
-                // Empty: the particles are in the system order.
-                order: Vec::new(),
-            },
-            column(7),
-        )))
+                reference: column(7),
+                ..Dynamics::default()
+            }
+        }))
     }
 }
 
@@ -1198,7 +928,7 @@ fn pair_sums<const D: usize, L: PairLaw, const ENERGY: bool>(
     inp: &PairInputs<'_, D, L>,
     first: usize,
     force: &mut [[f64; D]],
-    ew: &mut [[f64; 2]],
+    ew: &mut [[f64; D]],
 ) {
     match kernel {
         #[cfg(target_arch = "x86_64")]
@@ -1221,7 +951,7 @@ unsafe fn pair_sums_avx512<const D: usize, L: PairLaw, const ENERGY: bool>(
     inp: &PairInputs<'_, D, L>,
     first: usize,
     force: &mut [[f64; D]],
-    ew: &mut [[f64; 2]],
+    ew: &mut [[f64; D]],
 ) {
     pair_sums_body::<D, L, ENERGY>(inp, first, force, ew);
 }
@@ -1236,14 +966,14 @@ unsafe fn pair_sums_avx2<const D: usize, L: PairLaw, const ENERGY: bool>(
     inp: &PairInputs<'_, D, L>,
     first: usize,
     force: &mut [[f64; D]],
-    ew: &mut [[f64; 2]],
+    ew: &mut [[f64; D]],
 ) {
     pair_sums_body::<D, L, ENERGY>(inp, first, force, ew);
 }
 
 /// For each owned particle `i = first + k`: `force[k]` = the sum of `(f / r) (x_i - x_j)`
 /// over its list (increasing system index of the partner `j`), and with `ENERGY`
-/// `ew[k] = [sum phi, sum r . F]`, the terms from [`PairLaw::force_energy`]. The law runs on a
+/// `ew[k][..2] = [sum phi, sum r . F]`, the terms from [`PairLaw::force_energy`]. The law runs on a
 /// chunk of [`LANES`] partners at once; the sums then take the terms one by one in list
 /// order, so the result is the bits of a plain loop over the list.
 #[inline(always)]
@@ -1251,7 +981,7 @@ fn pair_sums_body<const D: usize, L: PairLaw, const ENERGY: bool>(
     inp: &PairInputs<'_, D, L>,
     first: usize,
     force: &mut [[f64; D]],
-    ew: &mut [[f64; 2]],
+    ew: &mut [[f64; D]],
 ) {
     let ns = inp.n_species;
     for (k, (f, ew)) in force.iter_mut().zip(ew.iter_mut()).enumerate() {
@@ -1295,7 +1025,7 @@ fn pair_sums_body<const D: usize, L: PairLaw, const ENERGY: bool>(
         }
         *f = fi;
         if ENERGY {
-            *ew = [e, w];
+            (ew[0], ew[1]) = (e, w);
         }
     }
 }
@@ -1354,16 +1084,20 @@ mod tests {
         }
         assert!(want.iter().any(|(f, _)| f[0] != 0.0));
         for kernel in Kernel::available() {
-            let (mut f, mut ew) = (vec![[0.0; 3]; n], vec![[0.0; 2]; n]);
+            let (mut f, mut ew) = (vec![[0.0; 3]; n], vec![[0.0; 3]; n]);
             pair_sums::<3, LennardJones, true>(kernel, &inp, 0, &mut f, &mut ew);
-            let (mut g, mut unused) = (vec![[0.0; 3]; n], vec![[7.0; 2]; n]);
+            let (mut g, mut unused) = (vec![[0.0; 3]; n], vec![[7.0; 3]; n]);
             pair_sums::<3, LennardJones, false>(kernel, &inp, 0, &mut g, &mut unused);
             for i in 0..n {
                 let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
                 assert_eq!(bits(&f[i]), bits(&want[i].0), "{kernel:?} particle {i}");
                 assert_eq!(bits(&g[i]), bits(&want[i].0), "{kernel:?} particle {i}");
-                assert_eq!(bits(&ew[i]), bits(&want[i].1), "{kernel:?} particle {i}");
-                assert_eq!(unused[i], [7.0; 2], "energies left alone without ENERGY");
+                assert_eq!(
+                    bits(&ew[i][..2]),
+                    bits(&want[i].1),
+                    "{kernel:?} particle {i}"
+                );
+                assert_eq!(unused[i], [7.0; 3], "energies left alone without ENERGY");
             }
         }
     }

@@ -1,8 +1,7 @@
-//! The backend-neutral engine interface behind [`crate::Md`], and the engine part of a
-//! checkpoint.
+//! The backend-neutral engine interface behind [`crate::Md`].
 
-use serde::{Deserialize, Serialize};
 use simkit_backend::Result;
+use simkit_backend::particles::Dynamics;
 
 use crate::{Diagnostics, State};
 
@@ -24,32 +23,10 @@ pub(crate) trait Engine: Send {
     fn steps_done(&self) -> u64;
     /// The checkpoint model string (backend kind, precision, dimension).
     fn model(&self) -> String;
-    /// The complete dynamic state.
-    fn save(&mut self) -> Result<EngineState>;
-    /// The positions the neighbour list was last built from (flat, system order), which a
-    /// bit-exact resume needs along with [`save`](Self::save)'s state; empty for an
-    /// engine whose list is a function of the current positions.
-    fn list_positions(&self) -> Vec<f64> {
-        Vec::new()
-    }
-}
-
-/// The dynamic state of an engine as a checkpoint stores it. Vectors are flat, `D` values
-/// per particle, and hold the engine's numbers exactly (`f32` widens to `f64` without
-/// rounding). The forces are not stored: they are a deterministic function of the
-/// positions and are recomputed, bit for bit, on resume.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub(crate) struct EngineState {
-    /// Steps done.
-    pub steps: u64,
-    /// Positions: on the GPU with periodic axes wrapped into the box; on the CPU as the
-    /// engine holds them, periodic coordinates unwrapped since its last list build (by at
-    /// most half the skin).
-    pub pos: Vec<f64>,
-    /// Velocities as the integrator stores them (leapfrog: at the half step `t + dt/2`).
-    pub vel: Vec<f64>,
-    /// The CPU's slot order (the system index of the particle in each slot, in cell order
-    /// as of the last list build; empty: the system order). The force sums run in slot
-    /// order, so a bit-exact resume needs it.
-    pub order: Vec<u32>,
+    /// The complete dynamic state: steps, positions and velocities as the integrator
+    /// stores them (leapfrog: the half-step velocities), the slot order and the positions of
+    /// the last list build where the engine keeps a list. The forces are not stored: they
+    /// are a deterministic function of the positions and are recomputed, bit for bit, on
+    /// resume.
+    fn save(&mut self) -> Result<Dynamics>;
 }

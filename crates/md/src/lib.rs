@@ -126,6 +126,7 @@ pub use laws::{
     BuckCoeff, Buckingham, LennardJones, LjCoeff, MAX_COEFFICIENT, Mie, MieCoeff, Morse,
     MorseCoeff, Wca, Yukawa, YukawaCoeff,
 };
-pub use sim::{Md, State};
+pub use sim::Md;
+pub use simkit_backend::particles::State;
 pub use table::{MAX_SPECIES, PairTable};
 pub use thermostat::Langevin;

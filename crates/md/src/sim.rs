@@ -1,12 +1,13 @@
-//! The user-facing simulation object and its state snapshot.
+//! The user-facing simulation object and its checkpoint format.
 
 use serde::{Deserialize, Serialize};
+use simkit_backend::particles::Dynamics;
 use simkit_backend::{Backend, Error, Precision, Restart, Result, Simulation, checkpoint};
 
 use crate::cpu::CpuEngine;
-use crate::engine::{Engine, EngineState};
+use crate::engine::Engine;
 use crate::{
-    Config, Diagnostics, Dim, GpuKernel, Integrator, Langevin, LennardJones, PairLaw, System,
+    Config, Diagnostics, Dim, GpuKernel, Integrator, Langevin, LennardJones, PairLaw, State, System,
 };
 
 /// The checkpoint model string of an engine: backend, precision, dimension and, for a
@@ -91,27 +92,21 @@ impl From<ConfigRecord> for Config {
 struct Payload<L> {
     system: System<L>,
     config: ConfigRecord,
-    engine: EngineState,
-    /// The positions of the CPU's last neighbour-list build (flat, system order; empty on
-    /// the GPU): the list, hence the order of the force sums, is rebuilt from them.
-    list: Vec<f64>,
+    engine: Dynamics,
 }
 
-/// A checkpoint in the format of [`Md`]'s `Restart::checkpoint`: the system, the settings,
-/// the engine state and the positions of the last list build (flat, system order), under
-/// the model string `model`.
+/// A checkpoint in the format of [`Md`]'s `Restart::checkpoint`: the system, the settings and
+/// the engine state, under the model string `model`.
 pub(crate) fn encode_checkpoint<L: PairLaw>(
     system: &System<L>,
     config: &Config,
     model: &str,
-    engine: EngineState,
-    list: Vec<f64>,
+    engine: Dynamics,
 ) -> Result<Vec<u8>> {
     let payload = Payload {
         system: system.clone(),
         config: ConfigRecord::from(config),
         engine,
-        list,
     };
     checkpoint::encode(
         env!("CARGO_PKG_NAME"),
@@ -122,8 +117,8 @@ pub(crate) fn encode_checkpoint<L: PairLaw>(
 }
 
 /// What [`encode_checkpoint`] wrote: the model string, the system (validated again), the
-/// settings, the engine state and the list-build positions.
-pub(crate) type Decoded<L> = (String, System<L>, Config, EngineState, Vec<f64>);
+/// settings and the engine state.
+pub(crate) type Decoded<L> = (String, System<L>, Config, Dynamics);
 
 /// Reads a checkpoint of any model of this crate written with law `L` and validates its
 /// system.
@@ -151,34 +146,7 @@ pub(crate) fn decode_checkpoint<L: PairLaw>(bytes: &[u8]) -> Result<Decoded<L>> 
         payload.system,
         Config::from(payload.config),
         payload.engine,
-        payload.list,
     ))
-}
-
-/// Host-side snapshot: time, positions, velocities (`[x, y, 0]` in 2D) and species, in the
-/// system's particle order.
-#[derive(Clone, Debug, PartialEq)]
-pub struct State {
-    /// Simulation time (`steps * dt`).
-    pub time: f64,
-    /// Positions (periodic axes wrapped into the box).
-    pub positions: Vec<[f64; 3]>,
-    /// Velocities at `time`.
-    pub velocities: Vec<[f64; 3]>,
-    /// Species of every particle.
-    pub species: Vec<u32>,
-}
-
-impl State {
-    /// The positions as `glam::DVec3` values (a view, no copy).
-    pub fn positions_dvec3(&self) -> &[glam::DVec3] {
-        simkit_backend::vector::as_dvec3(&self.positions)
-    }
-
-    /// The velocities as `glam::DVec3` values (a view, no copy).
-    pub fn velocities_dvec3(&self) -> &[glam::DVec3] {
-        simkit_backend::vector::as_dvec3(&self.velocities)
-    }
 }
 
 /// A molecular-dynamics run of a [`System`] with pair law `L` on a chosen backend.
@@ -224,7 +192,7 @@ impl<L: PairLaw> Md<L> {
         system: &System<L>,
         config: &Config,
         backend: Backend<'_>,
-        saved: Option<(&EngineState, &[f64])>,
+        saved: Option<&Dynamics>,
     ) -> Result<Self> {
         let dt = config.resolve_dt(system)?;
         let engine: Box<dyn Engine> = match backend {
@@ -243,13 +211,9 @@ impl<L: PairLaw> Md<L> {
                 }
             },
             #[cfg(feature = "gpu")]
-            Backend::Gpu(ctx) => Box::new(crate::gpu::GpuEngine::new(
-                ctx,
-                system,
-                config,
-                dt,
-                saved.map(|s| s.0),
-            )?),
+            Backend::Gpu(ctx) => {
+                Box::new(crate::gpu::GpuEngine::new(ctx, system, config, dt, saved)?)
+            }
         };
         Ok(Self {
             engine,
@@ -319,17 +283,11 @@ impl<L: PairLaw> Simulation for Md<L> {
 impl<L: PairLaw> Restart for Md<L> {
     fn checkpoint(&mut self) -> Result<Vec<u8>> {
         let engine = self.engine.save()?;
-        encode_checkpoint(
-            &self.system,
-            &self.config,
-            &self.engine.model(),
-            engine,
-            self.engine.list_positions(),
-        )
+        encode_checkpoint(&self.system, &self.config, &self.engine.model(), engine)
     }
 
     fn resume(bytes: &[u8], backend: Backend<'_>) -> Result<Self> {
-        let (written, system, config, engine, list) = decode_checkpoint(bytes)?;
+        let (written, system, config, engine) = decode_checkpoint(bytes)?;
         let want = model_name::<L>(backend.is_gpu(), config.precision, system.dim().axes());
         if written != want {
             return Err(Error::checkpoint(format!(
@@ -339,6 +297,6 @@ impl<L: PairLaw> Restart for Md<L> {
                 backend.name()
             )));
         }
-        Self::build(&system, &config, backend, Some((&engine, &list)))
+        Self::build(&system, &config, backend, Some(&engine))
     }
 }

@@ -1,6 +1,6 @@
 //! The simulation box and its cell grid: validation, wrapping, cell assignment, minimum image.
 
-use simkit_backend::{Error, Result};
+use simkit_backend::{Error, Real, Result};
 
 /// Cells are at least `cutoff * (1 + CELL_MARGIN)` wide.
 ///
@@ -364,6 +364,33 @@ fn bad_position(index: usize, axis: usize, value: f64, reason: &str) -> Error {
         value,
         reason.to_string(),
     )
+}
+
+/// Wraps the periodic coordinates of `x` into `[lo, hi)` (`hi = lo + len`) by one box
+/// length at most: a coordinate that moved further stays outside (the callers' checks
+/// report it), and one that lands on `hi` by rounding after the shift goes to `lo`. The
+/// boundary rule of every particle engine's list build (`md`, `dem`, their distributed
+/// runs).
+#[inline(always)]
+pub fn wrap_periodic<T: Real, const D: usize>(
+    x: &mut [T; D],
+    lo: [T; D],
+    hi: [T; D],
+    len: [T; D],
+    periodic: [bool; D],
+) {
+    for d in 0..D {
+        if periodic[d] {
+            if x[d] < lo[d] {
+                x[d] += len[d];
+                if x[d] >= hi[d] {
+                    x[d] = lo[d];
+                }
+            } else if x[d] >= hi[d] {
+                x[d] = x[d] - len[d];
+            }
+        }
+    }
 }
 
 #[cfg(test)]

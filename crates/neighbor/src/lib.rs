@@ -67,6 +67,8 @@ mod gpu;
 mod grid;
 mod linked;
 mod neighbors;
+mod rank;
+mod run;
 mod search;
 mod sorted;
 mod stencil;
@@ -83,9 +85,11 @@ pub use gpu::{
     GpuCellBuffers, GpuCellList, GpuGridParams, GpuNeighborList, GpuNeighborSearch,
     positions_to_f32,
 };
-pub use grid::{CELL_MARGIN, CellGrid, MAX_CELLS, OutOfBox};
+pub use grid::{CELL_MARGIN, CellGrid, MAX_CELLS, OutOfBox, wrap_periodic};
 pub use linked::{EMPTY, LinkedCells};
 pub use neighbors::Neighbors;
+pub use rank::{Finding, Parts, RECORD, RankParticles, Record};
+pub use run::{ByDim, DistributedRun, RankRun, RankView, agree_inputs};
 pub use search::{NeighborLists, NeighborSearch};
 pub use sorted::SortedCells;
 pub use stencil::{HALF_SHELL_2D, HALF_SHELL_3D};

@@ -182,8 +182,10 @@ fn mixed_mode_blow_ups_are_caught_and_rolled_back() {
         check_rollback(&mut sim, make, rolled);
     }
     // As `non_finite_state_is_a_blow_up_rolled_back_to_the_last_check` in f32: the f32
-    // pair kernel's r^2 overflows once separations pass 1.8e19.
-    let config = mixed(4e8, ForceLaw::Plummer { epsilon: 1.0 });
+    // pair kernel's r^2 overflows once separations pass 1.8e19 (NaN on the AVX-512 rsqrt
+    // path; elsewhere the positions themselves overflow, at a larger step).
+    let dt = overflow_dt(Backend::Cpu, Precision::F32);
+    let config = mixed(dt, ForceLaw::Plummer { epsilon: 1.0 });
     let make = || PpCoulomb::new(opposite_charges(64, 9), &config, Backend::Cpu).unwrap();
     let mut sim = make();
     let (step, rolled, msg) = expect_blow_up(&mut sim, 1000);
@@ -197,6 +199,28 @@ fn mixed_mode_blow_ups_are_caught_and_rolled_back() {
     check_rollback(&mut sim, make, rolled);
 }
 
+/// A time step at which the opposite-charge runs below turn non-finite after a hundred or
+/// two steps. The first step gives speeds `a0 dt`, after which the particles are far apart
+/// and coast. With the AVX-512 rsqrt kernel the force turns non-finite once `r^2`
+/// overflows (separations of `sqrt(largest float)`: 1.8e19 in f32, 1.3e154 in f64; the
+/// rsqrt estimate and its Newton step give NaN for `r^2 = inf`), after about `sqrt(max) /
+/// (a0 dt^2)` steps. The portable CPU kernel's `1 / sqrt(inf)` and llvmpipe's
+/// `inverseSqrt(inf)` are 0, so there the positions themselves overflow, after about `max /
+/// (a0 dt^2)` steps.
+fn overflow_dt(backend: Backend<'_>, precision: Precision) -> f64 {
+    #[cfg(target_arch = "x86_64")]
+    let avx512 = std::is_x86_feature_detected!("avx512f");
+    #[cfg(not(target_arch = "x86_64"))]
+    let avx512 = false;
+    let rsqrt = !backend.is_gpu() && avx512;
+    match (rsqrt, precision) {
+        (true, Precision::F32) => 4e8,
+        (true, Precision::F64) => 1e76,
+        (false, Precision::F32) => 1.5e18,
+        (false, Precision::F64) => 1.2e153,
+    }
+}
+
 /// A step so large that positions overflow to infinity after about a hundred steps (Plummer
 /// softening: the force stays bounded, the drift does not): the finite check catches it at
 /// the next interval check, names the particle, and the run is back at the last interval
@@ -205,18 +229,7 @@ fn mixed_mode_blow_ups_are_caught_and_rolled_back() {
 fn non_finite_state_is_a_blow_up_rolled_back_to_the_last_check() {
     for backend in backends("non_finite_state_is_a_blow_up_rolled_back_to_the_last_check") {
         for precision in precisions(backend) {
-            // The first step gives speeds a0 dt, after which the particles are far apart and
-            // coast. On the CPU the force turns non-finite once r^2 overflows (separations
-            // of sqrt(largest float): 1.8e19 in f32, 1.3e154 in f64; the rsqrt path gives NaN
-            // for r^2 = inf), after about sqrt(max) / (a0 dt^2) steps; llvmpipe's
-            // inverseSqrt(inf) is 0, so there the positions themselves overflow, after about
-            // max / (a0 dt^2) steps. Both: a hundred or two here.
-            let dt = match (backend, precision) {
-                (Backend::Cpu, Precision::F32) => 4e8,
-                (Backend::Cpu, Precision::F64) => 1e76,
-                (_, Precision::F32) => 1.5e18,
-                (_, Precision::F64) => 1.2e153,
-            };
+            let dt = overflow_dt(backend, precision);
             let config = Config::new(dt, ForceLaw::Plummer { epsilon: 1.0 })
                 .with_precision(precision)
                 .with_check_every(10);

@@ -1,7 +1,7 @@
 //! CPU backend: cache-blocked tiles of the padded grid, processed in parallel with rayon.
 
 use rayon::prelude::*;
-use simkit_backend::guard::{blow_up, chunks, end_step};
+use simkit_backend::guard::{Guarded, Halt, end_step, run_guarded};
 use simkit_backend::{Real, Result};
 
 use crate::boundary::fill_ghosts;
@@ -129,6 +129,8 @@ pub(crate) struct CpuRd<T: Real, M: Model> {
     coef: Vec<T>,
     /// The padded fields at the last check that passed.
     good: Vec<T>,
+    /// The step count of `good`.
+    good_steps: u64,
     steps: u64,
     snapshot_fresh: bool,
     steps_per_sweep: u32,
@@ -171,6 +173,7 @@ impl<T: Real, M: Model> CpuRd<T, M> {
             tmp,
             coef,
             good,
+            good_steps: steps,
             steps,
             snapshot_fresh: true,
             steps_per_sweep: config.steps_per_sweep,
@@ -229,43 +232,6 @@ impl<T: Real, M: Model> CpuRd<T, M> {
         d
     }
 
-    /// Advances `steps >= 1` steps in stretches that end on multiples of `check_every`,
-    /// checks after each (see [`Engine::step`]), and puts the last state that passed back
-    /// when a finite check fails.
-    fn checked_run(&mut self, steps: u32) -> Result<()> {
-        let (nx, ny, h) = (self.grid.nx(), self.grid.ny(), self.grid.h());
-        let recheck = self.model.field_dependent_diffusivity();
-        std::mem::swap(&mut self.good, &mut self.cur);
-        let mut good_step = self.steps;
-        let mut stretches = chunks(self.steps, steps, self.check_every).peekable();
-        while let Some(n) = stretches.next() {
-            self.advance_from_good(n);
-            self.snapshot_fresh = false;
-            self.steps += u64::from(n);
-            if let Some(what) = first_bad_cell(&self.cur, nx, ny) {
-                let failed = self.steps;
-                self.cur.copy_from_slice(&self.good);
-                self.steps = good_step;
-                self.next_dmax = None;
-                let bound = dt_bound(self.max_diffusivity(), h);
-                let cause = divergence_cause(self.model.name(), &self.stepping, bound);
-                return Err(blow_up(failed, good_step, what, cause));
-            }
-            if stretches.peek().is_some() {
-                if recheck {
-                    let d = match self.next_dmax {
-                        Some(d) => d,
-                        None => self.max_diffusivity(),
-                    };
-                    recheck_bound(self.model.name(), d, h, &self.stepping, self.steps)?;
-                }
-                std::mem::swap(&mut self.good, &mut self.cur);
-                good_step = self.steps;
-            }
-        }
-        Ok(())
-    }
-
     /// Advances `steps >= 1` steps from the state in `good` (which is left as it is) into
     /// `cur`.
     fn advance_from_good(&mut self, steps: u32) {
@@ -304,6 +270,70 @@ impl<T: Real, M: Model> CpuRd<T, M> {
     }
 }
 
+/// The blow-up guard's view (see [`simkit_backend::guard`]): keeping is a swap of `good`
+/// and `cur` (the next stretch reads the state that passed from `good`), checking looks for
+/// non-finite cells, and between stretches the stability bound of the current fields is
+/// checked again when the model's diffusivity depends on them.
+impl<T: Real, M: Model> Guarded for CpuRd<T, M> {
+    fn steps_done(&self) -> u64 {
+        self.steps
+    }
+
+    fn keep(&mut self) -> Result<()> {
+        std::mem::swap(&mut self.good, &mut self.cur);
+        self.good_steps = self.steps;
+        Ok(())
+    }
+
+    fn advance(&mut self, n: u32) -> std::result::Result<(), Halt> {
+        self.advance_from_good(n);
+        self.snapshot_fresh = false;
+        self.steps += u64::from(n);
+        Ok(())
+    }
+
+    fn check(&mut self) -> std::result::Result<(), Halt> {
+        let (nx, ny) = (self.grid.nx(), self.grid.ny());
+        match first_bad_cell(&self.cur, nx, ny) {
+            None => Ok(()),
+            Some(what) => {
+                // The bound of the state the run goes back to.
+                let d = padded_max_diffusivity(&self.model, nx, ny, &self.good, &self.coef);
+                let bound = dt_bound(d, self.grid.h());
+                Err(Halt::BlowUp {
+                    step: self.steps,
+                    what,
+                    cause: divergence_cause(self.model.name(), &self.stepping, bound),
+                })
+            }
+        }
+    }
+
+    fn restore(&mut self) -> Result<()> {
+        self.cur.copy_from_slice(&self.good);
+        self.steps = self.good_steps;
+        self.next_dmax = None;
+        Ok(())
+    }
+
+    fn between(&mut self) -> Result<()> {
+        if self.model.field_dependent_diffusivity() {
+            let d = match self.next_dmax {
+                Some(d) => d,
+                None => self.max_diffusivity(),
+            };
+            recheck_bound(
+                self.model.name(),
+                d,
+                self.grid.h(),
+                &self.stepping,
+                self.steps,
+            )?;
+        }
+        Ok(())
+    }
+}
+
 impl<T: Real, M: Model> Engine<T, M> for CpuRd<T, M> {
     fn step(&mut self, steps: u32) -> Result<()> {
         end_step(self.steps, steps)?;
@@ -318,7 +348,8 @@ impl<T: Real, M: Model> Engine<T, M> for CpuRd<T, M> {
             return Ok(());
         }
         // The whole loop on a pool thread: no hand-over to the pool per sweep.
-        simkit_backend::pool::on_pool(|| self.checked_run(steps))
+        let every = self.check_every;
+        simkit_backend::pool::on_pool(|| run_guarded(self, steps, every))
     }
     fn state(&mut self) -> Result<Grid<T>> {
         self.refresh_snapshot();

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use simkit_backend::comm::{Block, CartDecomposition, Comm};
-use simkit_backend::guard::{blow_up, chunks, first_non_finite};
+use simkit_backend::guard::{Guarded, Halt, first_non_finite, run_guarded};
 use simkit_backend::{Real, Result};
 
 use crate::boundary::{Boundaries, Boundary, fill_ghosts, ghost_value};
@@ -84,6 +84,8 @@ pub struct DistributedRd<T: Real, M: Model> {
     coef: Vec<T>,
     /// The padded fields at the last check that passed.
     good: Vec<T>,
+    /// The step count of `good`.
+    good_steps: u64,
     steps: u64,
 }
 
@@ -168,6 +170,7 @@ impl<T: Real, M: Model> DistributedRd<T, M> {
             boundaries: bc,
             tmp: cur.clone(),
             good: cur.clone(),
+            good_steps: 0,
             cur,
             coef,
             steps: 0,
@@ -255,10 +258,8 @@ impl<T: Real, M: Model> DistributedRd<T, M> {
             let d = self.max_diffusivity()?;
             check_dt_with(self.model.name(), d, self.h, &self.config.stepping)?;
         }
-        if steps == 0 {
-            return Ok(());
-        }
-        self.checked_run(steps)
+        let every = self.config.check_every;
+        run_guarded(&mut Checked(self), steps, every)
     }
 
     /// The whole grid on rank 0 (`Some`), `None` on the other ranks. Collective.
@@ -285,42 +286,6 @@ impl<T: Real, M: Model> DistributedRd<T, M> {
         let [nx, ny] = self.block.len;
         let local = padded_max_diffusivity(&self.model, nx, ny, &self.cur, &self.coef);
         self.comm.all_max(local)
-    }
-
-    /// Steps in stretches ending on multiples of `check_every`, each followed by the finite
-    /// check over all ranks (and, inside the call, the bound re-check).
-    fn checked_run(&mut self, steps: u32) -> Result<()> {
-        let recheck = self.model.field_dependent_diffusivity();
-        self.good.copy_from_slice(&self.cur);
-        let mut good_step = self.steps;
-        let mut stretches = chunks(self.steps, steps, self.config.check_every).peekable();
-        while let Some(n) = stretches.next() {
-            self.advance(n)?;
-            self.steps += u64::from(n);
-            if let Some(what) = self.first_bad_cell()? {
-                let failed = self.steps;
-                self.cur.copy_from_slice(&self.good);
-                self.steps = good_step;
-                let bound = dt_bound(self.max_diffusivity()?, self.h);
-                let cause = divergence_cause(self.model.name(), &self.config.stepping, bound);
-                return Err(blow_up(failed, good_step, what, cause));
-            }
-            if stretches.peek().is_some() {
-                if recheck {
-                    let d = self.max_diffusivity()?;
-                    recheck_bound(
-                        self.model.name(),
-                        d,
-                        self.h,
-                        &self.config.stepping,
-                        self.steps,
-                    )?;
-                }
-                self.good.copy_from_slice(&self.cur);
-                good_step = self.steps;
-            }
-        }
-        Ok(())
     }
 
     /// Advances `steps` steps, one stencil pass per stage, ghosts refreshed after each.
@@ -450,5 +415,62 @@ impl<T: Real, M: Model> DistributedRd<T, M> {
             let (x, y) = (x.clamp(1, gnx) - 1, y.clamp(1, gny) - 1);
             format!("species {s} in the ghost cell next to cell ({x}, {y}) = {v}")
         }))
+    }
+}
+
+/// The blow-up guard's view of a distributed run (see [`simkit_backend::guard`]): the
+/// checks of [`crate::Rd`], each decided by all ranks together.
+struct Checked<'a, T: Real, M: Model>(&'a mut DistributedRd<T, M>);
+
+impl<T: Real, M: Model> Guarded for Checked<'_, T, M> {
+    fn steps_done(&self) -> u64 {
+        self.0.steps
+    }
+
+    fn keep(&mut self) -> Result<()> {
+        let r = &mut *self.0;
+        r.good.copy_from_slice(&r.cur);
+        r.good_steps = r.steps;
+        Ok(())
+    }
+
+    fn advance(&mut self, n: u32) -> std::result::Result<(), Halt> {
+        self.0.advance(n)?;
+        self.0.steps += u64::from(n);
+        Ok(())
+    }
+
+    fn check(&mut self) -> std::result::Result<(), Halt> {
+        let r = &*self.0;
+        let Some(what) = r.first_bad_cell()? else {
+            return Ok(());
+        };
+        // The bound of the state the run goes back to, over all ranks.
+        let [nx, ny] = r.block.len;
+        let d = r
+            .comm
+            .all_max(padded_max_diffusivity(&r.model, nx, ny, &r.good, &r.coef))?;
+        let bound = dt_bound(d, r.h);
+        Err(Halt::BlowUp {
+            step: r.steps,
+            what,
+            cause: divergence_cause(r.model.name(), &r.config.stepping, bound),
+        })
+    }
+
+    fn restore(&mut self) -> Result<()> {
+        let r = &mut *self.0;
+        r.cur.copy_from_slice(&r.good);
+        r.steps = r.good_steps;
+        Ok(())
+    }
+
+    fn between(&mut self) -> Result<()> {
+        let r = &*self.0;
+        if r.model.field_dependent_diffusivity() {
+            let d = r.max_diffusivity()?;
+            recheck_bound(r.model.name(), d, r.h, &r.config.stepping, r.steps)?;
+        }
+        Ok(())
     }
 }

@@ -90,6 +90,28 @@ pub struct GuardReport {
     pub bad: Option<(String, u32)>,
 }
 
+/// The outcome of [`GpuGuard::run`].
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum GuardedRun {
+    /// Every check passed: the run is at step `steps`.
+    Passed {
+        /// Steps done after the call.
+        steps: u64,
+    },
+    /// A check failed. The live buffers still hold the state where it failed (read what
+    /// the message needs), then call [`GpuGuard::rollback`] to go back to step `good`.
+    Failed {
+        /// The step of the last check that passed.
+        good: u64,
+        /// The step of the check that failed.
+        bad: u64,
+        /// The watched buffer with the first bad value.
+        label: String,
+        /// The index of the value (in scalars of the watched precision).
+        index: u32,
+    },
+}
+
 /// Device-side finite checks with snapshots of the last state that passed.
 pub struct GpuGuard {
     check: Kernel,
@@ -262,6 +284,82 @@ impl GpuGuard {
         Ok(GuardReport {
             passed: flags[0],
             bad,
+        })
+    }
+
+    /// The stepping loop of a GPU backend: records the `steps` steps that follow step
+    /// `done` in the stretches of [`crate::guard::chunks`] (ending on multiples of `every`
+    /// and at the end of the call) without a host round trip, and reads the outcome once.
+    ///
+    /// `record_step(encoder, step)` records the step that starts at step `step`;
+    /// `after_stretch(encoder)` records what the backend checks beyond the finite values
+    /// (e.g. a kernel that writes a watched health buffer), before the guard's own check
+    /// and snapshot of each stretch. A command buffer is submitted every `per_submit`
+    /// steps. On [`GuardedRun::Failed`] the caller explains the failure from the live
+    /// buffers and calls [`GpuGuard::rollback`].
+    ///
+    /// Errors: a step count that would overflow, and any GPU failure.
+    #[allow(clippy::too_many_arguments)]
+    pub fn run(
+        &self,
+        ctx: &GpuContext,
+        done: u64,
+        steps: u32,
+        every: u32,
+        per_submit: u32,
+        mut record_step: impl FnMut(&mut wgpu::CommandEncoder, u64) -> Result<()>,
+        mut after_stretch: impl FnMut(&mut wgpu::CommandEncoder) -> Result<()>,
+    ) -> Result<GuardedRun> {
+        crate::guard::end_step(done, steps)?;
+        if steps == 0 {
+            return Ok(GuardedRun::Passed { steps: done });
+        }
+        self.begin(ctx)?;
+        // The step of every recorded check; the first is the starting state.
+        let mut checks = vec![done];
+        let mut encoder = ctx.encoder("guarded steps");
+        self.record(ctx, &mut encoder)?;
+        let (mut at, mut recorded) = (done, 0);
+        for stretch in crate::guard::chunks(done, steps, every) {
+            for _ in 0..stretch {
+                record_step(&mut encoder, at)?;
+                at += 1;
+                recorded += 1;
+                if recorded == per_submit.max(1) {
+                    ctx.submit(std::mem::replace(
+                        &mut encoder,
+                        ctx.encoder("guarded steps"),
+                    ));
+                    recorded = 0;
+                }
+            }
+            after_stretch(&mut encoder)?;
+            self.record(ctx, &mut encoder)?;
+            checks.push(at);
+        }
+        ctx.submit(encoder);
+        let report = self.report(ctx)?;
+        Ok(match report.bad {
+            None => GuardedRun::Passed { steps: at },
+            Some((label, _)) if report.passed == 0 => {
+                // The starting state passed its check when it was made: it was changed
+                // outside the run, and there is no snapshot to go back to.
+                return Err(Error::invalid(
+                    format!("device buffer '{label}' at step {done}"),
+                    "not finite",
+                    "the state changed outside the run since the last step; rebuild the \
+                     simulation from a checkpoint",
+                ));
+            }
+            Some((label, index)) => {
+                let passed = (report.passed as usize).min(checks.len() - 1);
+                GuardedRun::Failed {
+                    good: checks[passed - 1],
+                    bad: checks[passed],
+                    label,
+                    index,
+                }
+            }
         })
     }
 

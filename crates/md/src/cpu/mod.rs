@@ -33,13 +33,14 @@ mod kernel;
 
 use rayon::prelude::*;
 
-use simkit_backend::guard::{blow_up, chunks, first_non_finite};
+use simkit_backend::guard::{Guarded, Halt, first_non_finite, run_guarded, verdict};
+use simkit_backend::particles::Dynamics;
 use simkit_backend::{Error, Real, Result, max_or_nan};
-use simkit_neighbor::BlockedHalfList;
+use simkit_neighbor::{BlockedHalfList, wrap_periodic};
 
 use crate::config::Integrator;
 use crate::diagnostics::assemble;
-use crate::engine::{Engine, EngineState};
+use crate::engine::Engine;
 use crate::thermostat::{gaussians, ou_coefficients};
 use crate::{Config, Diagnostics, PairLaw, State, System};
 
@@ -110,12 +111,12 @@ pub(crate) struct CpuEngine<const D: usize, T: Real, L: PairLaw> {
 
 impl<const D: usize, T: Real, L: PairLaw> CpuEngine<D, T, L> {
     /// Builds the engine from a validated system at `dt`; `saved` is a checkpointed state
-    /// with the positions of its last list build (system order, flat).
+    /// (columns in slot order, with the positions of its last list build).
     pub fn new(
         system: &System<L>,
         config: &Config,
         dt: f64,
-        saved: Option<(&EngineState, &[f64])>,
+        saved: Option<&Dynamics>,
     ) -> Result<Self> {
         let n = system.particle_count();
         let lo3 = system.lo();
@@ -160,12 +161,15 @@ impl<const D: usize, T: Real, L: PairLaw> CpuEngine<D, T, L> {
                     .collect(),
                 Vec::new(),
             ),
-            Some((s, reference)) => (
-                s.steps,
-                unflat(&s.pos, "positions")?,
-                unflat(&s.vel, "velocities")?,
-                unflat(reference, "list-build positions")?,
-            ),
+            Some(s) => {
+                s.check(n, D, &["pos", "vel", "reference"])?;
+                (
+                    s.steps,
+                    unflat(&s.pos, "positions")?,
+                    unflat(&s.vel, "velocities")?,
+                    unflat(&s.reference, "list-build positions")?,
+                )
+            }
         };
         let half_skin = 0.5 * (range - r_c);
         let mut e = Self {
@@ -190,8 +194,11 @@ impl<const D: usize, T: Real, L: PairLaw> CpuEngine<D, T, L> {
                         .collect(),
                 )
             }),
-            species: system.species().to_vec(),
-            order: (0..n as u32).collect(),
+            order: match saved {
+                Some(s) if !s.order.is_empty() => s.order.clone(),
+                _ => (0..n as u32).collect(),
+            },
+            species: Vec::new(),
             lo: lo.map(T::from_f64),
             hi: std::array::from_fn(|d| T::from_f64(lo[d] + len[d])),
             len: len.map(T::from_f64),
@@ -219,6 +226,8 @@ impl<const D: usize, T: Real, L: PairLaw> CpuEngine<D, T, L> {
                 steps: 0,
             },
         };
+        let all = system.species();
+        e.species = e.order.iter().map(|&i| all[i as usize]).collect();
         // Frozen particles stand still.
         let frozen = system.frozen();
         for (v, &sp) in e.vel.iter_mut().zip(&e.species) {
@@ -238,16 +247,10 @@ impl<const D: usize, T: Real, L: PairLaw> CpuEngine<D, T, L> {
                 }
                 e.rebuild()?;
             }
-            Some((s, _)) => {
-                let order = if s.order.is_empty() {
-                    (0..n as u32).collect()
-                } else {
-                    s.order.clone()
-                };
-                e.permute(&order)?;
+            Some(_) => {
                 e.relist()?;
                 // A stored position must be one the run could have produced.
-                if let Some((what, _)) = e.check() {
+                if let Some((what, _)) = e.first_failure() {
                     return Err(Error::checkpoint(format!(
                         "the stored state is not valid: {what}"
                     )));
@@ -259,7 +262,7 @@ impl<const D: usize, T: Real, L: PairLaw> CpuEngine<D, T, L> {
             let h = T::from_f64(0.5 * dt);
             kick(&mut e.vel, &e.acc, h);
         }
-        if let Some((what, cause)) = e.check() {
+        if let Some((what, cause)) = e.first_failure() {
             return Err(Error::invalid(
                 "initial state",
                 what,
@@ -267,33 +270,6 @@ impl<const D: usize, T: Real, L: PairLaw> CpuEngine<D, T, L> {
             ));
         }
         Ok(e)
-    }
-
-    /// Puts the particle of system index `order[k]` into slot `k`, from the system order
-    /// (a checkpoint's `order`).
-    fn permute(&mut self, order: &[u32]) -> Result<()> {
-        let n = self.pos.len();
-        let mut seen = vec![false; n];
-        let valid = order.len() == n
-            && order.iter().all(|&i| {
-                let fresh = (i as usize) < n && !seen[i as usize];
-                if fresh {
-                    seen[i as usize] = true;
-                }
-                fresh
-            });
-        if !valid {
-            return Err(Error::checkpoint(format!(
-                "the stored particle order is not a permutation of 0..{n}"
-            )));
-        }
-        let take = |v: &[[T; D]]| -> Vec<[T; D]> { order.iter().map(|&i| v[i as usize]).collect() };
-        self.pos = take(&self.pos);
-        self.vel = take(&self.vel);
-        self.reference = take(&self.reference);
-        self.species = order.iter().map(|&i| self.species[i as usize]).collect();
-        self.order = order.to_vec();
-        Ok(())
     }
 
     /// Reorders every per-particle array but `reference` into `slots` (slot `k` takes the
@@ -318,7 +294,7 @@ impl<const D: usize, T: Real, L: PairLaw> CpuEngine<D, T, L> {
         self.pos
             .par_iter_mut()
             .with_min_len(MIN_LEN)
-            .for_each(|x| wrap(x, lo, hi, len, per));
+            .for_each(|x| wrap_periodic(x, lo, hi, len, per));
         let slots = self.list.sort(&self.pos)?;
         self.reslot(&slots);
         self.reference.clone_from(&self.pos);
@@ -548,7 +524,7 @@ impl<const D: usize, T: Real, L: PairLaw> CpuEngine<D, T, L> {
     }
 
     /// The first non-finite value or particle outside the box, with the likely cause.
-    fn check(&self) -> Option<(String, String)> {
+    fn first_failure(&self) -> Option<(String, String)> {
         let cause = "a time step too large for the stiffest pair (see time_step_guide) or \
                      particles started (nearly) on top of each other; lower Config::dt";
         for (name, v) in [
@@ -653,63 +629,6 @@ impl<const D: usize, T: Real, L: PairLaw> CpuEngine<D, T, L> {
         None
     }
 
-    fn keep(&mut self) {
-        let s = &mut self.snap;
-        s.pos.clone_from(&self.pos);
-        s.vel.clone_from(&self.vel);
-        s.acc.clone_from(&self.acc);
-        s.force.clone_from(&self.force);
-        s.ew.clone_from(&self.ew);
-        s.reference.clone_from(&self.reference);
-        s.order.clone_from(&self.order);
-        s.steps = self.steps;
-    }
-
-    fn restore(&mut self) -> Result<()> {
-        let s = &self.snap;
-        self.pos.clone_from(&s.pos);
-        self.vel.clone_from(&s.vel);
-        self.acc.clone_from(&s.acc);
-        self.force.clone_from(&s.force);
-        self.ew.clone_from(&s.ew);
-        self.reference.clone_from(&s.reference);
-        self.order.clone_from(&s.order);
-        self.steps = s.steps;
-        let all = self.system.species();
-        self.species = self.order.iter().map(|&i| all[i as usize]).collect();
-        // The list refers to the slots of the last build: rebuild the snapshot's.
-        self.relist()
-    }
-
-    fn guarded(&mut self, steps: u32) -> Result<()> {
-        for n in chunks(self.steps, steps, self.check_every) {
-            self.keep();
-            let mut failed = None;
-            for s in 0..n {
-                // The energies only where the check (and the caller) looks: the last step.
-                if let Err(e) = self.one_step(s + 1 == n) {
-                    failed = Some((self.steps + 1, e.to_string()));
-                    break;
-                }
-            }
-            let found = match failed {
-                Some((step, what)) => Some((
-                    step,
-                    what,
-                    "a time step too large for the stiffest pair (see time_step_guide); \
-                     lower Config::dt"
-                        .to_string(),
-                )),
-                None => self.check().map(|(w, c)| (self.steps, w, c)),
-            };
-            if let Some((step, what, cause)) = found {
-                self.restore()?;
-                return Err(blow_up(step, self.steps, what, cause));
-            }
-        }
-        Ok(())
-    }
-
     /// Velocities at the step (leapfrog: `v(t + dt/2) - a(t) dt / 2`).
     fn synced_velocities(&self) -> Vec<[T; D]> {
         match self.integrator {
@@ -732,15 +651,10 @@ impl<const D: usize, T: Real, L: PairLaw> CpuEngine<D, T, L> {
             .iter()
             .map(|&x| {
                 let mut x = x;
-                wrap(&mut x, lo, hi, len, per);
+                wrap_periodic(&mut x, lo, hi, len, per);
                 x
             })
             .collect()
-    }
-
-    /// The positions at the last list build, flat, in the system order (for a checkpoint).
-    pub fn list_positions(&self) -> Vec<f64> {
-        flat_in_system_order(&self.reference, &self.order)
     }
 }
 
@@ -755,30 +669,6 @@ pub(crate) fn list_range<L: PairLaw>(system: &System<L>, skin: f64) -> f64 {
         .fold(system.table().max_cutoff() + skin, |r, d| {
             r.min(0.5 * len[d])
         })
-}
-
-/// Wraps the periodic coordinates of `x` into `[lo, hi)` (one box length at most: a
-/// particle that moved further stays outside, and the check reports it).
-#[inline(always)]
-pub(crate) fn wrap<T: Real, const D: usize>(
-    x: &mut [T; D],
-    lo: [T; D],
-    hi: [T; D],
-    len: [T; D],
-    per: [bool; D],
-) {
-    for d in 0..D {
-        if per[d] {
-            if x[d] < lo[d] {
-                x[d] += len[d];
-                if x[d] >= hi[d] {
-                    x[d] = lo[d];
-                }
-            } else if x[d] >= hi[d] {
-                x[d] = x[d] - len[d];
-            }
-        }
-    }
 }
 
 /// Whether the squared displacement `d2` exceeds `limit` or is NaN.
@@ -822,20 +712,64 @@ fn widen<T: Real, const D: usize>(v: &[[T; D]]) -> Vec<[f64; 3]> {
         .collect()
 }
 
-/// `v` (in slot order) flat, `D` values per particle, in the system order.
-fn flat_in_system_order<T: Real, const D: usize>(v: &[[T; D]], order: &[u32]) -> Vec<f64> {
-    let mut out = vec![0.0; v.len() * D];
-    for (x, &i) in v.iter().zip(order) {
-        for d in 0..D {
-            out[i as usize * D + d] = x[d].to_f64();
-        }
+/// The blow-up guard's view of the engine (see [`simkit_backend::guard`]).
+impl<const D: usize, T: Real, L: PairLaw> Guarded for CpuEngine<D, T, L> {
+    fn steps_done(&self) -> u64 {
+        self.steps
     }
-    out
+
+    fn keep(&mut self) -> Result<()> {
+        let s = &mut self.snap;
+        s.pos.clone_from(&self.pos);
+        s.vel.clone_from(&self.vel);
+        s.acc.clone_from(&self.acc);
+        s.force.clone_from(&self.force);
+        s.ew.clone_from(&self.ew);
+        s.reference.clone_from(&self.reference);
+        s.order.clone_from(&self.order);
+        s.steps = self.steps;
+        Ok(())
+    }
+
+    fn advance(&mut self, n: u32) -> std::result::Result<(), Halt> {
+        for s in 0..n {
+            // The energies only where the check (and the caller) looks: the last step.
+            self.one_step(s + 1 == n).map_err(|e| Halt::BlowUp {
+                step: self.steps + 1,
+                what: e.to_string(),
+                cause: "a time step too large for the stiffest pair (see time_step_guide); \
+                        lower Config::dt"
+                    .to_string(),
+            })?;
+        }
+        Ok(())
+    }
+
+    fn check(&mut self) -> std::result::Result<(), Halt> {
+        verdict(self.steps, self.first_failure())
+    }
+
+    fn restore(&mut self) -> Result<()> {
+        let s = &self.snap;
+        self.pos.clone_from(&s.pos);
+        self.vel.clone_from(&s.vel);
+        self.acc.clone_from(&s.acc);
+        self.force.clone_from(&s.force);
+        self.ew.clone_from(&s.ew);
+        self.reference.clone_from(&s.reference);
+        self.order.clone_from(&s.order);
+        self.steps = s.steps;
+        let all = self.system.species();
+        self.species = self.order.iter().map(|&i| all[i as usize]).collect();
+        // The list refers to the slots of the last build: rebuild the snapshot's.
+        self.relist()
+    }
 }
 
 impl<const D: usize, T: Real, L: PairLaw> Engine for CpuEngine<D, T, L> {
     fn step(&mut self, steps: u32) -> Result<()> {
-        simkit_backend::pool::on_pool(|| self.guarded(steps))
+        let every = self.check_every;
+        simkit_backend::pool::on_pool(|| run_guarded(self, steps, every))
     }
 
     fn state(&mut self) -> Result<State> {
@@ -908,16 +842,21 @@ impl<const D: usize, T: Real, L: PairLaw> Engine for CpuEngine<D, T, L> {
         crate::sim::model_name::<L>(false, T::PRECISION, D)
     }
 
-    fn save(&mut self) -> Result<EngineState> {
-        Ok(EngineState {
+    /// The slots as they are (cell order of the last list build), with that build's
+    /// positions: a resume rebuilds the identical list, hence the same order of the force
+    /// sums.
+    fn save(&mut self) -> Result<Dynamics> {
+        let flat =
+            |v: &[[T; D]]| -> Vec<f64> { v.as_flattened().iter().map(|x| x.to_f64()).collect() };
+        Ok(Dynamics {
             steps: self.steps,
-            pos: flat_in_system_order(&self.pos, &self.order),
-            vel: flat_in_system_order(&self.vel, &self.order),
+            time: self.steps as f64 * self.dt,
+            width: D as u32,
             order: self.order.clone(),
+            pos: flat(&self.pos),
+            vel: flat(&self.vel),
+            reference: flat(&self.reference),
+            ..Dynamics::default()
         })
-    }
-
-    fn list_positions(&self) -> Vec<f64> {
-        CpuEngine::list_positions(self)
     }
 }

@@ -36,18 +36,19 @@ use simkit_neighbor::{
     AnyGpuCellList, CELLS_WGSL, CellGrid, GpuCellBuffers, GpuCellList, OutOfBox,
 };
 
-use simkit_backend::gpu::{DISPATCH_WGSL, GpuGuard, Uniform, Watch, record_pass};
+use simkit_backend::gpu::{DISPATCH_WGSL, GpuGuard, GuardedRun, Uniform, Watch, record_pass};
 
 mod cell_block;
 use cell_block::{CellBlock, ForceInputs, HEALTH_LABEL};
-use simkit_backend::guard::{blow_up, chunks};
+use simkit_backend::guard::blow_up;
 use simkit_backend::rng::RNG_WGSL;
 use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Precision, Result};
 
 use crate::config::{GpuKernel, Integrator};
 use crate::diagnostics::assemble;
-use crate::engine::{Engine, EngineState};
+use crate::engine::Engine;
 use crate::{Config, Diagnostics, Dim, PairLaw, State, System};
+use simkit_backend::particles::Dynamics;
 
 pub(crate) const PARAMS_WGSL: &str = simkit_backend::wgsl!("params.wgsl");
 const DRIFT_WGSL: &str = simkit_backend::wgsl!("drift.wgsl");
@@ -175,7 +176,7 @@ impl<L: PairLaw> GpuEngine<L> {
         system: &System<L>,
         config: &Config,
         dt: f64,
-        saved: Option<&EngineState>,
+        saved: Option<&Dynamics>,
     ) -> Result<Self> {
         let have = ctx.limits().max_storage_buffers_per_shader_stage;
         if have < STORAGE_BUFFERS_NEEDED {
@@ -227,27 +228,15 @@ impl<L: PairLaw> GpuEngine<L> {
                 0,
             ),
             Some(s) => {
-                fn unflat<'a>(
-                    v: &'a [f64],
-                    what: &str,
-                    n: usize,
-                    axes: usize,
-                ) -> Result<Vec<&'a [f64]>> {
-                    if Some(v.len()) != n.checked_mul(axes) {
-                        return Err(Error::checkpoint(format!(
-                            "the stored {what} have {} values for {n} particles in {axes}D",
-                            v.len()
-                        )));
-                    }
-                    if v.iter().any(|x| !x.is_finite()) {
-                        return Err(Error::checkpoint(format!(
-                            "the stored {what} are not finite"
-                        )));
-                    }
-                    Ok(v.chunks_exact(axes).collect())
+                // The GPU keeps the system order: no slot order, no list positions.
+                s.check(n, axes, &["pos", "vel"])?;
+                if !s.order.is_empty() {
+                    return Err(Error::checkpoint(
+                        "the stored state has a CPU slot order; resume it on the CPU",
+                    ));
                 }
-                let p = unflat(&s.pos, "positions", n, axes)?;
-                let v = unflat(&s.vel, "velocities", n, axes)?;
+                let p: Vec<&[f64]> = s.pos.chunks_exact(axes).collect();
+                let v: Vec<&[f64]> = s.vel.chunks_exact(axes).collect();
                 (
                     p.iter()
                         .zip(species)
@@ -539,41 +528,30 @@ impl<L: PairLaw> GpuEngine<L> {
 impl<L: PairLaw> Engine for GpuEngine<L> {
     fn step(&mut self, steps: u32) -> Result<()> {
         let ctx = &self.ctx;
-        self.guard.begin(ctx)?;
-        // The step of every recorded check; the first is the starting state.
-        let mut checks = vec![self.steps];
-        let mut encoder = ctx.encoder("md steps");
-        self.guard.record(ctx, &mut encoder)?;
-        let mut recorded = 0;
-        let mut at = self.steps;
-        for stretch in chunks(self.steps, steps, self.check_every) {
-            for _ in 0..stretch {
-                self.record_step(&mut encoder, at)?;
-                at += 1;
-                recorded += 1;
-                if recorded == STEPS_PER_SUBMIT {
-                    ctx.submit(std::mem::replace(&mut encoder, ctx.encoder("md steps")));
-                    recorded = 0;
-                }
-            }
-            self.guard.record(ctx, &mut encoder)?;
-            let last = checks[checks.len() - 1];
-            checks.push(last + u64::from(stretch));
-        }
-        ctx.submit(encoder);
-        let report = self.guard.report(ctx)?;
-        match report.bad {
-            None => {
-                self.steps = checks[checks.len() - 1];
+        let run = self.guard.run(
+            ctx,
+            self.steps,
+            steps,
+            self.check_every,
+            STEPS_PER_SUBMIT,
+            |encoder, from| self.record_step(encoder, from),
+            |_| Ok(()),
+        )?;
+        match run {
+            GuardedRun::Passed { steps } => {
+                self.steps = steps;
                 match &self.forces {
                     // A cell over the adapter's per-cell limit means truncated force loops.
                     Forces::PerParticle { cells, .. } => cells.check(ctx),
                     Forces::CellBlock(_) => Ok(()),
                 }
             }
-            Some((label, index)) => {
-                let passed = (report.passed as usize).clamp(1, checks.len() - 1);
-                let (good, bad) = (checks[passed - 1], checks[passed]);
+            GuardedRun::Failed {
+                good,
+                bad,
+                label,
+                index,
+            } => {
                 self.guard.rollback(ctx)?;
                 self.steps = good;
                 if let Forces::CellBlock(b) = &self.forces {
@@ -697,18 +675,20 @@ impl<L: PairLaw> Engine for GpuEngine<L> {
         crate::sim::model_name::<L>(true, Precision::F32, self.axes)
     }
 
-    fn save(&mut self) -> Result<EngineState> {
+    fn save(&mut self) -> Result<Dynamics> {
         let flat = |v: Vec<[f32; 4]>, n: usize, axes: usize| -> Vec<f64> {
             v.iter()
                 .take(n)
                 .flat_map(|x| x[..axes].iter().map(|&c| f64::from(c)))
                 .collect()
         };
-        Ok(EngineState {
+        Ok(Dynamics {
             steps: self.steps,
+            time: self.steps as f64 * self.dt,
+            width: self.axes as u32,
             pos: flat(self.pos.download(&self.ctx)?, self.n, self.axes),
             vel: flat(self.vel.download(&self.ctx)?, self.n, self.axes),
-            order: Vec::new(),
+            ..Dynamics::default()
         })
     }
 }

@@ -15,7 +15,7 @@ mod tests;
 use std::collections::HashMap;
 use std::ops::Range;
 
-use simkit_backend::guard::{chunks, first_non_finite};
+use simkit_backend::guard::{Guarded, Halt, first_non_finite, run_guarded};
 use simkit_backend::{Error, Precision, Result};
 
 use crate::config::{Config, ForceLaw, Integrator, Mode, coincident_error};
@@ -335,31 +335,16 @@ impl<T: CpuReal> CpuEngine<T> {
     /// replicated data every process reaches every decision from the same values, so all
     /// stop at the same step with the same error.
     pub(crate) fn run(&mut self, steps: u32, c: &mut Checks<'_>, share: &impl Share) -> Result<()> {
-        self.keep();
-        let mut at = c.done;
-        let mut kept = at;
-        for n in chunks(c.done, steps, c.every) {
-            for s in 0..u64::from(n) {
-                match self.one_step(share) {
-                    Ok(()) => {}
-                    Err(Stop::Coincident(i, j, x)) => {
-                        self.restore();
-                        return Err(coincident_blow_up(at + s + 1, kept, i, j, x));
-                    }
-                    Err(Stop::Exchange(e)) => {
-                        self.restore();
-                        return Err(e);
-                    }
-                }
-            }
-            at += u64::from(n);
-            self.check(at, kept, c, share)?;
-            self.keep();
-            kept = at;
-        }
-        Ok(())
+        let (at, every) = (c.done, c.every);
+        let mut checked = Checked {
+            engine: self,
+            checks: c,
+            share,
+            at,
+            kept: at,
+        };
+        run_guarded(&mut checked, steps, every)
     }
-
     /// Keeps a copy of the current state (the last state that passed a check).
     fn keep(&mut self) {
         copy3(&mut self.kept.x, &self.x);
@@ -529,5 +514,58 @@ impl<T: CpuReal> Engine for CpuEngine<T> {
             None => std::any::type_name::<T>(),
         };
         format!("cpu-{precision} ({path})")
+    }
+}
+
+/// The blow-up guard's view of a run (see [`simkit_backend::guard`]): the engine, the
+/// checks of the call and the step counts of the current and of the kept state.
+struct Checked<'a, 'c, T: CpuReal, S: Share> {
+    engine: &'a mut CpuEngine<T>,
+    checks: &'a mut Checks<'c>,
+    share: &'a S,
+    at: u64,
+    kept: u64,
+}
+
+impl<T: CpuReal, S: Share> Guarded for Checked<'_, '_, T, S> {
+    fn steps_done(&self) -> u64 {
+        self.at
+    }
+
+    fn keep(&mut self) -> Result<()> {
+        self.engine.keep();
+        self.kept = self.at;
+        Ok(())
+    }
+
+    fn advance(&mut self, n: u32) -> std::result::Result<(), Halt> {
+        for s in 0..u64::from(n) {
+            match self.engine.one_step(self.share) {
+                Ok(()) => {}
+                Err(Stop::Coincident(i, j, x)) => {
+                    return Err(Halt::Error(coincident_blow_up(
+                        self.at + s + 1,
+                        self.kept,
+                        i,
+                        j,
+                        x,
+                    )));
+                }
+                Err(Stop::Exchange(e)) => return Err(Halt::Error(e)),
+            }
+        }
+        self.at += u64::from(n);
+        Ok(())
+    }
+
+    fn check(&mut self) -> std::result::Result<(), Halt> {
+        let (at, kept) = (self.at, self.kept);
+        Ok(self.engine.check(at, kept, self.checks, self.share)?)
+    }
+
+    fn restore(&mut self) -> Result<()> {
+        self.engine.restore();
+        self.at = self.kept;
+        Ok(())
     }
 }
