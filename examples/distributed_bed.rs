@@ -79,7 +79,10 @@ fn run(args: &Args) -> Result<()> {
                 .is_root()
                 .then(|| checkpoint::read_file(path))
                 .transpose()?;
-            DistributedDem::resume(&comm.broadcast_from_root(bytes)?, comm.clone())?
+            DistributedDem::<simkit::dem::Material>::resume(
+                &comm.broadcast_from_root(bytes)?,
+                comm.clone(),
+            )?
         }
         None => DistributedDem::new(&scene, &Config::default(), comm.clone())?,
     };

@@ -289,6 +289,37 @@ pub fn decode_any_model<T: DeserializeOwned>(
     decode_parts(bytes, package, version, None)
 }
 
+/// The model string of a run of a crate with pluggable laws: `{name}<{kind}>` for the
+/// crate's default law, `{name}<{kind}, {law}>` for any other (e.g. `Md<cpu f64, 3>`,
+/// `Md<gpu f32, 2, morse>`), so a run resumes only with the law that wrote it and the
+/// default law's strings stay those of the crate before laws were pluggable.
+pub fn model_with_law(name: &str, kind: &str, law: &str, default_law: &str) -> String {
+    if law == default_law {
+        format!("{name}<{kind}>")
+    } else {
+        format!("{name}<{kind}, {law}>")
+    }
+}
+
+/// Refuses, before its payload is read, a checkpoint whose model string (of
+/// [`model_with_law`]) names another law than `law`.
+///
+/// Errors: [`Error::Checkpoint`] naming both laws, and those of [`header`].
+pub fn require_law(bytes: &[u8], law: &str, default_law: &str) -> Result<()> {
+    let model = header(bytes)?.model;
+    let inner = model
+        .split_once('<')
+        .map_or("", |(_, rest)| rest.trim_end_matches('>'));
+    let written = inner.splitn(3, ", ").nth(2).unwrap_or(default_law);
+    if written == law {
+        return Ok(());
+    }
+    Err(Error::checkpoint(format!(
+        "holds a {model} run of law '{written}', not '{law}'; resume it with the law type \
+         that wrote it"
+    )))
+}
+
 /// Writes checkpoint `bytes` to `path` atomically, creating parent directories.
 pub fn write_file(path: impl AsRef<Path>, bytes: &[u8]) -> Result<()> {
     crate::atomic::write_atomic(path, |w: &mut dyn Write| w.write_all(bytes))
@@ -319,6 +350,23 @@ mod tests {
             Error::Checkpoint { reason, .. } => reason,
             other => panic!("expected a checkpoint error, got {other}"),
         }
+    }
+
+    #[test]
+    fn a_law_in_the_model_string_is_checked_before_the_payload() {
+        let m = model_with_law("Md", "cpu f64, 3", "morse", "lj");
+        assert_eq!(m, "Md<cpu f64, 3, morse>");
+        assert_eq!(
+            model_with_law("Md", "cpu f64, 3", "lj", "lj"),
+            "Md<cpu f64, 3>"
+        );
+        let bytes = encode("simkit-md", "0.1.0", &m, &1u8).unwrap();
+        require_law(&bytes, "morse", "lj").unwrap();
+        let e = require_law(&bytes, "lj", "lj").unwrap_err();
+        assert!(e.to_string().contains("'morse'"), "{e}");
+        let plain = encode("simkit-md", "0.1.0", "Md<cpu f64, 3>", &1u8).unwrap();
+        require_law(&plain, "lj", "lj").unwrap();
+        assert!(require_law(&plain, "morse", "lj").is_err());
     }
 
     #[test]

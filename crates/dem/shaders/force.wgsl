@@ -3,8 +3,9 @@
 // acc.w receives the deepest overlap of the particle's contacts over the smaller radius
 // (against a wall: its radius), which the blow-up check (check.wgsl) reads.
 // Variants (override constants, chosen once): FRICTION, INIT (initial accelerations only).
-// The contact law is contact.wgsl, the wall geometry walls.wgsl (one copy each, shared by
-// the particle and the wall contacts).
+// The contact law is the law's WGSL (dem_contact_force; the linear law's is contact.wgsl),
+// the wall geometry walls.wgsl (one copy each, shared by the particle and the wall
+// contacts).
 override FRICTION: bool = false;
 override INIT: bool = false;
 
@@ -16,12 +17,13 @@ override INIT: bool = false;
 @group(0) @binding(5) var<storage, read> wrapped: array<vec4<f32>>;
 @group(0) @binding(6) var<storage, read> vpred: array<vec4<f32>>;
 @group(0) @binding(7) var<storage, read> species: array<u32>;
-// Species-pair coefficients (kappa, 2b, mu_s, mu_k), n_species^2 entries, then one DemWall
-// record (4 entries) per wall.
-@group(0) @binding(8) var<storage, read> table: array<vec4<f32>>;
-@group(0) @binding(9) var<storage, read_write> acc: array<vec4<f32>>;
-@group(0) @binding(10) var<storage, read_write> vel: array<vec4<f32>>;
-@group(0) @binding(11) var<storage, read> clock: array<u32>;
+// The law's coefficients: n_species^2 species pairs, then one entry per wall.
+@group(0) @binding(8) var<storage, read> coeff: array<DemCoeff>;
+// Wall geometry, one record per wall.
+@group(0) @binding(9) var<storage, read> walls: array<DemWall>;
+@group(0) @binding(10) var<storage, read_write> acc: array<vec4<f32>>;
+@group(0) @binding(11) var<storage, read_write> vel: array<vec4<f32>>;
+@group(0) @binding(12) var<storage, read> clock: array<u32>;
 
 @compute @workgroup_size(64)
 fn dem_force(
@@ -62,15 +64,10 @@ fn dem_force(
                     let n = sep / dist;
                     let vj = vpred[j];
                     let mij = dem_reduced_mass(mi, vj.w);
-                    let cf = table[row + species[j]];
                     let vrel = vi.xyz - vj.xyz;
                     let vn = dot(vrel, n);
-                    let fnorm = dem_normal_force(cf, mij, rsum - dist, vn);
                     deepest = max(deepest, (rsum - dist) / min(ri, pj.w));
-                    f += fnorm * n;
-                    if (FRICTION) {
-                        f += dem_friction_force(cf, n, vn, vrel, fnorm, mij);
-                    }
+                    f += dem_contact_force(coeff[row + species[j]], mij, rsum - dist, n, vrel, vn, FRICTION);
                 }
             }
         }
@@ -84,9 +81,7 @@ fn dem_force(
         let motion = dem_wall_motion(prm.amplitude, prm.omega, f32(steps) * prm.omega_dt);
         let base = prm.n_species * prm.n_species;
         for (var w = 0u; w < prm.n_walls; w++) {
-            let e = base + 4u * w;
-            let wall = DemWall(table[e], table[e + 1u], table[e + 2u], table[e + 3u]);
-            let cf = wall.coeff;
+            let wall = walls[w];
             let vib = wall.motion.x;
             var n: vec3<f32>;
             var delta: f32;
@@ -105,12 +100,8 @@ fn dem_force(
             wv[prm.vertical] = vib * motion.y;
             let vrel = vi.xyz - wv;
             let vn = dot(vrel, n);
-            let fnorm = dem_normal_force(cf, mi, delta, vn);
             deepest = max(deepest, delta / ri);
-            f += fnorm * n;
-            if (FRICTION) {
-                f += dem_friction_force(cf, n, vn, vrel, fnorm, mi);
-            }
+            f += dem_contact_force(coeff[base + w], mi, delta, n, vrel, vn, FRICTION);
         }
     }
     let a = f / mi;

@@ -17,15 +17,13 @@ struct DemParams {
     _pad1: u32,
 }
 
-// One wall record: 4 consecutive entries of the force kernel's coefficient table, after the
-// species-pair coefficients (Rust: dem::gpu::GpuWall).
+// One wall's geometry (Rust: dem::gpu::GpuWall); its contact coefficients follow the
+// species pairs' in the force kernel's coefficient table.
 struct DemWall {
     // Unit normal into the particle region, offset (plane walls; grid-origin coordinates).
     plane: vec4<f32>,
     // Axis (x, y) in grid-origin coordinates, radius, kind (1 = cylinder, 0 = plane).
     cylinder: vec4<f32>,
-    // Contact coefficients (kappa, 2b, mu_s, mu_k).
-    coeff: vec4<f32>,
     // (1 if the wall vibrates else 0, 0, 0, 0).
     motion: vec4<f32>,
 }

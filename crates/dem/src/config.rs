@@ -3,7 +3,7 @@
 use serde::{Deserialize, Serialize};
 use simkit_backend::{Error, Precision, Result};
 
-use crate::{ContactCoefficients, Scene};
+use crate::{ContactLaw, Scene};
 
 /// Time integration scheme. Both give the damping force a non-lagged velocity.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -115,20 +115,21 @@ impl Config {
     }
 }
 
-/// The safe time-step bound of a scene: the minimum of
-/// [`ContactCoefficients::safe_dt`] over every species pair and wall material.
-pub fn safe_dt(scene: &Scene) -> f64 {
+/// The safe time-step bound of a scene: the minimum of [`ContactLaw::safe_dt`] over every
+/// species pair and wall material (for [`crate::Material`]:
+/// [`crate::ContactCoefficients::safe_dt`]).
+pub fn safe_dt<L: ContactLaw>(scene: &Scene<L>) -> f64 {
     scene
         .pair_table()
         .iter()
         .chain(scene.walls().iter().map(|w| &w.material))
-        .map(|m| ContactCoefficients::new(m).safe_dt(m))
+        .map(L::safe_dt)
         .fold(f64::INFINITY, f64::min)
 }
 
 /// The time step the solver will use for `scene` with `config`, or an
 /// [`Error::Unstable`] when it exceeds [`safe_dt`] without the explicit override.
-pub fn resolve_dt(scene: &Scene, config: &Config) -> Result<f64> {
+pub fn resolve_dt<L: ContactLaw>(scene: &Scene<L>, config: &Config) -> Result<f64> {
     let dt = match config.dt {
         Some(dt) => simkit_backend::require_positive("dt", dt)?,
         None => scene.min_contact_time() / DEFAULT_STEPS_PER_CONTACT,
@@ -138,7 +139,8 @@ pub fn resolve_dt(scene: &Scene, config: &Config) -> Result<f64> {
         return Err(Error::Unstable {
             dt,
             bound,
-            reason: "min(t_c / 5, 1 / omega_0) over all contact materials; \
+            reason: "the smallest ContactLaw::safe_dt over all contact materials (linear law: \
+                     min(t_c / 5, 1 / omega_0)); \
                      set Config::allow_unstable_dt to override"
                 .into(),
         });

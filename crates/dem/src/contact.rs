@@ -3,9 +3,9 @@
 
 use std::f64::consts::PI;
 
-use simkit_backend::Real;
+use simkit_backend::{Real, Result};
 
-use crate::Material;
+use crate::{Contact, ContactLaw, Material};
 
 /// Spring and dashpot coefficients per unit reduced mass, from a [`Material`], in the real
 /// type `T` (`f64` unless stated; the CPU backend converts them to its precision with
@@ -122,8 +122,71 @@ pub fn spring_energy<T: Real>(c: &ContactCoefficients<T>, m_ij: T, delta: T) -> 
 
 /// Reduced mass `m_i m_j / (m_i + m_j)`.
 ///
-/// WGSL twin: `dem_reduced_mass(m_i, m_j)` in `shaders/contact.wgsl`.
+/// WGSL twin: `dem_reduced_mass(m_i, m_j)` in `shaders/mass.wgsl`.
 #[inline(always)]
 pub fn reduced_mass<T: Real>(m_i: T, m_j: T) -> T {
     m_i * m_j / (m_i + m_j)
+}
+
+/// The built-in contact law: the linear spring–dashpot of [`ContactCoefficients`] with the
+/// Coulomb-capped viscous friction of [`friction_force`].
+impl ContactLaw for Material {
+    type Coeff<T: Real> = ContactCoefficients<T>;
+    type Gpu = [f32; 4];
+    const NAME: &'static str = "linear";
+    const WGSL: &'static str = simkit_backend::wgsl!("contact.wgsl");
+
+    fn validate(&self, what: &str) -> Result<()> {
+        self.check(what)
+    }
+
+    fn coefficients<T: Real>(&self) -> ContactCoefficients<T> {
+        ContactCoefficients::new(self).to_real()
+    }
+
+    fn gpu(c: &ContactCoefficients<f32>) -> [f32; 4] {
+        [c.kappa, c.two_b, c.mu_s, c.mu_k]
+    }
+
+    fn scales(&self) -> Vec<(&'static str, f64, bool)> {
+        let c = ContactCoefficients::new(self);
+        vec![
+            ("contact stiffness (pi / t_c)^2", c.kappa, true),
+            ("contact damping 2 ln(1/e) / t_c", c.two_b, false),
+            ("friction mu_s", c.mu_s, false),
+            ("friction mu_k", c.mu_k, false),
+        ]
+    }
+
+    fn has_friction(&self) -> bool {
+        self.mu_s > 0.0 && self.mu_k > 0.0
+    }
+
+    fn contact_time(&self) -> f64 {
+        self.contact_time
+    }
+
+    fn safe_dt(&self) -> f64 {
+        ContactCoefficients::new(self).safe_dt(self)
+    }
+
+    /// [`normal_force`] along `n`, plus [`friction_force`] when `FRICTION`.
+    #[inline(always)]
+    fn force<T: Real, const D: usize, const FRICTION: bool>(
+        c: &ContactCoefficients<T>,
+        k: &Contact<T, D>,
+    ) -> [T; D] {
+        let fnorm = normal_force(c, k.m_ij, k.delta, k.v_n);
+        let mut fp = k.n.map(|x| fnorm * x);
+        if FRICTION && let Some(ft) = friction_force(c, &k.n, k.v_n, &k.v_rel, fnorm, k.m_ij) {
+            for (f, t) in fp.iter_mut().zip(ft) {
+                *f += t;
+            }
+        }
+        fp
+    }
+
+    fn elastic_energy<T: Real>(c: &ContactCoefficients<T>, m_ij: T, delta: T) -> T {
+        spring_energy(c, m_ij, delta)
+    }
 }

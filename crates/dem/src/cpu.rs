@@ -23,8 +23,8 @@ use simkit_neighbor::{BlockedHalfList, HalfListBlock, wrap_periodic};
 
 use crate::prepared::Prepared;
 use crate::{
-    ContactCoefficients, Integrator, State, cylinder_overlap, friction_force, normal_force,
-    pair_index, plane_overlap, reduced_mass,
+    Contact, ContactLaw, Integrator, State, cylinder_overlap, pair_index, plane_overlap,
+    reduced_mass,
 };
 use simkit_backend::particles::Dynamics;
 
@@ -44,13 +44,13 @@ struct BlockWork<T, const D: usize> {
 }
 
 #[derive(Clone, Copy)]
-pub(crate) struct WallT<T> {
+pub(crate) struct WallT<T, C> {
     cylinder: bool,
     normal: [T; 3],
     offset: T,
     center: [T; 2],
     radius: T,
-    coeff: ContactCoefficients<T>,
+    coeff: C,
     vibrating: bool,
     /// Whether the wall depends on a periodic coordinate (then the particle position is
     /// wrapped before the wall test: positions are wrapped only at list builds).
@@ -89,7 +89,7 @@ struct Snapshot<T, const D: usize> {
 }
 
 /// What the blow-up check found first.
-enum Contact {
+enum Partner {
     /// Particle–particle contact with the particle in this slot.
     Pair(usize),
     /// Particle–wall contact with this wall.
@@ -99,8 +99,8 @@ enum Contact {
 pub(crate) const AXES: [&str; 3] = ["x", "y", "z"];
 
 /// The CPU engine for dimension `D` and precision `T`.
-pub(crate) struct CpuEngine<const D: usize, T: Real> {
-    prep: Prepared,
+pub(crate) struct CpuEngine<const D: usize, T: Real, L: ContactLaw> {
+    prep: Prepared<L>,
     time: f64,
     started: bool,
     steps: u64,
@@ -108,8 +108,8 @@ pub(crate) struct CpuEngine<const D: usize, T: Real> {
     snap: Snapshot<T, D>,
     p: Particles<T, D>,
     n_species: usize,
-    coeff: Vec<ContactCoefficients<T>>,
-    walls: Vec<WallT<T>>,
+    coeff: Vec<L::Coeff<T>>,
+    walls: Vec<WallT<T, L::Coeff<T>>>,
     /// Cell sort and per-block half list (each pair with its periodic image).
     list: BlockedHalfList<T, D>,
     /// Per block of `list`: wall candidates and queued reactions.
@@ -133,7 +133,7 @@ pub(crate) struct CpuEngine<const D: usize, T: Real> {
 }
 
 /// Read-only inputs of the force pass.
-pub(crate) struct ForceInput<'a, T, const D: usize> {
+pub(crate) struct ForceInput<'a, T: Real, const D: usize, L: ContactLaw> {
     pub pos: &'a [[T; D]],
     /// The velocities the dashpots read (velocity Verlet: predicted at the force time).
     pub vel: &'a [[T; D]],
@@ -141,8 +141,8 @@ pub(crate) struct ForceInput<'a, T, const D: usize> {
     pub mass: &'a [T],
     pub species: &'a [u32],
     pub n_species: usize,
-    pub coeff: &'a [ContactCoefficients<T>],
-    pub walls: &'a [WallT<T>],
+    pub coeff: &'a [L::Coeff<T>],
+    pub walls: &'a [WallT<T, L::Coeff<T>>],
     pub gravity: [T; D],
     /// Vertical displacement and velocity of the vibrating walls.
     pub zw: T,
@@ -160,9 +160,9 @@ pub(crate) struct ForceInput<'a, T, const D: usize> {
 
 /// The force of wall `w` on particle `i` (if they touch) added to `f`.
 #[inline(always)]
-pub(crate) fn wall_force<T: Real, const D: usize, const FRICTION: bool>(
-    inp: &ForceInput<'_, T, D>,
-    w: &WallT<T>,
+pub(crate) fn wall_force<T: Real, const D: usize, L: ContactLaw, const FRICTION: bool>(
+    inp: &ForceInput<'_, T, D, L>,
+    w: &WallT<T, L::Coeff<T>>,
     i: usize,
     f: &mut [T; D],
 ) {
@@ -202,14 +202,16 @@ pub(crate) fn wall_force<T: Real, const D: usize, const FRICTION: bool>(
         vrel[d] = v[d] - wv[d];
         vn += vrel[d] * n[d];
     }
-    let fnorm = normal_force(&w.coeff, m, delta, vn);
+    let contact = Contact {
+        m_ij: m,
+        delta,
+        n,
+        v_rel: vrel,
+        v_n: vn,
+    };
+    let fw = L::force::<T, D, FRICTION>(&w.coeff, &contact);
     for d in 0..D {
-        f[d] += fnorm * n[d];
-    }
-    if FRICTION && let Some(ft) = friction_force(&w.coeff, &n, vn, &vrel, fnorm, m) {
-        for d in 0..D {
-            f[d] += ft[d];
-        }
+        f[d] += fw[d];
     }
 }
 
@@ -218,8 +220,8 @@ pub(crate) fn wall_force<T: Real, const D: usize, const FRICTION: bool>(
 /// force), or `None` when they are farther apart than their radii. One statement of the
 /// pair contact for every CPU force loop (the blocked half list here, the distributed run).
 #[inline(always)]
-pub(crate) fn contact_force<T: Real, const D: usize, const FRICTION: bool>(
-    inp: &ForceInput<'_, T, D>,
+pub(crate) fn contact_force<T: Real, const D: usize, L: ContactLaw, const FRICTION: bool>(
+    inp: &ForceInput<'_, T, D, L>,
     i: usize,
     j: usize,
     sep: [T; D],
@@ -252,17 +254,14 @@ pub(crate) fn contact_force<T: Real, const D: usize, const FRICTION: bool>(
     let (m, mj) = (inp.mass[i], inp.mass[j]);
     let mij = reduced_mass(m, mj);
     let c = &inp.coeff[pair_index(inp.species[i], inp.species[j], inp.n_species)];
-    let fnorm = normal_force(c, mij, delta, vn);
-    let mut fp = [T::ZERO; D];
-    for d in 0..D {
-        fp[d] = fnorm * n[d];
-    }
-    if FRICTION && let Some(ft) = friction_force(c, &n, vn, &vrel, fnorm, mij) {
-        for d in 0..D {
-            fp[d] += ft[d];
-        }
-    }
-    Some(fp)
+    let contact = Contact {
+        m_ij: mij,
+        delta,
+        n,
+        v_rel: vrel,
+        v_n: vn,
+    };
+    Some(L::force::<T, D, FRICTION>(c, &contact))
 }
 
 /// The force of the contact of particles `i` and `j` at separation `sep = x_i - x_j`
@@ -270,8 +269,8 @@ pub(crate) fn contact_force<T: Real, const D: usize, const FRICTION: bool>(
 /// `b`, else queued in `b.ghosts`).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn pair_contact<T: Real, const D: usize, const FRICTION: bool>(
-    inp: &ForceInput<'_, T, D>,
+fn pair_contact<T: Real, const D: usize, L: ContactLaw, const FRICTION: bool>(
+    inp: &ForceInput<'_, T, D, L>,
     i: usize,
     j: usize,
     sep: [T; D],
@@ -281,7 +280,7 @@ fn pair_contact<T: Real, const D: usize, const FRICTION: bool>(
     f: &mut [[T; D]],
     ghosts: &mut [Vec<(u32, [T; D])>],
 ) {
-    let Some(fp) = contact_force::<T, D, FRICTION>(inp, i, j, sep) else {
+    let Some(fp) = contact_force::<T, D, L, FRICTION>(inp, i, j, sep) else {
         return;
     };
     for d in 0..D {
@@ -299,8 +298,8 @@ fn pair_contact<T: Real, const D: usize, const FRICTION: bool>(
 
 /// Forces on the particles of block `b` into `f` (its slice of the force array): gravity,
 /// walls and every pair of its half list; reactions on later blocks go to `b.ghosts`.
-fn block_forces<T: Real, const D: usize, const FRICTION: bool>(
-    inp: &ForceInput<'_, T, D>,
+fn block_forces<T: Real, const D: usize, L: ContactLaw, const FRICTION: bool>(
+    inp: &ForceInput<'_, T, D, L>,
     nb: &HalfListBlock<T, D>,
     b: &mut BlockWork<T, D>,
     f: &mut [[T; D]],
@@ -326,7 +325,7 @@ fn block_forces<T: Real, const D: usize, const FRICTION: bool>(
             if wk as usize != k {
                 break;
             }
-            wall_force::<T, D, FRICTION>(inp, &inp.walls[w as usize], i, &mut fi);
+            wall_force::<T, D, L, FRICTION>(inp, &inp.walls[w as usize], i, &mut fi);
             next_wall += 1;
         }
         let xi = pos[i];
@@ -334,12 +333,32 @@ fn block_forces<T: Real, const D: usize, const FRICTION: bool>(
         for &j in &partners[offsets[k] as usize..offsets[k + 1] as usize] {
             let j = j as usize;
             let sep: [T; D] = std::array::from_fn(|d| xi[d] - pos[j][d]);
-            pair_contact::<T, D, FRICTION>(inp, i, j, sep, &mut fi, start, end, f, &mut b.ghosts);
+            pair_contact::<T, D, L, FRICTION>(
+                inp,
+                i,
+                j,
+                sep,
+                &mut fi,
+                start,
+                end,
+                f,
+                &mut b.ghosts,
+            );
         }
         for &(j, shift) in &img_partners[img_offsets[k] as usize..img_offsets[k + 1] as usize] {
             let j = j as usize;
             let sep: [T; D] = std::array::from_fn(|d| (xi[d] - pos[j][d]) - shift[d]);
-            pair_contact::<T, D, FRICTION>(inp, i, j, sep, &mut fi, start, end, f, &mut b.ghosts);
+            pair_contact::<T, D, L, FRICTION>(
+                inp,
+                i,
+                j,
+                sep,
+                &mut fi,
+                start,
+                end,
+                f,
+                &mut b.ghosts,
+            );
         }
         f[k] = fi;
     }
@@ -399,7 +418,9 @@ where
 }
 
 /// The scene's walls in the force loop's form and precision.
-pub(crate) fn walls_of<T: Real, const D: usize>(prep: &Prepared) -> Vec<WallT<T>> {
+pub(crate) fn walls_of<T: Real, const D: usize, L: ContactLaw>(
+    prep: &Prepared<L>,
+) -> Vec<WallT<T, L::Coeff<T>>> {
     let periodic = &prep.periodic;
     prep.walls
         .iter()
@@ -409,7 +430,7 @@ pub(crate) fn walls_of<T: Real, const D: usize>(prep: &Prepared) -> Vec<WallT<T>
             offset: T::from_f64(w.offset),
             center: w.center.map(T::from_f64),
             radius: T::from_f64(w.radius),
-            coeff: w.coeff.to_real(),
+            coeff: w.material.coefficients(),
             vibrating: w.vibrating,
             wrap: if w.cylinder {
                 (0..D.min(2)).any(|d| periodic[d])
@@ -446,10 +467,10 @@ fn permute<X: Copy + Send + Sync>(v: &mut Vec<X>, order: &[u32], parallel: bool)
     *v = sorted;
 }
 
-impl<const D: usize, T: Real> CpuEngine<D, T> {
+impl<const D: usize, T: Real, L: ContactLaw> CpuEngine<D, T, L> {
     /// The engine for `prep`, at its initial state or, with `saved`, at a checkpointed
     /// one.
-    pub fn new(prep: Prepared, saved: Option<&Dynamics>) -> Result<Self> {
+    pub fn new(prep: Prepared<L>, saved: Option<&Dynamics>) -> Result<Self> {
         let n = prep.n;
         let cv = |a: &[f64; 3]| -> [T; D] { std::array::from_fn(|d| T::from_f64(a[d])) };
         let lo: [f64; D] = std::array::from_fn(|d| prep.lo[d]);
@@ -483,15 +504,11 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
             .radius
             .iter()
             .fold(T::ZERO, |m, &r| if r > m { r } else { m });
-        let walls = walls_of::<T, D>(&prep);
+        let walls = walls_of::<T, D, L>(&prep);
         let mut e = Self {
             p,
             n_species: prep.n_species,
-            coeff: prep
-                .coeff
-                .iter()
-                .map(ContactCoefficients::to_real)
-                .collect(),
+            coeff: prep.pairs.iter().map(L::coefficients).collect(),
             walls,
             block: list.block_size(),
             list,
@@ -615,8 +632,8 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
             let (ratio, i, with) = self.deepest_contact();
             if ratio > limit {
                 let other = match with {
-                    Contact::Pair(j) => format!("particle {}", p.id[j]),
-                    Contact::Wall(w) => format!("wall {w}"),
+                    Partner::Pair(j) => format!("particle {}", p.id[j]),
+                    Partner::Wall(w) => format!("wall {w}"),
                 };
                 return Some((
                     format!(
@@ -634,13 +651,13 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
     /// The deepest contact now, as overlap over the smaller radius (against a wall: the
     /// particle's radius), its slot and what it touches; `(0, 0, Pair(0))` without
     /// contacts. Walks the neighbour list and the wall candidates, like the force pass.
-    fn deepest_contact(&self) -> (f64, usize, Contact) {
+    fn deepest_contact(&self) -> (f64, usize, Partner) {
         let p = &self.p;
         let (zw, _) = self.prep.wall_motion(self.time);
         let vert = self.prep.vertical;
         let (per, lo, len) = (self.periodic, self.lo, self.len);
         let block = |(nb, b): (&HalfListBlock<T, D>, &BlockWork<T, D>)| {
-            let mut best = (0.0f64, 0usize, Contact::Pair(0));
+            let mut best = (0.0f64, 0usize, Partner::Pair(0));
             let (start, offsets, partners) = (nb.start(), nb.offsets(), nb.partners());
             let (img_offsets, img_partners) = (nb.image_offsets(), nb.image_partners());
             let mut consider = |i: usize, j: usize, shift: [T; D]| {
@@ -653,7 +670,7 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
                 let depth = ri + rj - r2.sqrt();
                 let ratio = depth / ri.min(rj);
                 if ratio > best.0 {
-                    best = (ratio, i, Contact::Pair(j));
+                    best = (ratio, i, Partner::Pair(j));
                 }
             };
             for k in 0..nb.len() {
@@ -677,12 +694,12 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
                 let r = p.radius[i].to_f64();
                 let ratio = self.prep.walls[w as usize].overlap(&x, r, zw, vert) / r;
                 if ratio > best.0 {
-                    best = (ratio, i, Contact::Wall(w as usize));
+                    best = (ratio, i, Partner::Wall(w as usize));
                 }
             }
             best
         };
-        let deeper = |a: (f64, usize, Contact), b: (f64, usize, Contact)| {
+        let deeper = |a: (f64, usize, Partner), b: (f64, usize, Partner)| {
             if b.0 > a.0 { b } else { a }
         };
         let blocks = self.list.blocks();
@@ -691,13 +708,13 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
                 .par_iter()
                 .zip(self.work.par_iter())
                 .map(block)
-                .reduce(|| (0.0, 0, Contact::Pair(0)), deeper)
+                .reduce(|| (0.0, 0, Partner::Pair(0)), deeper)
         } else {
             blocks
                 .iter()
                 .zip(&self.work)
                 .map(block)
-                .fold((0.0, 0, Contact::Pair(0)), deeper)
+                .fold((0.0, 0, Partner::Pair(0)), deeper)
         }
     }
 
@@ -835,7 +852,7 @@ impl<const D: usize, T: Real> CpuEngine<D, T> {
             &'a mut [[T; D]],
         );
         let force = |((nb, b), f): Task<'_, T, D>| {
-            block_forces::<T, D, FRICTION>(&inp, nb, b, f);
+            block_forces::<T, D, L, FRICTION>(&inp, nb, b, f);
         };
         let blocks = self.list.blocks();
         if self.parallel {
@@ -1080,7 +1097,7 @@ pub(crate) fn wrap<T: Real, const D: usize>(
 }
 
 /// The blow-up guard's view of the engine (see [`simkit_backend::guard`]).
-impl<const D: usize, T: Real> Guarded for CpuEngine<D, T> {
+impl<const D: usize, T: Real, L: ContactLaw> Guarded for CpuEngine<D, T, L> {
     fn steps_done(&self) -> u64 {
         self.steps
     }
@@ -1121,7 +1138,7 @@ impl<const D: usize, T: Real> Guarded for CpuEngine<D, T> {
     }
 }
 
-impl<const D: usize, T: Real> crate::engine::Engine for CpuEngine<D, T> {
+impl<const D: usize, T: Real, L: ContactLaw> crate::engine::Engine<L> for CpuEngine<D, T, L> {
     fn step(&mut self, steps: u32) -> Result<()> {
         let every = self.prep.check_every;
         let run = |e: &mut Self| run_guarded(e, steps, every);
@@ -1160,7 +1177,7 @@ impl<const D: usize, T: Real> crate::engine::Engine for CpuEngine<D, T> {
         })
     }
 
-    fn prepared(&self) -> &Prepared {
+    fn prepared(&self) -> &Prepared<L> {
         &self.prep
     }
 
@@ -1169,7 +1186,7 @@ impl<const D: usize, T: Real> crate::engine::Engine for CpuEngine<D, T> {
     }
 
     fn model(&self) -> String {
-        format!("Dem<cpu {}, {D}>", T::WGSL)
+        crate::sim::model_name::<L>(false, T::PRECISION, D)
     }
 
     fn save(&mut self) -> Result<Dynamics> {
@@ -1205,7 +1222,7 @@ mod tests {
     fn listed_and_all<const D: usize>(scene: &Scene, steps: u32) -> (State, State) {
         let run = |all: bool| {
             let prep = Prepared::new(scene, &Config::default(), false).expect("prepared");
-            let mut e = CpuEngine::<D, f64>::new(prep, None).expect("engine");
+            let mut e = CpuEngine::<D, f64, Material>::new(prep, None).expect("engine");
             if all {
                 e.wall_margin = f64::INFINITY;
                 e.rebuild().expect("rebuild");

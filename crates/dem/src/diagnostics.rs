@@ -2,6 +2,7 @@
 
 use simkit_backend::{Error, Result, max_or_nan};
 
+use crate::ContactLaw;
 use crate::prepared::Prepared;
 
 /// Scalar observables of one state (computed on the host from a [`crate::State`], so they
@@ -43,8 +44,8 @@ pub struct Diagnostics {
 /// contact distance wide (periodic axes: the box split into whole cells), and each looks up
 /// its neighbour cells by binary search, so the cost is `O(N log N)` in time and `O(N)` in
 /// memory whatever the box size. Positions outside the box (no walls) are fine.
-pub(crate) fn for_each_close_pair(
-    p: &Prepared,
+pub(crate) fn for_each_close_pair<L: ContactLaw>(
+    p: &Prepared<L>,
     positions: &[[f64; 3]],
     mut f: impl FnMut(usize, usize, [f64; 3], f64),
 ) {
@@ -153,7 +154,7 @@ pub const MAX_INITIAL_OVERLAP: f64 = 0.1;
 /// Refuses initial particle–particle overlaps deeper than [`MAX_INITIAL_OVERLAP`] of the
 /// smaller radius, and particle–wall overlaps deeper than that fraction of the radius
 /// (they would release a large elastic energy at once).
-pub(crate) fn check_initial_overlaps(p: &Prepared) -> Result<()> {
+pub(crate) fn check_initial_overlaps<L: ContactLaw>(p: &Prepared<L>) -> Result<()> {
     let (zw, _) = p.wall_motion(0.0);
     for (i, (x, &r)) in p.positions.iter().zip(&p.radius).enumerate() {
         for (k, w) in p.walls.iter().enumerate() {
@@ -193,7 +194,10 @@ pub(crate) fn check_initial_overlaps(p: &Prepared) -> Result<()> {
 }
 
 /// The deepest particle–particle overlap `(i, j, depth)`, if any pair overlaps.
-pub(crate) fn deepest_overlap(p: &Prepared, positions: &[[f64; 3]]) -> Option<(usize, usize, f64)> {
+pub(crate) fn deepest_overlap<L: ContactLaw>(
+    p: &Prepared<L>,
+    positions: &[[f64; 3]],
+) -> Option<(usize, usize, f64)> {
     let mut worst: Option<(usize, usize, f64)> = None;
     for_each_close_pair(p, positions, |i, j, _, r2| {
         let depth = p.radius[i] + p.radius[j] - r2.sqrt();
@@ -204,8 +208,8 @@ pub(crate) fn deepest_overlap(p: &Prepared, positions: &[[f64; 3]]) -> Option<(u
     worst
 }
 
-pub(crate) fn compute(
-    p: &Prepared,
+pub(crate) fn compute<L: ContactLaw>(
+    p: &Prepared<L>,
     time: f64,
     x: &[[f64; 3]],
     v: &[[f64; 3]],
@@ -257,12 +261,13 @@ pub(crate) fn compute(
     out.granular_temperature = t / (p.n * p.axes) as f64;
     let mut worst = 0.0f64;
     let mut worst_ratio = 0.0f64;
+    let coeff: Vec<L::Coeff<f64>> = p.pairs.iter().map(L::coefficients).collect();
     for_each_close_pair(p, x, |i, j, _, r2| {
         let depth = p.radius[i] + p.radius[j] - r2.sqrt();
         if depth > 0.0 {
-            let c = &p.coeff[crate::pair_index(p.species[i], p.species[j], p.n_species)];
+            let c = &coeff[crate::pair_index(p.species[i], p.species[j], p.n_species)];
             let mij = crate::reduced_mass(p.mass[i], p.mass[j]);
-            out.elastic += crate::spring_energy(c, mij, depth);
+            out.elastic += L::elastic_energy(c, mij, depth);
             out.contacts += 1;
             worst = max_or_nan(worst, depth);
             worst_ratio = max_or_nan(worst_ratio, depth / p.radius[i].min(p.radius[j]));
@@ -277,7 +282,7 @@ pub(crate) fn compute(
                 w.overlap(&xi, r, zw, p.vertical)
             };
             if depth > 0.0 {
-                out.elastic += crate::spring_energy(&w.coeff, m, depth);
+                out.elastic += L::elastic_energy(&w.material.coefficients::<f64>(), m, depth);
                 out.wall_contacts += 1;
                 worst = max_or_nan(worst, depth);
                 worst_ratio = max_or_nan(worst_ratio, depth / r);

@@ -18,7 +18,7 @@ use crate::cpu::{
 };
 use crate::prepared::Prepared;
 use crate::sim::{decode, encode, model_name};
-use crate::{Config, ContactCoefficients, Diagnostics, Integrator, Scene, State, diagnostics};
+use crate::{Config, ContactLaw, Diagnostics, Integrator, Material, Scene, State, diagnostics};
 
 /// Owned particles per rayon task of the per-particle passes.
 const CHUNK: usize = 1024;
@@ -76,19 +76,19 @@ const ACC: usize = 1;
 /// # Ok(())
 /// # }
 /// ```
-pub struct DistributedDem {
-    run: DistributedRun<Engine<2>, Engine<3>>,
-    scene: Scene,
+pub struct DistributedDem<L: ContactLaw = Material> {
+    run: DistributedRun<Engine<2, L>, Engine<3, L>>,
+    scene: Scene<L>,
     config: Config,
 }
 
-impl std::fmt::Debug for DistributedDem {
+impl<L: ContactLaw> std::fmt::Debug for DistributedDem<L> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         self.run.debug(f, "DistributedDem")
     }
 }
 
-impl DistributedDem {
+impl<L: ContactLaw> DistributedDem<L> {
     /// Validates the scene and settings as [`crate::Dem::new`] does on the CPU (the same
     /// errors, on every rank) and builds this rank's part of the run. Collective; every
     /// rank passes the same scene and configuration.
@@ -97,7 +97,7 @@ impl DistributedDem {
     /// (not offered here); more ranks than regions at least a list range wide fit in the
     /// box; ranks whose scenes or settings differ. An error on one rank is an error on
     /// every rank (the others name the rank that failed).
-    pub fn new(scene: &Scene, config: &Config, comm: Comm) -> Result<Self> {
+    pub fn new(scene: &Scene<L>, config: &Config, comm: Comm) -> Result<Self> {
         Self::build(scene, config, comm, None)
     }
 
@@ -112,8 +112,8 @@ impl DistributedDem {
     /// one (as `Dem::resume`), those of [`DistributedDem::new`]. An error on one rank is an
     /// error on every rank.
     pub fn resume(bytes: &[u8], comm: Comm) -> Result<Self> {
-        let saved = comm.agree(decode(bytes).and_then(|s| {
-            let want = model_name(false, Precision::F64, s.scene.dim().axes());
+        let saved = comm.agree(decode::<L>(bytes).and_then(|s| {
+            let want = model_name::<L>(false, Precision::F64, s.scene.dim().axes());
             if s.model == want {
                 Ok(s)
             } else {
@@ -126,7 +126,12 @@ impl DistributedDem {
         Self::build(&saved.scene, &saved.config, comm, Some(&saved.engine))
     }
 
-    fn build(scene: &Scene, config: &Config, comm: Comm, saved: Option<&Dynamics>) -> Result<Self> {
+    fn build(
+        scene: &Scene<L>,
+        config: &Config,
+        comm: Comm,
+        saved: Option<&Dynamics>,
+    ) -> Result<Self> {
         let prep = comm.agree(prepare(scene, config))?;
         // Everything the ranks must agree on: the scene and settings as a checkpoint stores
         // them (with the state, when resuming).
@@ -158,7 +163,7 @@ impl DistributedDem {
     distributed_accessors!();
 
     /// The scene the run started from.
-    pub fn scene(&self) -> &Scene {
+    pub fn scene(&self) -> &Scene<L> {
         &self.scene
     }
 
@@ -204,13 +209,13 @@ impl DistributedDem {
     ///
     /// Errors: a failed exchange.
     pub fn checkpoint(&mut self) -> Result<Vec<u8>> {
-        let model = model_name(false, Precision::F64, self.scene.dim().axes());
+        let model = model_name::<L>(false, Precision::F64, self.scene.dim().axes());
         let (scene, config) = (&self.scene, &self.config);
         self.run.checkpoint(|d| encode(scene, config, &model, d))
     }
 }
 
-impl Simulation for DistributedDem {
+impl<L: ContactLaw> Simulation for DistributedDem<L> {
     type State = State;
 
     /// Advances `steps` steps on every rank, checking the state every
@@ -244,7 +249,7 @@ impl Simulation for DistributedDem {
 }
 
 /// The shared validation of [`crate::Dem::new`], plus what this run does not offer.
-fn prepare(scene: &Scene, config: &Config) -> Result<Prepared> {
+fn prepare<L: ContactLaw>(scene: &Scene<L>, config: &Config) -> Result<Prepared<L>> {
     if config.precision != Precision::F64 {
         return Err(Error::Unsupported(
             "DistributedDem computes in f64; use Precision::F64 or Dem for f32".into(),
@@ -270,8 +275,8 @@ const NOTHING: Finding = [4.0, 0.0, 0.0, 0.0, 0.0];
 
 /// This rank's part of the run in dimension `D`: its particles ([`RankParticles`]) and
 /// the contact law's inputs.
-struct Engine<const D: usize> {
-    prep: Prepared,
+struct Engine<const D: usize, L: ContactLaw> {
+    prep: Prepared<L>,
     p: RankParticles<D, ()>,
     time: f64,
     started: bool,
@@ -284,8 +289,8 @@ struct Engine<const D: usize> {
     mass: Vec<f64>,
     species: Vec<u32>,
     inv_mass: Vec<f64>,
-    coeff: Vec<ContactCoefficients>,
-    walls: Vec<WallT<f64>>,
+    coeff: Vec<L::Coeff<f64>>,
+    walls: Vec<WallT<f64, L::Coeff<f64>>>,
     gravity: [f64; D],
     periodic: [bool; D],
     lo: [f64; D],
@@ -294,13 +299,13 @@ struct Engine<const D: usize> {
     rebuild_dist2: f64,
 }
 
-impl<const D: usize> Engine<D>
+impl<const D: usize, L: ContactLaw> Engine<D, L>
 where
     [f64; D]: bytemuck::Pod,
 {
     /// The engine without particles (they come with [`Engine::start`] or
     /// [`Engine::load`]).
-    fn new(prep: Prepared, comm: &Comm) -> Result<Self> {
+    fn new(prep: Prepared<L>, comm: &Comm) -> Result<Self> {
         let range = prep.cutoff + prep.skin;
         // 2D: columns under the vertical y; 3D: x and y (the vertical z is not cut).
         let dims = (D == 2).then_some([comm.size(), 1]);
@@ -332,8 +337,8 @@ where
             mass: Vec::new(),
             species: Vec::new(),
             inv_mass: Vec::new(),
-            coeff: prep.coeff.clone(),
-            walls: walls_of::<f64, D>(&prep),
+            coeff: prep.pairs.iter().map(L::coefficients).collect(),
+            walls: walls_of::<f64, D, L>(&prep),
             gravity,
             periodic,
             lo,
@@ -442,13 +447,13 @@ where
                         *f += g * inp.mass[i];
                     }
                     for w in inp.walls {
-                        wall_force::<f64, D, FRICTION>(&inp, w, i, &mut f);
+                        wall_force::<f64, D, L, FRICTION>(&inp, w, i, &mut f);
                     }
                     let xi = inp.pos[i];
                     for &j in list.partners(i) {
                         let j = j as usize;
                         let sep: [f64; D] = std::array::from_fn(|d| xi[d] - inp.pos[j][d]);
-                        if let Some(fp) = contact_force::<f64, D, FRICTION>(&inp, i, j, sep) {
+                        if let Some(fp) = contact_force::<f64, D, L, FRICTION>(&inp, i, j, sep) {
                             for d in 0..D {
                                 f[d] += fp[d];
                             }
@@ -663,12 +668,12 @@ fn worse(a: Finding, b: Finding) -> Finding {
 
 /// The blow-up guard's view of a rank's engine (see [`simkit_backend::guard`]): every
 /// decision is taken by all ranks together.
-struct Checked<'a, const D: usize> {
-    e: &'a mut Engine<D>,
+struct Checked<'a, const D: usize, L: ContactLaw> {
+    e: &'a mut Engine<D, L>,
     comm: &'a Comm,
 }
 
-impl<const D: usize> Guarded for Checked<'_, D>
+impl<const D: usize, L: ContactLaw> Guarded for Checked<'_, D, L>
 where
     [f64; D]: bytemuck::Pod,
 {
@@ -710,7 +715,7 @@ where
     }
 }
 
-impl<const D: usize> RankRun for Engine<D>
+impl<const D: usize, L: ContactLaw> RankRun for Engine<D, L>
 where
     [f64; D]: bytemuck::Pod,
 {

@@ -7,7 +7,7 @@ use crate::State;
 use crate::prepared::Prepared;
 
 /// One backend instance (CPU at some dimension and precision, or GPU).
-pub(crate) trait Engine: Send {
+pub(crate) trait Engine<L>: Send {
     /// Advances `steps` time steps with the blow-up check (see [`simkit_backend::guard`]);
     /// on a failed check the engine is back at the last state that passed and returns
     /// [`simkit_backend::Error::BlowUp`].
@@ -15,7 +15,7 @@ pub(crate) trait Engine: Send {
     /// Time, positions and velocities (scene order, `[x, y, 0]` in 2D).
     fn state(&mut self) -> Result<State>;
     /// The validated scene and run settings the engine was built from.
-    fn prepared(&self) -> &Prepared;
+    fn prepared(&self) -> &Prepared<L>;
     /// Backend description (device, precision, threads).
     fn name(&self) -> String;
     /// Steps done since the start of the run (checkpoints included).

@@ -29,9 +29,9 @@ use simkit_backend::gpu::{
 use simkit_backend::guard::blow_up;
 use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Precision, Result};
 
-use crate::State;
 use crate::engine::Engine;
 use crate::prepared::Prepared;
+use crate::{ContactLaw, State};
 use simkit_backend::particles::Dynamics;
 
 const PARAMS_WGSL: &str = simkit_backend::wgsl!("params.wgsl");
@@ -39,8 +39,8 @@ const DRIFT_WGSL: &str = simkit_backend::wgsl!("drift.wgsl");
 const FORCE_WGSL: &str = simkit_backend::wgsl!("force.wgsl");
 const TICK_WGSL: &str = simkit_backend::wgsl!("tick.wgsl");
 const CHECK_WGSL: &str = simkit_backend::wgsl!("check.wgsl");
-/// The contact law (twin of [`crate::normal_force`], [`crate::friction_force`]).
-const CONTACT_WGSL: &str = simkit_backend::wgsl!("contact.wgsl");
+/// The reduced mass (twin of [`crate::reduced_mass`]).
+const MASS_WGSL: &str = simkit_backend::wgsl!("mass.wgsl");
 /// The wall geometry (twin of [`crate::plane_overlap`], [`crate::cylinder_overlap`],
 /// [`crate::wall_motion`]).
 const WALLS_WGSL: &str = simkit_backend::wgsl!("walls.wgsl");
@@ -48,7 +48,7 @@ const WALLS_WGSL: &str = simkit_backend::wgsl!("walls.wgsl");
 /// Steps recorded into one command buffer.
 const STEPS_PER_SUBMIT: u32 = 64;
 /// Storage buffers the force kernel binds.
-const STORAGE_BUFFERS_NEEDED: u32 = 10;
+const STORAGE_BUFFERS_NEEDED: u32 = 11;
 
 /// Mirror of `DemParams` in `shaders/params.wgsl`.
 #[repr(C)]
@@ -82,8 +82,7 @@ struct GpuCheck {
     pad: u32,
 }
 
-/// Mirror of `DemWall` in `shaders/params.wgsl`: one wall record, 4 consecutive entries of
-/// the force kernel's coefficient table.
+/// Mirror of `DemWall` in `shaders/params.wgsl`: one wall's geometry.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct GpuWall {
@@ -91,15 +90,17 @@ struct GpuWall {
     plane: [f32; 4],
     /// Axis `(x, y)` relative to the grid origin, radius, kind (1 = cylinder, 0 = plane).
     cylinder: [f32; 4],
-    /// Contact coefficients `(kappa, 2b, mu_s, mu_k)`.
-    coeff: [f32; 4],
     /// `(1, 0, 0, 0)` for a vibrating wall, zero otherwise.
     motion: [f32; 4],
 }
 
 /// The device cell list of the scene's dimension, cells at least a contact distance wide.
-fn cell_list(ctx: &GpuContext, p: &Prepared, pos: &GpuBuffer<[f32; 4]>) -> Result<AnyGpuCellList> {
-    fn grid<const D: usize>(p: &Prepared) -> Result<CellGrid<D>> {
+fn cell_list<L: ContactLaw>(
+    ctx: &GpuContext,
+    p: &Prepared<L>,
+    pos: &GpuBuffer<[f32; 4]>,
+) -> Result<AnyGpuCellList> {
+    fn grid<const D: usize, L: ContactLaw>(p: &Prepared<L>) -> Result<CellGrid<D>> {
         let lo: [f64; D] = std::array::from_fn(|d| p.lo[d]);
         let len: [f64; D] = std::array::from_fn(|d| p.len[d]);
         let per: [bool; D] = std::array::from_fn(|d| p.periodic[d]);
@@ -117,15 +118,15 @@ fn cell_list(ctx: &GpuContext, p: &Prepared, pos: &GpuBuffer<[f32; 4]>) -> Resul
         Ok(CellGrid::new(lo, len, per, width)?.with_out_of_box(OutOfBox::Clamp))
     }
     Ok(if p.axes == 2 {
-        AnyGpuCellList::Two(GpuCellList::new(ctx, &grid::<2>(p)?, pos)?)
+        AnyGpuCellList::Two(GpuCellList::new(ctx, &grid::<2, L>(p)?, pos)?)
     } else {
-        AnyGpuCellList::Three(GpuCellList::new(ctx, &grid::<3>(p)?, pos)?)
+        AnyGpuCellList::Three(GpuCellList::new(ctx, &grid::<3, L>(p)?, pos)?)
     })
 }
 
-pub(crate) struct GpuEngine {
+pub(crate) struct GpuEngine<L: ContactLaw> {
     ctx: GpuContext,
-    prep: Prepared,
+    prep: Prepared<L>,
     pos: GpuBuffer<[f32; 4]>,
     vel: GpuBuffer<[f32; 4]>,
     cells: AnyGpuCellList,
@@ -140,15 +141,16 @@ pub(crate) struct GpuEngine {
     evidence: GpuBuffer<[u32; 4]>,
     first: GpuBuffer<u32>,
     steps: u64,
-    _bound: BoundOnly,
+    _bound: BoundOnly<L>,
 }
 
 /// Buffers only the kernels touch (held so they live as long as the bind groups).
-struct BoundOnly {
+struct BoundOnly<L: ContactLaw> {
     _alarm: GpuBuffer<u32>,
     _vpred: GpuBuffer<[f32; 4]>,
     _species: GpuBuffer<u32>,
-    _table: GpuBuffer<[f32; 4]>,
+    _coeff: GpuBuffer<L::Gpu>,
+    _walls: GpuBuffer<GpuWall>,
     _clock: GpuBuffer<u32>,
     _params: Uniform<GpuParams>,
 }
@@ -174,10 +176,10 @@ fn kernel(
     )
 }
 
-impl GpuEngine {
+impl<L: ContactLaw> GpuEngine<L> {
     /// The engine for `prep`, at its initial state or, with `saved`, at a checkpointed
     /// one.
-    pub fn new(ctx: &GpuContext, prep: Prepared, saved: Option<&Dynamics>) -> Result<Self> {
+    pub fn new(ctx: &GpuContext, prep: Prepared<L>, saved: Option<&Dynamics>) -> Result<Self> {
         let have = ctx.limits().max_storage_buffers_per_shader_stage;
         if have < STORAGE_BUFFERS_NEEDED {
             return Err(Error::Unsupported(format!(
@@ -234,11 +236,15 @@ impl GpuEngine {
         let acc = GpuBuffer::from_slice(ctx, "dem acc", &acc_h)?;
         let vpred = GpuBuffer::from_slice(ctx, "dem vpred", &vel_h)?;
         let species = GpuBuffer::from_slice(ctx, "dem species", &prep.species)?;
-        let mut table: Vec<[f32; 4]> = prep
-            .coeff
+        // The law's coefficients of the species pairs, then of the walls.
+        let coeff: Vec<L::Gpu> = prep
+            .pairs
             .iter()
-            .map(|c| [c.kappa as f32, c.two_b as f32, c.mu_s as f32, c.mu_k as f32])
+            .chain(prep.walls.iter().map(|w| &w.material))
+            .map(|m| L::gpu(&m.coefficients::<f32>()))
             .collect();
+        let coeff = GpuBuffer::from_slice(ctx, "dem coefficients", &coeff)?;
+        let mut walls = Vec::with_capacity(prep.walls.len().max(1));
         for w in &prep.walls {
             // Walls in wrapped coordinates (relative to the grid origin), as the kernel sees them.
             let n_dot_o: f64 = (0..3).map(|d| w.normal[d] * origin[d]).sum();
@@ -255,17 +261,15 @@ impl GpuEngine {
                     w.radius as f32,
                     if w.cylinder { 1.0 } else { 0.0 },
                 ],
-                coeff: [
-                    w.coeff.kappa as f32,
-                    w.coeff.two_b as f32,
-                    w.coeff.mu_s as f32,
-                    w.coeff.mu_k as f32,
-                ],
                 motion: [if w.vibrating { 1.0 } else { 0.0 }, 0.0, 0.0, 0.0],
             };
-            table.extend_from_slice(&bytemuck::cast::<GpuWall, [[f32; 4]; 4]>(record));
+            walls.push(record);
         }
-        let table = GpuBuffer::from_slice(ctx, "dem table", &table)?;
+        if walls.is_empty() {
+            // Buffers hold at least one element; the kernel reads none (n_walls = 0).
+            walls.push(GpuWall::zeroed());
+        }
+        let walls = GpuBuffer::from_slice(ctx, "dem walls", &walls)?;
         // The device step counter keys the wall phase (wrapping at 2^32 steps, as on the
         // device).
         let clock = GpuBuffer::from_slice(ctx, "dem clock", &[steps as u32])?;
@@ -321,14 +325,15 @@ impl GpuEngine {
             wrapped.binding(),
             vpred.binding(),
             species.binding(),
-            table.binding(),
+            coeff.binding(),
+            walls.binding(),
             acc.binding(),
             vel.binding(),
             clock.binding(),
         ];
         let k = kernel(
             ctx,
-            &[CONTACT_WGSL, WALLS_WGSL, FORCE_WGSL],
+            &[MASS_WGSL, L::WGSL, WALLS_WGSL, FORCE_WGSL],
             "dem_force",
             64,
             &[("FRICTION", friction), ("INIT", 0.0)],
@@ -337,7 +342,7 @@ impl GpuEngine {
         let force = (k, b);
         let init = kernel(
             ctx,
-            &[CONTACT_WGSL, WALLS_WGSL, FORCE_WGSL],
+            &[MASS_WGSL, L::WGSL, WALLS_WGSL, FORCE_WGSL],
             "dem_force",
             64,
             &[("FRICTION", friction), ("INIT", 1.0)],
@@ -430,7 +435,8 @@ impl GpuEngine {
                 _alarm: alarm,
                 _vpred: vpred,
                 _species: species,
-                _table: table,
+                _coeff: coeff,
+                _walls: walls,
                 _clock: clock,
                 _params: params,
             },
@@ -457,7 +463,7 @@ fn load(s: &Dynamics, n: usize) -> Result<Loaded> {
     Ok((arrays(&s.pos), arrays(&s.vel), arrays(&s.acc)))
 }
 
-impl GpuEngine {
+impl<L: ContactLaw> GpuEngine<L> {
     /// Records one step into `encoder`.
     fn record_step(&self, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
         let ctx = &self.ctx;
@@ -532,7 +538,7 @@ impl GpuEngine {
     }
 }
 
-impl Engine for GpuEngine {
+impl<L: ContactLaw> Engine<L> for GpuEngine<L> {
     fn step(&mut self, steps: u32) -> Result<()> {
         let ctx = &self.ctx;
         let n = self.prep.n as u64;
@@ -593,7 +599,7 @@ impl Engine for GpuEngine {
         })
     }
 
-    fn prepared(&self) -> &Prepared {
+    fn prepared(&self) -> &Prepared<L> {
         &self.prep
     }
 
@@ -606,7 +612,7 @@ impl Engine for GpuEngine {
     }
 
     fn model(&self) -> String {
-        crate::sim::model_name(true, Precision::F32, self.prep.axes)
+        crate::sim::model_name::<L>(true, Precision::F32, self.prep.axes)
     }
 
     fn save(&mut self) -> Result<Dynamics> {
@@ -684,14 +690,8 @@ mod tests {
             &[
                 ("plane", offset_of!(GpuWall, plane)),
                 ("cylinder", offset_of!(GpuWall, cylinder)),
-                ("coeff", offset_of!(GpuWall, coeff)),
                 ("motion", offset_of!(GpuWall, motion)),
             ],
-        );
-        // The kernel reads a record as 4 consecutive table entries.
-        assert_eq!(
-            std::mem::size_of::<GpuWall>(),
-            4 * std::mem::size_of::<[f32; 4]>()
         );
     }
 }

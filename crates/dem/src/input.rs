@@ -4,6 +4,8 @@ use serde::{Deserialize, Serialize};
 use simkit_backend::vector::IntoVec3;
 use simkit_backend::{Error, Result};
 
+use crate::ContactLaw;
+
 /// Spatial dimension of a scene.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Dim {
@@ -64,12 +66,8 @@ impl Material {
         self
     }
 
-    /// Whether the tangential force is non-zero.
-    pub fn has_friction(&self) -> bool {
-        self.mu_s > 0.0 && self.mu_k > 0.0
-    }
-
-    pub(crate) fn validate(&self, what: &str) -> Result<()> {
+    /// The checks of [`ContactLaw::validate`](crate::ContactLaw::validate).
+    pub(crate) fn check(&self, what: &str) -> Result<()> {
         let e = self.restitution;
         if !(e.is_finite() && e > 0.0 && e <= 1.0) {
             return Err(Error::invalid(
@@ -162,20 +160,22 @@ pub enum WallShape {
     },
 }
 
-/// A wall with its own contact material; it may follow the container vibration.
+/// A wall with its own contact material (parameters of the scene's [`ContactLaw`]); it may
+/// follow the container vibration.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Wall {
+#[serde(bound = "L: ContactLaw")]
+pub struct Wall<L = Material> {
     /// Geometry at rest (time 0 without vibration offset).
     pub shape: WallShape,
     /// Contact parameters against every species (wall mass is infinite: `m_ij = m_i`).
-    pub material: Material,
+    pub material: L,
     /// Whether the wall moves with the scene's [`Vibration`].
     pub vibrating: bool,
 }
 
-impl Wall {
+impl<L: ContactLaw> Wall<L> {
     /// A fixed plane through `point` with unit inward `normal` (normalised here).
-    pub fn plane(normal: [f64; 3], point: [f64; 3], material: Material) -> Self {
+    pub fn plane(normal: [f64; 3], point: [f64; 3], material: L) -> Self {
         let len = (normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]).sqrt();
         let n = if len > 0.0 {
             normal.map(|c| c / len)
@@ -191,7 +191,7 @@ impl Wall {
     }
 
     /// A fixed vertical cylinder side wall (3D).
-    pub fn cylinder(center: [f64; 2], radius: f64, material: Material) -> Self {
+    pub fn cylinder(center: [f64; 2], radius: f64, material: L) -> Self {
         Self {
             shape: WallShape::Cylinder { center, radius },
             material,
@@ -246,15 +246,15 @@ impl Vibration {
 /// # }
 /// ```
 #[derive(Clone, Debug, PartialEq)]
-pub struct Scene {
+pub struct Scene<L = Material> {
     dim: Dim,
     lo: [f64; 3],
     hi: [f64; 3],
     periodic: [bool; 3],
     n_species: usize,
-    pairs: Vec<Material>,
+    pairs: Vec<L>,
     particles: Vec<Particle>,
-    walls: Vec<Wall>,
+    walls: Vec<Wall<L>>,
     gravity: f64,
     vibration: Option<Vibration>,
 }
@@ -264,26 +264,28 @@ const AXES: [&str; 3] = ["x", "y", "z"];
 /// The fields of a [`Scene`] as a checkpoint stores them; [`Scene::from_record`] rebuilds
 /// the scene through the validating builders.
 #[derive(Clone, Debug, Serialize, Deserialize)]
-pub(crate) struct SceneRecord {
+#[serde(bound = "L: ContactLaw")]
+pub(crate) struct SceneRecord<L> {
     dim: Dim,
     lo: [f64; 3],
     hi: [f64; 3],
     periodic: [bool; 3],
     n_species: usize,
-    pairs: Vec<Material>,
+    pairs: Vec<L>,
     particles: Vec<Particle>,
-    walls: Vec<Wall>,
+    walls: Vec<Wall<L>>,
     gravity: f64,
     vibration: Option<Vibration>,
 }
 
-impl Scene {
+impl<L: ContactLaw> Scene<L> {
     /// An empty scene in the box `[lo, hi]` (z ignored in 2D) with one species whose
-    /// particle–particle contacts use `material`. No axis is periodic, there are no walls
+    /// particle–particle contacts use `material` (the parameters of the contact law `L`:
+    /// [`Material`] for the linear spring–dashpot). No axis is periodic, there are no walls
     /// (add them, or particles leaving the box are clamped into its edge cells for the
     /// neighbour search only) and no gravity. The corners are any [`IntoVec3`] (`glam`
     /// vectors or arrays).
-    pub fn new(dim: Dim, lo: impl IntoVec3, hi: impl IntoVec3, material: Material) -> Result<Self> {
+    pub fn new(dim: Dim, lo: impl IntoVec3, hi: impl IntoVec3, material: L) -> Result<Self> {
         let (lo, hi) = (lo.into_vec3(), hi.into_vec3());
         material.validate("particle material")?;
         for d in 0..dim.axes() {
@@ -321,7 +323,7 @@ impl Scene {
 
     /// Sets the number of species; every pair starts with `material` (replace pairs with
     /// [`set_pair`](Self::set_pair)).
-    pub fn set_species(&mut self, count: usize, material: Material) -> Result<&mut Self> {
+    pub fn set_species(&mut self, count: usize, material: L) -> Result<&mut Self> {
         if count == 0 || count > 64 {
             return Err(Error::invalid("species count", count, "must be in 1..=64"));
         }
@@ -332,7 +334,7 @@ impl Scene {
     }
 
     /// Sets the material of species pair `(a, b)` (and `(b, a)`: the table is symmetric).
-    pub fn set_pair(&mut self, a: u32, b: u32, material: Material) -> Result<&mut Self> {
+    pub fn set_pair(&mut self, a: u32, b: u32, material: L) -> Result<&mut Self> {
         let n = self.n_species;
         if a as usize >= n || b as usize >= n {
             return Err(Error::invalid(
@@ -363,7 +365,7 @@ impl Scene {
     }
 
     /// Adds a wall.
-    pub fn add_wall(&mut self, wall: Wall) -> Result<&mut Self> {
+    pub fn add_wall(&mut self, wall: Wall<L>) -> Result<&mut Self> {
         wall.material
             .validate(&format!("wall {} material", self.walls.len()))?;
         match wall.shape {
@@ -409,7 +411,7 @@ impl Scene {
 
     /// Adds plane walls on every non-periodic face of the box (2 per axis), vibrating with
     /// the container when `vibrating`.
-    pub fn add_box_walls(&mut self, material: Material, vibrating: bool) -> Result<&mut Self> {
+    pub fn add_box_walls(&mut self, material: L, vibrating: bool) -> Result<&mut Self> {
         for d in 0..self.dim.axes() {
             if self.periodic[d] {
                 continue;
@@ -511,7 +513,7 @@ impl Scene {
     ///
     /// [`Error::InvalidParameter`] naming the pair when `a` or `b` is not below
     /// [`species_count`](Self::species_count).
-    pub fn pair(&self, a: u32, b: u32) -> Result<Material> {
+    pub fn pair(&self, a: u32, b: u32) -> Result<L> {
         let n = self.n_species;
         if a as usize >= n || b as usize >= n {
             return Err(Error::invalid(
@@ -523,7 +525,7 @@ impl Scene {
         Ok(self.pairs[pair_index(a, b, n)])
     }
     /// The full species-pair table, row-major `n x n`, symmetric.
-    pub fn pair_table(&self) -> &[Material] {
+    pub fn pair_table(&self) -> &[L] {
         &self.pairs
     }
     /// Particles.
@@ -531,7 +533,7 @@ impl Scene {
         &self.particles
     }
     /// Walls.
-    pub fn walls(&self) -> &[Wall] {
+    pub fn walls(&self) -> &[Wall<L>] {
         &self.walls
     }
     /// Gravity magnitude (0 = off).
@@ -545,7 +547,7 @@ impl Scene {
 
     /// Whether any pair or wall material has friction.
     pub fn has_friction(&self) -> bool {
-        self.pairs.iter().any(Material::has_friction)
+        self.pairs.iter().any(L::has_friction)
             || self.walls.iter().any(|w| w.material.has_friction())
     }
 
@@ -559,12 +561,12 @@ impl Scene {
         self.pairs
             .iter()
             .chain(self.walls.iter().map(|w| &w.material))
-            .map(|m| m.contact_time)
+            .map(L::contact_time)
             .fold(f64::INFINITY, f64::min)
     }
 
     /// The scene as a checkpoint stores it.
-    pub(crate) fn to_record(&self) -> SceneRecord {
+    pub(crate) fn to_record(&self) -> SceneRecord<L> {
         SceneRecord {
             dim: self.dim,
             lo: self.lo,
@@ -581,7 +583,7 @@ impl Scene {
 
     /// Rebuilds a scene from a checkpoint record through the builders, so it is validated
     /// exactly as one built by hand.
-    pub(crate) fn from_record(r: SceneRecord) -> Result<Self> {
+    pub(crate) fn from_record(r: SceneRecord<L>) -> Result<Self> {
         let first = *r.pairs.first().ok_or_else(|| {
             Error::invalid(
                 "species-pair table",

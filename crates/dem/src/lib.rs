@@ -1,9 +1,16 @@
-//! `dem`: granular discrete-element dynamics of discs (2D) and spheres (3D) with a linear
-//! spring–dashpot contact, Coulomb-capped friction, walls (planes, boxes, a 3D cylinder),
-//! a vibrated container and periodic axes, on the CPU (rayon, `f64` or `f32`) and on the
-//! GPU (wgpu, `f32`, the whole step on the device).
+//! `dem`: granular discrete-element dynamics of discs (2D) and spheres (3D) with a contact
+//! law of the user's choice (built in: the linear spring–dashpot with Coulomb-capped
+//! friction), walls (planes, boxes, a 3D cylinder), a vibrated container and periodic axes,
+//! on the CPU (rayon, `f64` or `f32`) and on the GPU (wgpu, `f32`, the whole step on the
+//! device).
 //!
-//! - [`Scene`]: particles, species-pair [`Material`] table, walls, gravity, [`Vibration`].
+//! - [`ContactLaw`]: what a contact model provides (its parameters per material pair, the
+//!   coefficients the force loops read, the force of a [`Contact`] as one Rust function
+//!   generic over [`simkit_backend::Real`] with its WGSL twin, the elastic energy, the
+//!   contact time and the safe time step). Every backend is compiled for the scene's law,
+//!   so a law of your own runs at the speed of the built-in one. [`Material`] is the
+//!   built-in law and the default.
+//! - [`Scene`]: particles, species-pair material table, walls, gravity, [`Vibration`].
 //! - [`ContactCoefficients`]: spring and dashpot from the requested restitution `e` and
 //!   contact time `t_c` with the reduced mass, so `e` holds for any mass pair and for walls.
 //! - The laws, one function each for every CPU path (both precisions, diagnostics
@@ -56,7 +63,7 @@
 //! let mut sim = Dem::new(&scene, &Config::default(), Backend::Cpu)?;
 //! sim.step(150)?;
 //! let bytes = sim.checkpoint()?; // or sim.write_checkpoint("run.ckpt")?
-//! let mut resumed = Dem::resume(&bytes, Backend::Cpu)?;
+//! let mut resumed = Dem::<Material>::resume(&bytes, Backend::Cpu)?;
 //! sim.step(100)?;
 //! resumed.step(100)?;
 //! assert_eq!(resumed.steps_done(), 250);
@@ -94,6 +101,7 @@ mod engine;
 #[cfg(feature = "gpu")]
 mod gpu;
 mod input;
+mod law;
 mod prepared;
 pub mod scenes;
 mod sim;
@@ -108,6 +116,7 @@ pub use diagnostics::Diagnostics;
 pub use diagnostics::MAX_INITIAL_OVERLAP;
 pub use distributed::DistributedDem;
 pub use input::{Dim, Material, Particle, Scene, Vibration, Wall, WallShape, pair_index};
+pub use law::{Contact, ContactLaw};
 pub use sim::Dem;
 pub use simkit_backend::Precision;
 pub use simkit_backend::particles::State;

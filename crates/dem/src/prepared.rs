@@ -3,8 +3,8 @@
 use simkit_backend::{Error, Result};
 
 use crate::{
-    Config, ContactCoefficients, Integrator, Scene, Vibration, WallShape, cylinder_overlap,
-    plane_overlap, resolve_dt, safe_dt, wall_motion,
+    Config, ContactLaw, Integrator, Scene, Vibration, WallShape, cylinder_overlap, plane_overlap,
+    resolve_dt, safe_dt, wall_motion,
 };
 
 /// Largest magnitude of any length, speed, mass or coefficient the `f64` engines accept:
@@ -41,9 +41,9 @@ fn check_magnitude(name: &str, v: f64, limit: f64, precision: &str, lower: bool)
     }
 }
 
-/// A wall with its coefficients, in a backend-neutral form.
+/// A wall with its material, in a backend-neutral form.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct PreparedWall {
+pub(crate) struct PreparedWall<L> {
     /// 0 = plane, 1 = cylinder.
     pub cylinder: bool,
     /// Plane normal (into the particle region).
@@ -54,11 +54,11 @@ pub(crate) struct PreparedWall {
     pub center: [f64; 2],
     /// Cylinder radius.
     pub radius: f64,
-    pub coeff: ContactCoefficients,
+    pub material: L,
     pub vibrating: bool,
 }
 
-impl PreparedWall {
+impl<L> PreparedWall<L> {
     /// Overlap (negative: minus the gap) of a particle at `x` with radius `r` with this
     /// wall when the vibrating walls are displaced by `zw` along the `vertical` axis
     /// ([`plane_overlap`] or [`cylinder_overlap`], as the force loops use them).
@@ -79,7 +79,7 @@ impl PreparedWall {
 
 /// Everything the backends need, validated.
 #[derive(Clone, Debug)]
-pub(crate) struct Prepared {
+pub(crate) struct Prepared<L> {
     pub axes: usize,
     pub vertical: usize,
     pub n: usize,
@@ -92,8 +92,9 @@ pub(crate) struct Prepared {
     pub mass: Vec<f64>,
     pub species: Vec<u32>,
     pub n_species: usize,
-    pub coeff: Vec<ContactCoefficients>,
-    pub walls: Vec<PreparedWall>,
+    /// The species-pair materials, `n_species^2` entries ([`crate::pair_index`]).
+    pub pairs: Vec<L>,
+    pub walls: Vec<PreparedWall<L>>,
     pub gravity: f64,
     pub vibration: Option<Vibration>,
     pub friction: bool,
@@ -111,11 +112,11 @@ pub(crate) struct Prepared {
     pub has_walls: bool,
 }
 
-impl Prepared {
+impl<L: ContactLaw> Prepared<L> {
     /// Validates `scene` and `config` for an engine that computes in `f32` (`single`) or
     /// `f64`: every check both backends share lives here, so they accept and refuse the
     /// same inputs.
-    pub fn new(scene: &Scene, config: &Config, single: bool) -> Result<Self> {
+    pub fn new(scene: &Scene<L>, config: &Config, single: bool) -> Result<Self> {
         scene.check_ready()?;
         let dt = resolve_dt(scene, config)?;
         let (limit, precision) = if single {
@@ -147,7 +148,7 @@ impl Prepared {
             .walls()
             .iter()
             .map(|w| {
-                let coeff = ContactCoefficients::new(&w.material);
+                let material = w.material;
                 match w.shape {
                     WallShape::Plane { normal, offset } => PreparedWall {
                         cylinder: false,
@@ -155,7 +156,7 @@ impl Prepared {
                         offset,
                         center: [0.0; 2],
                         radius: 0.0,
-                        coeff,
+                        material,
                         vibrating: w.vibrating,
                     },
                     WallShape::Cylinder { center, radius } => PreparedWall {
@@ -164,7 +165,7 @@ impl Prepared {
                         offset: 0.0,
                         center,
                         radius,
-                        coeff,
+                        material,
                         vibrating: w.vibrating,
                     },
                 }
@@ -183,11 +184,7 @@ impl Prepared {
             mass: ps.iter().map(|p| p.mass).collect(),
             species: ps.iter().map(|p| p.species).collect(),
             n_species: scene.species_count(),
-            coeff: scene
-                .pair_table()
-                .iter()
-                .map(ContactCoefficients::new)
-                .collect(),
+            pairs: scene.pair_table().to_vec(),
             walls,
             gravity: scene.gravity(),
             vibration,
@@ -207,7 +204,7 @@ impl Prepared {
     /// The checks of [`Prepared::new`] beyond the builders': magnitudes the precision can
     /// hold, particles inside the box, periodic axes long enough for the neighbour lists.
     fn check_scene(
-        scene: &Scene,
+        scene: &Scene<L>,
         config: &Config,
         dt: f64,
         limit: f64,
@@ -255,11 +252,9 @@ impl Prepared {
             .iter()
             .chain(scene.walls().iter().map(|w| &w.material));
         for m in materials {
-            let c = ContactCoefficients::new(m);
-            in_range("contact stiffness (pi / t_c)^2", c.kappa, limit, precision)?;
-            not_huge("contact damping 2 ln(1/e) / t_c", c.two_b, limit, precision)?;
-            not_huge("friction mu_s", c.mu_s, limit, precision)?;
-            not_huge("friction mu_k", c.mu_k, limit, precision)?;
+            for (name, v, positive) in m.scales() {
+                check_magnitude(name, v, limit, precision, positive)?;
+            }
         }
         for (i, p) in ps.iter().enumerate() {
             in_range(&format!("particle[{i}].radius"), p.radius, limit, precision)?;

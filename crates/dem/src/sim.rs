@@ -8,16 +8,19 @@ use crate::diagnostics;
 use crate::engine::Engine;
 use crate::input::SceneRecord;
 use crate::prepared::Prepared;
-use crate::{Config, Diagnostics, Integrator, Precision, Scene, State};
+use crate::{Config, ContactLaw, Diagnostics, Integrator, Material, Precision, Scene, State};
 use simkit_backend::particles::Dynamics;
 
-/// The checkpoint model string of an engine: backend, precision, dimension.
-pub(crate) fn model_name(gpu: bool, precision: Precision, axes: usize) -> String {
-    if gpu {
-        format!("Dem<gpu f32, {axes}>")
+/// The checkpoint model string of an engine: backend, precision, dimension and, for a
+/// contact law other than the default [`Material`], the law's name
+/// ([`checkpoint::model_with_law`]).
+pub(crate) fn model_name<L: ContactLaw>(gpu: bool, precision: Precision, axes: usize) -> String {
+    let kind = if gpu {
+        format!("gpu f32, {axes}")
     } else {
-        format!("Dem<cpu {}, {axes}>", precision.wgsl())
-    }
+        format!("cpu {}, {axes}", precision.wgsl())
+    };
+    checkpoint::model_with_law("Dem", &kind, L::NAME, Material::NAME)
 }
 
 /// [`Config`] as a checkpoint stores it.
@@ -67,13 +70,14 @@ impl From<ConfigRecord> for Config {
 /// Everything a checkpoint holds: the inputs (validated again on resume) and the engine's
 /// dynamic state.
 #[derive(Serialize, Deserialize)]
-struct Payload {
-    scene: SceneRecord,
+#[serde(bound = "L: ContactLaw")]
+struct Payload<L> {
+    scene: SceneRecord<L>,
     config: ConfigRecord,
     engine: Dynamics,
 }
 
-/// A granular DEM simulation of a [`Scene`] on a chosen backend.
+/// A granular DEM simulation of a [`Scene`] with contact law `L` on a chosen backend.
 ///
 /// ```
 /// use simkit_backend::{Backend, Simulation};
@@ -91,13 +95,13 @@ struct Payload {
 /// # Ok(())
 /// # }
 /// ```
-pub struct Dem {
-    engine: Box<dyn Engine>,
-    scene: Scene,
+pub struct Dem<L: ContactLaw = Material> {
+    engine: Box<dyn Engine<L>>,
+    scene: Scene<L>,
     config: Config,
 }
 
-impl Dem {
+impl<L: ContactLaw> Dem<L> {
     /// Validates the scene and settings and builds the backend.
     ///
     /// Errors: an empty scene, a particle outside the box, a time step over the safe bound
@@ -106,13 +110,13 @@ impl Dem {
     /// the largest diameter times `1 + skin`, magnitudes the precision cannot hold (the GPU
     /// computes in `f32`, as the CPU with [`Precision::F32`]), position Verlet on the GPU,
     /// or any GPU failure. The checks are shared: both backends accept the same inputs.
-    pub fn new(scene: &Scene, config: &Config, backend: Backend<'_>) -> Result<Self> {
+    pub fn new(scene: &Scene<L>, config: &Config, backend: Backend<'_>) -> Result<Self> {
         Self::build(scene, config, backend, None)
     }
 
     /// [`Dem::new`], at a checkpointed state when `saved` is given.
     fn build(
-        scene: &Scene,
+        scene: &Scene<L>,
         config: &Config,
         backend: Backend<'_>,
         saved: Option<&Dynamics>,
@@ -120,12 +124,12 @@ impl Dem {
         let single = backend.is_gpu() || config.precision == Precision::F32;
         let prep = Prepared::new(scene, config, single)?;
         diagnostics::check_initial_overlaps(&prep)?;
-        let engine: Box<dyn Engine> = match backend {
+        let engine: Box<dyn Engine<L>> = match backend {
             Backend::Cpu => match (prep.axes, config.precision) {
-                (2, Precision::F64) => Box::new(CpuEngine::<2, f64>::new(prep, saved)?),
-                (2, Precision::F32) => Box::new(CpuEngine::<2, f32>::new(prep, saved)?),
-                (_, Precision::F64) => Box::new(CpuEngine::<3, f64>::new(prep, saved)?),
-                (_, Precision::F32) => Box::new(CpuEngine::<3, f32>::new(prep, saved)?),
+                (2, Precision::F64) => Box::new(CpuEngine::<2, f64, L>::new(prep, saved)?),
+                (2, Precision::F32) => Box::new(CpuEngine::<2, f32, L>::new(prep, saved)?),
+                (_, Precision::F64) => Box::new(CpuEngine::<3, f64, L>::new(prep, saved)?),
+                (_, Precision::F32) => Box::new(CpuEngine::<3, f32, L>::new(prep, saved)?),
             },
             #[cfg(feature = "gpu")]
             Backend::Gpu(ctx) => {
@@ -176,7 +180,7 @@ impl Dem {
     }
 }
 
-impl Simulation for Dem {
+impl<L: ContactLaw> Simulation for Dem<L> {
     type State = State;
 
     /// Advances `steps` steps, checking the state every [`Config::check_every`] steps and
@@ -205,15 +209,15 @@ impl Simulation for Dem {
 /// order and the positions of the last neighbour-list build, the step count and the
 /// accumulated time; GPU: the device buffers and the step count, which keys the wall
 /// phase). A checkpoint resumes on the backend kind that wrote it, bit for bit.
-impl Restart for Dem {
+impl<L: ContactLaw> Restart for Dem<L> {
     fn checkpoint(&mut self) -> Result<Vec<u8>> {
         let engine = self.engine.save()?;
         encode(&self.scene, &self.config, &self.engine.model(), engine)
     }
 
     fn resume(bytes: &[u8], backend: Backend<'_>) -> Result<Self> {
-        let saved = decode(bytes)?;
-        let want = model_name(
+        let saved = decode::<L>(bytes)?;
+        let want = model_name::<L>(
             backend.is_gpu(),
             saved.config.precision,
             saved.scene.dim().axes(),
@@ -234,17 +238,17 @@ impl Restart for Dem {
 /// What a checkpoint holds, decoded: the model that wrote it, the scene and settings
 /// (validated as builders would), and the engine's dynamic state (validated by the engine
 /// that loads it).
-pub(crate) struct Saved {
+pub(crate) struct Saved<L> {
     /// The model string of the engine that wrote it ([`model_name`]).
     pub model: String,
-    pub scene: Scene,
+    pub scene: Scene<L>,
     pub config: Config,
     pub engine: Dynamics,
 }
 
 /// A checkpoint of `engine`'s state for `scene` and `config`, written by `model`.
-pub(crate) fn encode(
-    scene: &Scene,
+pub(crate) fn encode<L: ContactLaw>(
+    scene: &Scene<L>,
     config: &Config,
     model: &str,
     engine: Dynamics,
@@ -262,9 +266,12 @@ pub(crate) fn encode(
     )
 }
 
-/// The contents of a dem checkpoint (any model).
-pub(crate) fn decode(bytes: &[u8]) -> Result<Saved> {
-    let (model, payload): (String, Payload) =
+/// The contents of a dem checkpoint of law `L` (any model).
+///
+/// Errors: a checkpoint of another law is refused before its payload is read.
+pub(crate) fn decode<L: ContactLaw>(bytes: &[u8]) -> Result<Saved<L>> {
+    checkpoint::require_law(bytes, L::NAME, Material::NAME)?;
+    let (model, payload): (String, Payload<L>) =
         checkpoint::decode_any_model(bytes, env!("CARGO_PKG_NAME"), env!("CARGO_PKG_VERSION"))?;
     let scene = Scene::from_record(payload.scene)
         .map_err(|e| Error::checkpoint(format!("the stored scene is not valid: {e}")))?;

@@ -40,7 +40,8 @@ fn agrees_with_dem_to_rounding_after_100_steps() {
         dem.step(steps).expect("step");
         let contacts = dem.diagnostics().expect("diagnostics").contacts;
         let bytes = dem.checkpoint().expect("checkpoint");
-        let mut dist = DistributedDem::resume(&bytes, Comm::serial()).expect("resume");
+        let mut dist =
+            DistributedDem::<simkit_dem::Material>::resume(&bytes, Comm::serial()).expect("resume");
         dem.step(100).expect("step");
         dist.step(100).expect("step");
         let (a, b) = (dist.state().expect("state"), dem.state().expect("state"));
@@ -123,7 +124,8 @@ fn checkpoints_move_between_dem_and_distributed_dem() {
     let mut dist = DistributedDem::new(&scene, &config, Comm::serial()).expect("distributed");
     dist.step(300).expect("step");
     let bytes = dist.checkpoint().expect("checkpoint");
-    let mut dem = Dem::resume(&bytes, Backend::Cpu).expect("Dem resumes it");
+    let mut dem =
+        Dem::<simkit_dem::Material>::resume(&bytes, Backend::Cpu).expect("Dem resumes it");
     assert_eq!(dem.steps_done(), 300);
     assert_eq!(
         state_bits(&dem.state().expect("state")),
@@ -134,7 +136,8 @@ fn checkpoints_move_between_dem_and_distributed_dem() {
     let mut dem = Dem::new(&scene, &config, Backend::Cpu).expect("dem");
     dem.step(300).expect("step");
     let bytes = dem.checkpoint().expect("checkpoint");
-    let mut dist = DistributedDem::resume(&bytes, Comm::serial()).expect("resumes Dem's");
+    let mut dist = DistributedDem::<simkit_dem::Material>::resume(&bytes, Comm::serial())
+        .expect("resumes Dem's");
     assert_eq!(
         state_bits(&dist.state().expect("state")),
         state_bits(&dem.state().expect("state"))
@@ -147,8 +150,11 @@ fn checkpoints_move_between_dem_and_distributed_dem() {
     let dir = tempfile::tempdir().expect("dir");
     let path = dir.path().join("run.ckpt");
     dist.write_checkpoint(&path).expect("write");
-    let again = DistributedDem::resume(&std::fs::read(&path).expect("read"), Comm::serial())
-        .expect("resume");
+    let again = DistributedDem::<simkit_dem::Material>::resume(
+        &std::fs::read(&path).expect("read"),
+        Comm::serial(),
+    )
+    .expect("resume");
     assert_eq!(again.steps_done(), 350);
 }
 
@@ -199,7 +205,11 @@ fn refuses_what_it_does_not_offer_and_bad_checkpoints() {
     };
     let mut dem = Dem::new(&scene, &f32, Backend::Cpu).expect("dem");
     let bytes = dem.checkpoint().expect("checkpoint");
-    let e = DistributedDem::resume(&bytes, Comm::serial()).expect_err("f32 model");
+    let e = DistributedDem::<simkit_dem::Material>::resume(&bytes, Comm::serial())
+        .expect_err("f32 model");
     assert!(e.to_string().contains("f64"), "{e}");
-    assert!(DistributedDem::resume(b"not a checkpoint", Comm::serial()).is_err());
+    assert!(
+        DistributedDem::<simkit_dem::Material>::resume(b"not a checkpoint", Comm::serial())
+            .is_err()
+    );
 }

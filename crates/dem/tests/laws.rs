@@ -19,11 +19,12 @@ use bytemuck::{Pod, Zeroable};
 use simkit_backend::rng::rng_uniform;
 use simkit_backend::testing::{eval_wgsl, gpu_or_skip};
 use simkit_dem::{
-    ContactCoefficients, Material, cylinder_overlap, friction_force, normal_force, plane_overlap,
-    reduced_mass, wall_motion,
+    Contact, ContactCoefficients, ContactLaw, Material, cylinder_overlap, friction_force,
+    normal_force, plane_overlap, reduced_mass, wall_motion,
 };
 
 const CONTACT_WGSL: &str = simkit_backend::wgsl!("contact.wgsl");
+const MASS_WGSL: &str = simkit_backend::wgsl!("mass.wgsl");
 const WALLS_WGSL: &str = simkit_backend::wgsl!("walls.wgsl");
 
 /// 8 f32 ulps at 1.
@@ -109,7 +110,7 @@ fn normal_force_and_reduced_mass_match_their_wgsl_twins() {
             }
         }
     }
-    let sources = [CASES_WGSL, CONTACT_WGSL];
+    let sources = [CASES_WGSL, MASS_WGSL, CONTACT_WGSL];
     let gpu_m: Vec<f32> = eval_wgsl(
         &ctx,
         &sources,
@@ -128,7 +129,7 @@ fn normal_force_and_reduced_mass_match_their_wgsl_twins() {
         &sources,
         "Case2",
         "f32",
-        "dem_normal_force(x.a, dem_reduced_mass(x.b.x, x.b.y), x.b.z, x.b.w)",
+        "dem_normal_force(DemCoeff(x.a.x, x.a.y, x.a.z, x.a.w), dem_reduced_mass(x.b.x, x.b.y), x.b.z, x.b.w)",
         &cases,
     )
     .unwrap();
@@ -198,7 +199,7 @@ fn friction_force_matches_its_wgsl_twin() {
         &[CASES_WGSL, CONTACT_WGSL],
         "Case4",
         "vec4<f32>",
-        "vec4<f32>(dem_friction_force(x.a, x.b.xyz, x.b.w, x.c.xyz, x.c.w, x.d.x), 0.0)",
+        "vec4<f32>(dem_friction_force(DemCoeff(x.a.x, x.a.y, x.a.z, x.a.w), x.b.xyz, x.b.w, x.c.xyz, x.c.w, x.d.x), 0.0)",
         &cases,
     )
     .unwrap();
@@ -428,4 +429,90 @@ fn wall_motion_matches_its_wgsl_twin() {
     }
     check("wall displacement", &gz, &cz, &sz, 1e-5);
     check("wall velocity", &gv, &cv, &sv, 1e-5);
+}
+
+/// The whole contact force of the built-in law, `dem_contact_force` (what the GPU force
+/// kernel calls for every contact), against `<Material as ContactLaw>::force` in `f32`, with
+/// and without friction: within 8 ulps of the size of the normal force plus the friction
+/// cap (the terms summed).
+#[test]
+fn the_contact_force_matches_its_wgsl_twin() {
+    let Some(ctx) = gpu_or_skip("the_contact_force_matches_its_wgsl_twin") else {
+        return;
+    };
+    let mut cases = Vec::new();
+    let mut k = 0u32;
+    for c in materials() {
+        for &delta in &[1e-4f32, 0.01, 0.2] {
+            for &m_ij in &[0.5f32, 3.0] {
+                for friction in [0.0f32, 1.0] {
+                    k += 1;
+                    let u = |a: u32| rng_uniform(13, a, k) - 0.5;
+                    let d = [u(0), u(1), u(2) + 0.7];
+                    let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                    let n = [d[0] / l, d[1] / l, d[2] / l];
+                    let v_rel = [2.0 * u(3), 2.0 * u(4), 2.0 * u(5)];
+                    let v_n = v_rel[0] * n[0] + v_rel[1] * n[1] + v_rel[2] * n[2];
+                    cases.push(Case4 {
+                        a: vec4(&c),
+                        b: [n[0], n[1], n[2], v_n],
+                        c: [v_rel[0], v_rel[1], v_rel[2], delta],
+                        d: [m_ij, friction, 0.0, 0.0],
+                    });
+                }
+            }
+        }
+    }
+    let gpu: Vec<[f32; 4]> = eval_wgsl(
+        &ctx,
+        &[CASES_WGSL, <Material as ContactLaw>::WGSL],
+        "Case4",
+        "vec4<f32>",
+        "vec4<f32>(dem_contact_force(DemCoeff(x.a.x, x.a.y, x.a.z, x.a.w), x.d.x, x.c.w, \
+         x.b.xyz, x.c.xyz, x.b.w, x.d.y > 0.5), 0.0)",
+        &cases,
+    )
+    .unwrap();
+    let mut worst = 0.0f64;
+    for (k, out) in cases.iter().zip(&gpu) {
+        let c = ContactCoefficients {
+            kappa: k.a[0],
+            two_b: k.a[1],
+            mu_s: k.a[2],
+            mu_k: k.a[3],
+        };
+        let contact = Contact {
+            m_ij: k.d[0],
+            delta: k.c[3],
+            n: [k.b[0], k.b[1], k.b[2]],
+            v_rel: [k.c[0], k.c[1], k.c[2]],
+            v_n: k.b[3],
+        };
+        let f = if k.d[1] > 0.5 {
+            Material::force::<f32, 3, true>(&c, &contact)
+        } else {
+            Material::force::<f32, 3, false>(&c, &contact)
+        };
+        let fnorm = f64::from(normal_force(&c, contact.m_ij, contact.delta, contact.v_n));
+        let vr: f64 = contact
+            .v_rel
+            .iter()
+            .map(|&x| f64::from(x).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        let cap = f64::from(c.mu_s) * fnorm.abs() + f64::from(c.mu_k * contact.m_ij) * vr;
+        let m_kappa = f64::from(contact.m_ij) * f64::from(c.kappa) * f64::from(contact.delta);
+        let m_damp = f64::from(contact.m_ij * c.two_b) * f64::from(contact.v_n).abs();
+        let scale = m_kappa + m_damp + fnorm.abs() + cap;
+        for d in 0..3 {
+            let e = (f64::from(out[d]) - f64::from(f[d])).abs();
+            worst = worst.max(e / scale);
+            assert!(e <= ULPS8 * scale, "{k:?}: {out:?} vs {f:?}");
+        }
+    }
+    eprintln!(
+        "{} cases, worst {:.2} ulps of the term size",
+        cases.len(),
+        worst / f64::from(f32::EPSILON)
+    );
 }

@@ -78,7 +78,7 @@ fn resume_restores_the_clock_and_the_wall_phase() {
     let mut sim = Dem::new(&bed(), &Config::default(), Backend::Cpu).unwrap();
     sim.step(333).unwrap();
     let bytes = sim.checkpoint().unwrap();
-    let mut back = Dem::resume(&bytes, Backend::Cpu).unwrap();
+    let mut back = Dem::<Material>::resume(&bytes, Backend::Cpu).unwrap();
     assert_eq!(back.steps_done(), 333);
     assert_eq!(back.state().unwrap(), sim.state().unwrap());
     // The clock accumulates t += dt, so it is 333 dt up to round-off.
@@ -127,22 +127,22 @@ fn bad_checkpoints_are_refused_clearly() {
     // Truncated anywhere.
     for cut in [0, 5, 20, bytes.len() / 2, bytes.len() - 1] {
         assert!(matches!(
-            Dem::resume(&bytes[..cut], Backend::Cpu),
+            Dem::<Material>::resume(&bytes[..cut], Backend::Cpu),
             Err(Error::Checkpoint { .. })
         ));
     }
     is_checkpoint_error(
-        Dem::resume(&bytes[..bytes.len() - 3], Backend::Cpu),
+        Dem::<Material>::resume(&bytes[..bytes.len() - 3], Backend::Cpu),
         "truncated",
     );
     // One flipped bit in the payload.
     let mut bad = bytes.clone();
     let at = bytes.len() - 40;
     bad[at] ^= 0x10;
-    is_checkpoint_error(Dem::resume(&bad, Backend::Cpu), "checksum");
+    is_checkpoint_error(Dem::<Material>::resume(&bad, Backend::Cpu), "checksum");
     // Another package.
     let other = checkpoint::encode("simkit-rd", env!("CARGO_PKG_VERSION"), "Rd", &1u8).unwrap();
-    is_checkpoint_error(Dem::resume(&other, Backend::Cpu), "simkit-rd");
+    is_checkpoint_error(Dem::<Material>::resume(&other, Backend::Cpu), "simkit-rd");
     // Another precision: the same file claiming to hold an f32 run (same-length model
     // string, checksum recomputed) is refused, not misread.
     let mut forged = bytes.clone();
@@ -154,18 +154,24 @@ fn bad_checkpoints_are_refused_clearly() {
     let n = forged.len();
     let crc = crc32(&forged[..n - 4]);
     forged[n - 4..].copy_from_slice(&crc.to_le_bytes());
-    is_checkpoint_error(Dem::resume(&forged, Backend::Cpu), "Dem<cpu f32, 2>");
+    is_checkpoint_error(
+        Dem::<Material>::resume(&forged, Backend::Cpu),
+        "Dem<cpu f32, 2>",
+    );
     // A CPU run resumed on the GPU (and back) is refused with the way out.
     #[cfg(feature = "gpu")]
     if let Some(ctx) = simkit_backend::testing::gpu_or_skip("bad_checkpoints_are_refused_clearly") {
         is_checkpoint_error(
-            Dem::resume(&bytes, Backend::Gpu(&ctx)),
+            Dem::<Material>::resume(&bytes, Backend::Gpu(&ctx)),
             "backend that wrote it",
         );
         let mut g = Dem::new(&bed(), &Config::default(), Backend::Gpu(&ctx)).unwrap();
         g.step(10).unwrap();
         let gb = g.checkpoint().unwrap();
         assert_eq!(checkpoint::header(&gb).unwrap().model, "Dem<gpu f32, 2>");
-        is_checkpoint_error(Dem::resume(&gb, Backend::Cpu), "backend that wrote it");
+        is_checkpoint_error(
+            Dem::<Material>::resume(&gb, Backend::Cpu),
+            "backend that wrote it",
+        );
     }
 }

@@ -322,7 +322,7 @@ fn checkpoint_decode_of_garbage_never_panics() {
                     b
                 }
             };
-            match Dem::resume(&bytes, Backend::Cpu) {
+            match Dem::<Material>::resume(&bytes, Backend::Cpu) {
                 Ok(_) => prop_assert!(false, "garbage resumed"),
                 Err(e) => {
                     prop_assert!(matches!(e, Error::Checkpoint { .. }), "{e}");

@@ -12,27 +12,14 @@ use crate::{
 
 /// The checkpoint model string of an engine: backend, precision, dimension and, for a
 /// law other than the default [`LennardJones`], the law's name (`Md<cpu f64, 3>`,
-/// `Md<gpu f32, 2, morse>`), so a run resumes only with the law that wrote it.
+/// `Md<gpu f32, 2, morse>`; [`checkpoint::model_with_law`]).
 pub(crate) fn model_name<L: PairLaw>(gpu: bool, precision: Precision, axes: usize) -> String {
     let kind = if gpu {
         format!("gpu f32, {axes}")
     } else {
         format!("cpu {}, {axes}", precision.wgsl())
     };
-    if L::NAME == LennardJones::NAME {
-        format!("Md<{kind}>")
-    } else {
-        format!("Md<{kind}, {}>", L::NAME)
-    }
-}
-
-/// The law named by a model string of [`model_name`] (the default law when none is).
-fn model_law(model: &str) -> &str {
-    let inner = model.trim_start_matches("Md<").trim_end_matches('>');
-    match inner.splitn(3, ", ").nth(2) {
-        Some(law) => law,
-        None => LennardJones::NAME,
-    }
+    checkpoint::model_with_law("Md", &kind, L::NAME, LennardJones::NAME)
 }
 
 /// [`Config`] as a checkpoint stores it.
@@ -126,15 +113,7 @@ pub(crate) type Decoded<L> = (String, System<L>, Config, Dynamics);
 /// Errors: a checkpoint of another law (named in the model string) is refused before its
 /// payload is read.
 pub(crate) fn decode_checkpoint<L: PairLaw>(bytes: &[u8]) -> Result<Decoded<L>> {
-    let model = checkpoint::header(bytes)?.model;
-    let law = model_law(&model);
-    if law != L::NAME {
-        return Err(Error::checkpoint(format!(
-            "holds a {model} run of pair law '{law}', not '{}'; resume it with the law \
-             type that wrote it",
-            L::NAME
-        )));
-    }
+    checkpoint::require_law(bytes, L::NAME, LennardJones::NAME)?;
     let (written, payload): (String, Payload<L>) =
         checkpoint::decode_any_model(bytes, env!("CARGO_PKG_NAME"), env!("CARGO_PKG_VERSION"))?;
     payload

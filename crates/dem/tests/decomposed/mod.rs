@@ -128,8 +128,9 @@ pub fn check_all(comm: &Comm) -> Result<usize, String> {
             &format!("{name}: checkpoint"),
         )?;
         // Swap: the one-process checkpoint goes on on `comm`, and `comm`'s on one process.
-        let mut many_resumed = DistributedDem::resume(&c1, comm.clone()).map_err(err)?;
-        let mut one_resumed = DistributedDem::resume(&c1, serial).map_err(err)?;
+        let mut many_resumed =
+            DistributedDem::<Material>::resume(&c1, comm.clone()).map_err(err)?;
+        let mut one_resumed = DistributedDem::<Material>::resume(&c1, serial).map_err(err)?;
         for sim in [&mut one, &mut many, &mut many_resumed, &mut one_resumed] {
             sim.step(steps - half).map_err(err)?;
         }

@@ -1,0 +1,104 @@
+//! The contact-law trait: what a contact model must provide to run on every backend.
+
+use std::fmt::Debug;
+
+use bytemuck::Pod;
+use serde::Serialize;
+use serde::de::DeserializeOwned;
+use simkit_backend::{Real, Result};
+
+/// The geometry and kinematics of one contact, as the force loops hand them to a
+/// [`ContactLaw`]: particle `i` touches `j` (another particle, or a wall of infinite mass).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Contact<T, const D: usize> {
+    /// Reduced mass `m_i m_j / (m_i + m_j)` (against a wall: `m_i`).
+    pub m_ij: T,
+    /// Overlap `delta = R_i + R_j - |r_i - r_j| > 0` (against a wall: the wall's overlap).
+    pub delta: T,
+    /// Unit normal from `j` to `i`.
+    pub n: [T; D],
+    /// Relative velocity `v_i - v_j` at the centres.
+    pub v_rel: [T; D],
+    /// Normal relative velocity `v_rel . n` (negative when approaching).
+    pub v_n: T,
+}
+
+/// A contact law between two materials (a species pair, or a species and a wall): its
+/// parameters (the implementing type itself), the coefficients the force loops read, the
+/// contact force as one Rust function generic over [`Real`] with its WGSL twin, the elastic
+/// energy, and the time scales the time-step guidance needs.
+///
+/// A [`Scene`](crate::Scene) holds one law type for every species pair and wall, and every
+/// backend is compiled for it: the CPU force loops (the blocked half list of
+/// [`Dem`](crate::Dem), the full lists of [`DistributedDem`](crate::DistributedDem)) call
+/// [`force`](ContactLaw::force) inlined, the GPU force kernel is built from
+/// [`WGSL`](ContactLaw::WGSL). The linear spring–dashpot of [`Material`](crate::Material) is
+/// the built-in law.
+///
+/// # Contract
+///
+/// - [`force`](ContactLaw::force) returns the force on `i` of a contact with overlap
+///   `delta > 0`; the tangential part only when `FRICTION` (the scene has a material with
+///   friction, [`ContactLaw::has_friction`]); it depends on the contact's geometry and
+///   kinematics only (the engines keep no per-contact state).
+/// - The WGSL twin declares `struct DemCoeff` (the layout of [`ContactLaw::Gpu`]) and
+///   `fn dem_contact_force(c: DemCoeff, m_ij: f32, delta: f32, n: vec3<f32>, v_rel:
+///   vec3<f32>, v_n: f32, friction: bool) -> vec3<f32>`.
+///
+/// Laws that remember the contact (a tangential spring per contact, rolling resistance)
+/// need the engines to carry a per-contact state through list rebuilds, reorderings and
+/// migrations; [`Contact`] is the struct that state will join.
+pub trait ContactLaw:
+    Copy + Debug + PartialEq + Send + Sync + Serialize + DeserializeOwned + 'static
+{
+    /// The coefficients of one material pair as the force loops read them, in precision
+    /// `T` (derived from the parameters once, at construction).
+    type Coeff<T: Real>: Copy + Debug + PartialEq + Send + Sync + 'static;
+
+    /// `Coeff<f32>` laid out as the WGSL struct `DemCoeff` of [`ContactLaw::WGSL`].
+    type Gpu: Pod + Send + Sync;
+
+    /// Short name of the law (checkpoints record it), e.g. `"linear"`.
+    const NAME: &'static str;
+
+    /// WGSL declaring `struct DemCoeff` and `fn dem_contact_force` (see the contract).
+    const WGSL: &'static str;
+
+    /// Checks the parameters; `what` names the material for the error message (e.g.
+    /// `"species pair (0, 1)"`, `"wall 2"`).
+    ///
+    /// Errors: [`simkit_backend::Error::InvalidParameter`] naming `what`, the parameter,
+    /// its value and the fix.
+    fn validate(&self, what: &str) -> Result<()>;
+
+    /// The coefficients in precision `T`.
+    fn coefficients<T: Real>(&self) -> Self::Coeff<T>;
+
+    /// The `f32` coefficients in the GPU layout.
+    fn gpu(c: &Self::Coeff<f32>) -> Self::Gpu;
+
+    /// The magnitudes the precision must hold, `(name, value, must be positive)`: each
+    /// must lie below the precision's limit, and the positive ones above its inverse (the
+    /// engines refuse a scene otherwise, naming the value).
+    fn scales(&self) -> Vec<(&'static str, f64, bool)>;
+
+    /// Whether the law has a tangential force with these parameters.
+    fn has_friction(&self) -> bool;
+
+    /// The duration of a binary contact: the default time step is the shortest over the
+    /// scene divided by [`DEFAULT_STEPS_PER_CONTACT`](crate::DEFAULT_STEPS_PER_CONTACT).
+    fn contact_time(&self) -> f64;
+
+    /// The largest stable time step for this material (larger steps are refused unless
+    /// [`Config::allow_unstable_dt`](crate::Config::allow_unstable_dt) is set).
+    fn safe_dt(&self) -> f64;
+
+    /// The force on particle `i` of `contact` (see the contract).
+    fn force<T: Real, const D: usize, const FRICTION: bool>(
+        c: &Self::Coeff<T>,
+        contact: &Contact<T, D>,
+    ) -> [T; D];
+
+    /// The elastic energy stored in a contact of reduced mass `m_ij` and overlap `delta`.
+    fn elastic_energy<T: Real>(c: &Self::Coeff<T>, m_ij: T, delta: T) -> T;
+}
