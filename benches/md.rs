@@ -147,31 +147,8 @@ fn benches(c: &mut Criterion) {
     g.throughput(Throughput::Elements(n * u64::from(STEPS)));
     g.sample_size(10);
     g.measurement_time(Duration::from_secs(10));
-    for (label, precision) in [
-        ("cpu_f64_threads", Precision::F64),
-        ("cpu_f32_threads", Precision::F32),
-    ] {
-        let config = config(precision);
-        for threads in [1usize, 2] {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .expect("thread pool");
-            g.bench_function(BenchmarkId::new(label, threads), |b| {
-                b.iter_batched(
-                    || {
-                        pool.install(|| Md::new(&system, &config, Backend::Cpu))
-                            .expect("cpu run")
-                    },
-                    |mut md| {
-                        pool.install(|| md.step(STEPS)).expect("step");
-                        black_box(md.steps_done())
-                    },
-                    BatchSize::PerIteration,
-                )
-            });
-        }
-    }
+    cpu_rows(&mut g, "cpu_f64_threads", &system, Precision::F64);
+    cpu_rows(&mut g, "cpu_f32_threads", &system, Precision::F32);
     if let Some(ctx) = gpu.as_ref() {
         g.throughput(Throughput::Elements(n * u64::from(GPU_STEPS)));
         for (label, kernel) in [
@@ -198,13 +175,15 @@ fn benches(c: &mut Criterion) {
     g.finish();
 }
 
-/// One CPU f64 row per law and thread count: 100 steps of `system`, fresh run per iteration.
-fn law_rows<L: PairLaw>(
+/// One CPU row per thread count (1 and 2): 100 steps of `system` in `precision`, a fresh
+/// run per iteration (its construction not timed).
+fn cpu_rows<L: PairLaw>(
     g: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
     label: &str,
     system: &System<L>,
+    precision: Precision,
 ) {
-    let config = config(Precision::F64);
+    let config = config(precision);
     for threads in [1usize, 2] {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -245,8 +224,8 @@ fn user_law(c: &mut Criterion) {
     ));
     g.sample_size(10);
     g.measurement_time(Duration::from_secs(10));
-    law_rows::<LennardJones>(&mut g, "built_in_lj_f64_threads", &built_in);
-    law_rows(&mut g, "user_lj_f64_threads", &user);
+    cpu_rows::<LennardJones>(&mut g, "built_in_lj_f64_threads", &built_in, Precision::F64);
+    cpu_rows(&mut g, "user_lj_f64_threads", &user, Precision::F64);
     g.finish();
 }
 
