@@ -51,7 +51,7 @@ const CAUSE: &str = "a time step too large for the stiffest pair (see time_step_
 /// **Results do not depend on the rank count, bit for bit.** Each owned particle sums its
 /// pair forces in increasing system index of the partner, from a full list (each pair is
 /// computed from both ends: twice the pair work of the single-process half list), with
-/// the pair law of the single-process CPU backend ([`crate::pair_force_energy`], the same
+/// the pair law of the single-process CPU backend ([`crate::PairLaw::force_energy`], the same
 /// function), and every per-particle update is the arithmetic of that backend. A periodic
 /// image gets its box length added by the rank that sends it, the same way for any rank
 /// count. So on 1, 2, 3 or 4 ranks the positions and velocities are the same bits, and
