@@ -144,10 +144,18 @@ fn run(args: &Args) -> Result<()> {
         };
         let (_, cpu32_x) = run_on(&system, &f32_config, Backend::Cpu, args.steps)?;
         let (gpu, gpu_x) = run_on(&system, &config, Backend::Gpu(ctx), args.steps)?;
+        // The largest distance between two runs' positions of a particle (minimum image:
+        // the box is periodic).
+        let len = system.lengths();
         let apart = |a: &[[f64; 3]], b: &[[f64; 3]]| {
             a.iter()
                 .zip(b)
-                .flat_map(|(p, q)| (0..3).map(move |d| (p[d] - q[d]).abs()))
+                .flat_map(|(p, q)| {
+                    (0..3).map(move |d| {
+                        let s = p[d] - q[d];
+                        (s - len[d] * (s / len[d]).round()).abs()
+                    })
+                })
                 .fold(0.0, f64::max)
         };
         println!(

@@ -301,6 +301,34 @@ pub fn model_with_law(name: &str, kind: &str, law: &str, default_law: &str) -> S
     }
 }
 
+/// Checks a law's name for [`model_with_law`]: letters, digits, `-` and `_` only, and not
+/// the default law's name unless `is_default` (the law is the default's type), so that
+/// two laws never write the same model string.
+///
+/// Errors: [`Error::InvalidParameter`] naming the law's name and the fix.
+pub fn check_law_name(name: &str, default_law: &str, is_default: bool) -> Result<()> {
+    let ok = !name.is_empty()
+        && name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_');
+    if !ok {
+        return Err(Error::invalid(
+            "law NAME",
+            name,
+            "must be non-empty, of letters, digits, '-' and '_' (checkpoints record it)",
+        ));
+    }
+    if name == default_law && !is_default {
+        return Err(Error::invalid(
+            "law NAME",
+            name,
+            "is the built-in default law's name; give your law a name of its own (a \
+             checkpoint of one would otherwise resume as the other)",
+        ));
+    }
+    Ok(())
+}
+
 /// Refuses, before its payload is read, a checkpoint whose model string (of
 /// [`model_with_law`]) names another law than `law`.
 ///
@@ -364,6 +392,11 @@ mod tests {
         require_law(&bytes, "morse", "lj").unwrap();
         let e = require_law(&bytes, "lj", "lj").unwrap_err();
         assert!(e.to_string().contains("'morse'"), "{e}");
+        check_law_name("morse", "lj", false).unwrap();
+        assert!(check_law_name("lj", "lj", false).is_err());
+        check_law_name("lj", "lj", true).unwrap();
+        assert!(check_law_name("a, b", "lj", false).is_err());
+        assert!(check_law_name("", "lj", false).is_err());
         let plain = encode("simkit-md", "0.1.0", "Md<cpu f64, 3>", &1u8).unwrap();
         require_law(&plain, "lj", "lj").unwrap();
         assert!(require_law(&plain, "morse", "lj").is_err());

@@ -113,9 +113,11 @@ impl Dynamics {
                     v.len()
                 )));
             }
-            if v.iter().any(|x| !x.is_finite()) {
+            if let Some(k) = v.iter().position(|x| !x.is_finite()) {
                 return Err(Error::checkpoint(format!(
-                    "the stored column {name} is not finite"
+                    "the stored column {name} holds {} at slot {}; the file is corrupt",
+                    v[k],
+                    k / width.max(1)
                 )));
             }
         }

@@ -541,7 +541,6 @@ impl<const D: usize, T: Real, L: ContactLaw> CpuEngine<D, T, L> {
             None => e.rebuild()?,
             Some(s) => e.load(s)?,
         }
-        Guarded::keep(&mut e)?;
         Ok(e)
     }
 

@@ -1,10 +1,28 @@
 //! The backend-neutral engine interface behind [`crate::Dem`].
 
-use simkit_backend::Result;
 use simkit_backend::particles::Dynamics;
+use simkit_backend::{Backend, Precision, Result};
 
-use crate::State;
 use crate::prepared::Prepared;
+use crate::{ContactLaw, State};
+
+/// The engine constructor of law `L` (`crate::sim::build_engine` compiled for it): the
+/// prepared scene, the CPU's precision, the backend and, on resume, the saved dynamic
+/// state.
+pub(crate) type Build<L> =
+    fn(Prepared<L>, Precision, Backend<'_>, Option<&Dynamics>) -> Result<Box<dyn Engine<L>>>;
+
+/// The engines of one contact law, compiled where this value is made: see
+/// [`ContactLaw::engines`].
+#[doc(hidden)]
+pub struct Engines<L>(pub(crate) Build<L>);
+
+impl<L: ContactLaw> Engines<L> {
+    /// The engines of `L`, compiled in the crate that calls this.
+    pub(crate) fn compiled_here() -> Self {
+        Self(crate::sim::build_engine::<L>)
+    }
+}
 
 /// One backend instance (CPU at some dimension and precision, or GPU).
 pub(crate) trait Engine<L>: Send {

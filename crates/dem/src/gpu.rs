@@ -236,6 +236,13 @@ impl<L: ContactLaw> GpuEngine<L> {
         let acc = GpuBuffer::from_slice(ctx, "dem acc", &acc_h)?;
         let vpred = GpuBuffer::from_slice(ctx, "dem vpred", &vel_h)?;
         let species = GpuBuffer::from_slice(ctx, "dem species", &prep.species)?;
+        // The kernel indexes the table by the WGSL struct's size: refuse a law whose mirror
+        // differs.
+        simkit_backend::testing::check_struct_size::<L::Gpu>(
+            L::WGSL,
+            "DemCoeff",
+            &format!("contact law '{}'", L::NAME),
+        )?;
         // The law's coefficients of the species pairs, then of the walls.
         let coeff: Vec<L::Gpu> = prep
             .pairs
@@ -450,10 +457,12 @@ type Loaded = (Vec<[f32; 4]>, Vec<[f32; 4]>, Vec<[f32; 4]>);
 /// The device arrays of a checkpoint, checked against the particle count.
 fn load(s: &Dynamics, n: usize) -> Result<Loaded> {
     s.check(n, 4, &["pos", "vel", "acc"])?;
-    if (0..n).any(|k| s.particle(k) != k) {
-        return Err(Error::checkpoint(
-            "the stored slots are not in scene order; the file does not belong to this scene",
-        ));
+    if let Some(k) = (0..n).find(|&k| s.particle(k) != k) {
+        return Err(Error::checkpoint(format!(
+            "slot {k} holds particle {}, not {k}: a GPU state is in scene order; resume a CPU \
+             checkpoint on the CPU",
+            s.particle(k)
+        )));
     }
     let arrays = |v: &[f64]| -> Vec<[f32; 4]> {
         v.chunks_exact(4)

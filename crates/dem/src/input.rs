@@ -287,6 +287,8 @@ impl<L: ContactLaw> Scene<L> {
     /// vectors or arrays).
     pub fn new(dim: Dim, lo: impl IntoVec3, hi: impl IntoVec3, material: L) -> Result<Self> {
         let (lo, hi) = (lo.into_vec3(), hi.into_vec3());
+        let is_default = std::any::TypeId::of::<L>() == std::any::TypeId::of::<Material>();
+        simkit_backend::checkpoint::check_law_name(L::NAME, Material::NAME, is_default)?;
         material.validate("particle material")?;
         for d in 0..dim.axes() {
             if !(lo[d].is_finite() && hi[d].is_finite() && hi[d] > lo[d]) {

@@ -7,6 +7,8 @@ use serde::Serialize;
 use serde::de::DeserializeOwned;
 use simkit_backend::{Real, Result};
 
+use crate::engine::Engines;
+
 /// The geometry and kinematics of one contact, as the force loops hand them to a
 /// [`ContactLaw`]: particle `i` touches `j` (another particle, or a wall of infinite mass).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -58,7 +60,9 @@ pub trait ContactLaw:
     /// `Coeff<f32>` laid out as the WGSL struct `DemCoeff` of [`ContactLaw::WGSL`].
     type Gpu: Pod + Send + Sync;
 
-    /// Short name of the law (checkpoints record it), e.g. `"linear"`.
+    /// Short name of the law (checkpoints record it, so a run resumes only with the law
+    /// that wrote it), e.g. `"linear"`: letters, digits, `-` and `_`, different from every
+    /// other law's (a scene refuses a law named as the built-in default).
     const NAME: &'static str;
 
     /// WGSL declaring `struct DemCoeff` and `fn dem_contact_force` (see the contract).
@@ -101,4 +105,14 @@ pub trait ContactLaw:
 
     /// The elastic energy stored in a contact of reduced mass `m_ij` and overlap `delta`.
     fn elastic_energy<T: Real>(c: &Self::Coeff<T>, m_ij: T, delta: T) -> T;
+
+    /// Where [`Dem`](crate::Dem)'s engines of this law (the CPU engine of each dimension
+    /// and precision, the GPU engine) are compiled. Keep the default, which compiles them
+    /// in the crate that runs the law. The built-in law overrides it with the same engines
+    /// so that they are compiled once, in `simkit-dem`, not again in every crate, test and
+    /// example that runs it (Rust compiles generic code where it is used).
+    #[doc(hidden)]
+    fn engines() -> Engines<Self> {
+        Engines::compiled_here()
+    }
 }

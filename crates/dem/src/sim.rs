@@ -124,25 +124,15 @@ impl<L: ContactLaw> Dem<L> {
         let single = backend.is_gpu() || config.precision == Precision::F32;
         let prep = Prepared::new(scene, config, single)?;
         diagnostics::check_initial_overlaps(&prep)?;
-        let engine: Box<dyn Engine<L>> = match backend {
-            Backend::Cpu => match (prep.axes, config.precision) {
-                (2, Precision::F64) => Box::new(CpuEngine::<2, f64, L>::new(prep, saved)?),
-                (2, Precision::F32) => Box::new(CpuEngine::<2, f32, L>::new(prep, saved)?),
-                (_, Precision::F64) => Box::new(CpuEngine::<3, f64, L>::new(prep, saved)?),
-                (_, Precision::F32) => Box::new(CpuEngine::<3, f32, L>::new(prep, saved)?),
-            },
-            #[cfg(feature = "gpu")]
-            Backend::Gpu(ctx) => {
-                if config.integrator != Integrator::VelocityVerlet {
-                    return Err(Error::Unsupported(
-                        "the GPU backend integrates with velocity Verlet only; use \
-                         Integrator::VelocityVerlet or the CPU backend"
-                            .into(),
-                    ));
-                }
-                Box::new(crate::gpu::GpuEngine::new(ctx, prep, saved)?)
-            }
-        };
+        #[cfg(feature = "gpu")]
+        if backend.is_gpu() && config.integrator != Integrator::VelocityVerlet {
+            return Err(Error::Unsupported(
+                "the GPU backend integrates with velocity Verlet only; use \
+                 Integrator::VelocityVerlet or the CPU backend"
+                    .into(),
+            ));
+        }
+        let engine = (L::engines().0)(prep, config.precision, backend, saved)?;
         Ok(Self {
             engine,
             scene: scene.clone(),
@@ -178,6 +168,26 @@ impl<L: ContactLaw> Dem<L> {
     pub fn wall_displacement(&self, t: f64) -> f64 {
         self.engine.prepared().wall_motion(t).0
     }
+}
+
+/// The engine of a prepared scene on `backend` ([`ContactLaw::engines`] says where it is
+/// compiled).
+pub(crate) fn build_engine<L: ContactLaw>(
+    prep: Prepared<L>,
+    precision: Precision,
+    backend: Backend<'_>,
+    saved: Option<&Dynamics>,
+) -> Result<Box<dyn Engine<L>>> {
+    Ok(match backend {
+        Backend::Cpu => match (prep.axes, precision) {
+            (2, Precision::F64) => Box::new(CpuEngine::<2, f64, L>::new(prep, saved)?),
+            (2, Precision::F32) => Box::new(CpuEngine::<2, f32, L>::new(prep, saved)?),
+            (_, Precision::F64) => Box::new(CpuEngine::<3, f64, L>::new(prep, saved)?),
+            (_, Precision::F32) => Box::new(CpuEngine::<3, f32, L>::new(prep, saved)?),
+        },
+        #[cfg(feature = "gpu")]
+        Backend::Gpu(ctx) => Box::new(crate::gpu::GpuEngine::new(ctx, prep, saved)?),
+    })
 }
 
 impl<L: ContactLaw> Simulation for Dem<L> {

@@ -1,9 +1,40 @@
 //! The backend-neutral engine interface behind [`crate::Md`].
 
-use simkit_backend::Result;
 use simkit_backend::particles::Dynamics;
+use simkit_backend::{Backend, Result};
 
-use crate::{Diagnostics, State};
+use crate::{Config, Diagnostics, PairLaw, State, System};
+
+/// The engine constructor of law `L` (`crate::sim::build_engine` compiled for it): the
+/// system, the settings, the resolved time step, the backend and, on resume, the saved
+/// dynamic state.
+pub(crate) type Build<L> =
+    fn(&System<L>, &Config, f64, Backend<'_>, Option<&Dynamics>) -> Result<Box<dyn Engine>>;
+
+/// The engines of one pair law, compiled where this value is made: see
+/// [`PairLaw::engines`].
+#[doc(hidden)]
+pub struct Engines<L>(pub(crate) Build<L>);
+
+impl<L: PairLaw> Engines<L> {
+    /// The engines of `L`, compiled in the crate that calls this.
+    pub(crate) fn compiled_here() -> Self {
+        Self(crate::sim::build_engine::<L>)
+    }
+}
+
+/// The override of [`PairLaw::engines`] for the built-in laws: their engines are compiled
+/// once, in this crate (`inline(never)` keeps the function, and so the engines, from
+/// being copied into the crates that call it).
+macro_rules! engines_compiled_in_simkit_md {
+    () => {
+        #[inline(never)]
+        fn engines() -> crate::engine::Engines<Self> {
+            crate::engine::Engines::compiled_here()
+        }
+    };
+}
+pub(crate) use engines_compiled_in_simkit_md;
 
 /// One backend instance (the CPU at some dimension and precision).
 pub(crate) trait Engine: Send {

@@ -7,6 +7,8 @@ use serde::Serialize;
 use serde::de::DeserializeOwned;
 use simkit_backend::{Real, Result};
 
+use crate::engine::Engines;
+
 /// A pair potential `phi(r)` cut at `r_c`: its parameters for one species pair (the
 /// implementing type itself), the coefficients the force loops read, the force and energy
 /// as one Rust function generic over [`Real`] with its WGSL twin, the cutoff, and the
@@ -34,7 +36,7 @@ use simkit_backend::{Real, Result};
 /// - [`validate`](PairLaw::validate) refuses parameters whose coefficients would not be
 ///   finite in `f32` (the GPU and the `f32` CPU backend compute in it).
 ///
-/// A complete law from outside the crate, with its GPU test, is `examples/custom_law.rs`;
+/// A complete law from outside the crate, with its GPU test, is `examples/custom_law/`;
 /// the guide `docs/md.md` walks through it.
 pub trait PairLaw:
     Copy + Debug + PartialEq + Send + Sync + Serialize + DeserializeOwned + 'static
@@ -47,7 +49,8 @@ pub trait PairLaw:
     type Gpu: Pod + Send + Sync;
 
     /// Short name of the law (checkpoints record it, so a run resumes only with the law
-    /// that wrote it), e.g. `"lj"`, `"morse"`.
+    /// that wrote it), e.g. `"lj"`, `"morse"`: letters, digits, `-` and `_`, different
+    /// from every other law's (a table refuses a law named as the built-in default).
     const NAME: &'static str;
 
     /// WGSL declaring `struct MdCoeff` and `fn md_pair_force_energy(c: MdCoeff, r2: f32)
@@ -97,5 +100,15 @@ pub trait PairLaw:
         let c = self.coefficients::<f64>(0.0);
         let (f, e) = Self::force_energy(&c, r * r);
         (f.abs(), e.abs())
+    }
+
+    /// Where [`Md`](crate::Md)'s engines of this law (the CPU engine of each dimension and
+    /// precision, the GPU engine) are compiled. Keep the default, which compiles them in
+    /// the crate that runs the law. The built-in laws override it with the same engines
+    /// so that they are compiled once, in `simkit-md`, not again in every crate, test and
+    /// example that runs them (Rust compiles generic code where it is used).
+    #[doc(hidden)]
+    fn engines() -> Engines<Self> {
+        Engines::compiled_here()
     }
 }

@@ -1,6 +1,6 @@
 //! The law-level GPU test of a [`PairLaw`]: its WGSL twin against its Rust function.
 
-use simkit_backend::testing::{eval_wgsl2, wgsl_struct};
+use simkit_backend::testing::{check_struct_size, eval_wgsl2};
 use simkit_backend::{Error, GpuContext, Result};
 
 use crate::PairLaw;
@@ -27,20 +27,12 @@ pub struct LawCheck {
 /// [`PairLaw::Gpu`].
 ///
 /// This is the test every built-in law passes (`tests/laws.rs`); run it on a law of your
-/// own the same way (`examples/custom_law.rs`).
+/// own the same way (`examples/custom_law/`).
 ///
 /// Errors: invalid laws, a size mismatch of `MdCoeff`, any GPU failure, and a
 /// disagreement, naming the parameters, the distance and both results.
 pub fn check_law_on_gpu<L: PairLaw>(ctx: &GpuContext, laws: &[L], ulps: f64) -> Result<LawCheck> {
-    let layout = wgsl_struct(L::WGSL, "MdCoeff")?;
-    let rust = std::mem::size_of::<L::Gpu>();
-    if layout.size as usize != rust {
-        return Err(Error::invalid(
-            format!("WGSL struct MdCoeff of law '{}'", L::NAME),
-            format!("{} bytes", layout.size),
-            format!("must have the size of the Rust mirror PairLaw::Gpu ({rust} bytes)"),
-        ));
-    }
+    check_struct_size::<L::Gpu>(L::WGSL, "MdCoeff", &format!("law '{}'", L::NAME))?;
     let mut coeff = Vec::new();
     let mut r2s = Vec::new();
     let mut twins = Vec::new();

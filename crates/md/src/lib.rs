@@ -14,7 +14,7 @@
 //!   [`LennardJones`] (`4 eps (a (sigma/r)^12 - b (sigma/r)^6)`, the default law),
 //!   [`Morse`], [`Yukawa`], [`Mie`], [`Wca`], [`Buckingham`], each validated against
 //!   LAMMPS. A law of your own runs at the speed of a built-in one on every backend
-//!   (`examples/custom_law.rs`; test its WGSL with [`check_law_on_gpu`]).
+//!   (`examples/custom_law/`; test its WGSL with [`check_law_on_gpu`]).
 //! - [`System`]: box, species masses, pair table, particles (validated).
 //! - [`Md`]: the run, `Md::new(&system, &config, backend)`, implementing
 //!   [`simkit_backend::Simulation`] and [`simkit_backend::Restart`].

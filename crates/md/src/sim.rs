@@ -174,26 +174,7 @@ impl<L: PairLaw> Md<L> {
         saved: Option<&Dynamics>,
     ) -> Result<Self> {
         let dt = config.resolve_dt(system)?;
-        let engine: Box<dyn Engine> = match backend {
-            Backend::Cpu => match (system.dim(), config.precision) {
-                (Dim::Two, Precision::F64) => {
-                    Box::new(CpuEngine::<2, f64, L>::new(system, config, dt, saved)?)
-                }
-                (Dim::Two, Precision::F32) => {
-                    Box::new(CpuEngine::<2, f32, L>::new(system, config, dt, saved)?)
-                }
-                (Dim::Three, Precision::F64) => {
-                    Box::new(CpuEngine::<3, f64, L>::new(system, config, dt, saved)?)
-                }
-                (Dim::Three, Precision::F32) => {
-                    Box::new(CpuEngine::<3, f32, L>::new(system, config, dt, saved)?)
-                }
-            },
-            #[cfg(feature = "gpu")]
-            Backend::Gpu(ctx) => {
-                Box::new(crate::gpu::GpuEngine::new(ctx, system, config, dt, saved)?)
-            }
-        };
+        let engine = (L::engines().0)(system, config, dt, backend, saved)?;
         Ok(Self {
             engine,
             system: system.clone(),
@@ -251,6 +232,34 @@ impl<L: PairLaw> Simulation for Md<L> {
     fn backend_name(&self) -> String {
         self.engine.name()
     }
+}
+
+/// The engine of `system` on `backend` ([`PairLaw::engines`] says where it is compiled).
+pub(crate) fn build_engine<L: PairLaw>(
+    system: &System<L>,
+    config: &Config,
+    dt: f64,
+    backend: Backend<'_>,
+    saved: Option<&Dynamics>,
+) -> Result<Box<dyn Engine>> {
+    Ok(match backend {
+        Backend::Cpu => match (system.dim(), config.precision) {
+            (Dim::Two, Precision::F64) => {
+                Box::new(CpuEngine::<2, f64, L>::new(system, config, dt, saved)?)
+            }
+            (Dim::Two, Precision::F32) => {
+                Box::new(CpuEngine::<2, f32, L>::new(system, config, dt, saved)?)
+            }
+            (Dim::Three, Precision::F64) => {
+                Box::new(CpuEngine::<3, f64, L>::new(system, config, dt, saved)?)
+            }
+            (Dim::Three, Precision::F32) => {
+                Box::new(CpuEngine::<3, f32, L>::new(system, config, dt, saved)?)
+            }
+        },
+        #[cfg(feature = "gpu")]
+        Backend::Gpu(ctx) => Box::new(crate::gpu::GpuEngine::new(ctx, system, config, dt, saved)?),
+    })
 }
 
 /// Checkpoints hold the system, the settings, the step count, the positions and the

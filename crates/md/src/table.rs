@@ -128,6 +128,8 @@ impl<L: PairLaw> PairTable<L> {
 /// The law's own checks, then what every backend needs of any law: a cutoff whose square is
 /// a normal `f64` and a finite energy at the cutoff (the shift).
 fn check_entry<L: PairLaw>(law: &L, si: usize, sj: usize) -> Result<()> {
+    let is_default = std::any::TypeId::of::<L>() == std::any::TypeId::of::<LennardJones>();
+    simkit_backend::checkpoint::check_law_name(L::NAME, LennardJones::NAME, is_default)?;
     let pair = format!("pair ({si}, {sj})");
     law.validate(&pair)?;
     let rc = law.cutoff();
@@ -135,7 +137,7 @@ fn check_entry<L: PairLaw>(law: &L, si: usize, sj: usize) -> Result<()> {
         return Err(Error::invalid(
             format!("{pair} cutoff"),
             rc,
-            "must be finite and > 0, its square a normal f64",
+            "must be finite and > 0, its square a normal f64; rescale the length unit",
         ));
     }
     let shift = law.energy(rc);
@@ -143,7 +145,7 @@ fn check_entry<L: PairLaw>(law: &L, si: usize, sj: usize) -> Result<()> {
         return Err(Error::invalid(
             format!("{pair} energy at the cutoff"),
             shift,
-            "must be finite (it is the energy shift)",
+            "must be finite (it is the energy shift); move the cutoff out of the law's core",
         ));
     }
     Ok(())

@@ -298,6 +298,9 @@ impl GpuGuard {
     /// steps. On [`GuardedRun::Failed`] the caller explains the failure from the live
     /// buffers and calls [`GpuGuard::rollback`].
     ///
+    /// A failed check of the starting state (nothing stepped) is `Failed` with `good = bad =
+    /// done`; the snapshots then hold the last state that passed in an earlier call.
+    ///
     /// Errors: a step count that would overflow, and any GPU failure.
     #[allow(clippy::too_many_arguments)]
     pub fn run(
@@ -341,20 +344,13 @@ impl GpuGuard {
         let report = self.report(ctx)?;
         Ok(match report.bad {
             None => GuardedRun::Passed { steps: at },
-            Some((label, _)) if report.passed == 0 => {
-                // The starting state passed its check when it was made: it was changed
-                // outside the run, and there is no snapshot to go back to.
-                return Err(Error::invalid(
-                    format!("device buffer '{label}' at step {done}"),
-                    "not finite",
-                    "the state changed outside the run since the last step; rebuild the \
-                     simulation from a checkpoint",
-                ));
-            }
             Some((label, index)) => {
+                // `passed = 0`: the starting state failed (e.g. a health flag a rebuild set
+                // after a rollback): nothing was stepped, `good = bad = done`, and the
+                // snapshots still hold the last state that passed in an earlier call.
                 let passed = (report.passed as usize).min(checks.len() - 1);
                 GuardedRun::Failed {
-                    good: checks[passed - 1],
+                    good: checks[passed.saturating_sub(1)],
                     bad: checks[passed],
                     label,
                     index,

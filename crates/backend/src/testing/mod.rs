@@ -13,7 +13,9 @@ mod wgsl;
 pub use mpirun::check_on_ranks;
 pub use mpirun::{MPI_CHILD_ENV, REQUIRE_MPI_ENV, is_mpi_child, mpirun_self};
 #[cfg(feature = "gpu")]
-pub use wgsl::{FieldOffset, WgslStruct, assert_mirrors, eval_wgsl, eval_wgsl2, wgsl_struct};
+pub use wgsl::{
+    FieldOffset, WgslStruct, assert_mirrors, check_struct_size, eval_wgsl, eval_wgsl2, wgsl_struct,
+};
 
 #[cfg(feature = "gpu")]
 use std::sync::OnceLock;

@@ -45,6 +45,26 @@ pub fn wgsl_struct(source: &str, name: &str) -> Result<WgslStruct> {
     ))
 }
 
+/// Refuses a Rust mirror `T` whose size differs from WGSL struct `name` in `source` (the
+/// GPU would read shifted values silently); `what` names the mirror in the error.
+///
+/// Errors: the struct is missing or does not parse, or the sizes differ (naming both).
+pub fn check_struct_size<T: Pod>(source: &str, name: &str, what: &str) -> Result<()> {
+    let layout = wgsl_struct(source, name)?;
+    let rust = std::mem::size_of::<T>();
+    if layout.size as usize != rust {
+        return Err(Error::invalid(
+            format!("WGSL struct {name} of {what}"),
+            format!("{} bytes", layout.size),
+            format!(
+                "must have the size of its Rust mirror ({rust} bytes); declare the same \
+                 fields as the mirror, f32 scalars only"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// One field of a Rust mirror: its name in the WGSL struct and its Rust byte offset
 /// (`std::mem::offset_of!`).
 pub type FieldOffset = (&'static str, usize);

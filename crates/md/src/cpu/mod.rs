@@ -128,20 +128,17 @@ impl<const D: usize, T: Real, L: PairLaw> CpuEngine<D, T, L> {
         let r_c = system.table().max_cutoff();
         let range = list_range(system, config.skin);
         let list = BlockedHalfList::new(lo, len, periodic, range, n)?;
+        // The lengths and the f64 values were checked by `Dynamics::check`; in `f32` a
+        // finite f64 may still overflow.
         let unflat = |v: &[f64], what: &str| -> Result<Vec<[T; D]>> {
-            if Some(v.len()) != n.checked_mul(D) {
-                return Err(Error::checkpoint(format!(
-                    "the stored {what} have {} values for {n} particles in {D}D",
-                    v.len()
-                )));
-            }
             let out: Vec<[T; D]> = v
                 .chunks_exact(D)
                 .map(|c| std::array::from_fn(|d| T::from_f64(c[d])))
                 .collect();
             if out.iter().flatten().any(|x| !x.to_f64().is_finite()) {
                 return Err(Error::checkpoint(format!(
-                    "the stored {what} are not finite"
+                    "the stored {what} overflow {}",
+                    T::WGSL
                 )));
             }
             Ok(out)

@@ -272,6 +272,13 @@ impl<L: PairLaw> GpuEngine<L> {
         let vel = GpuBuffer::from_slice(ctx, "md vel", &pad(vel_h))?;
         let acc = GpuBuffer::<[f32; 4]>::zeroed(ctx, "md acc", n.max(1))?;
         let vir = GpuBuffer::<f32>::zeroed(ctx, "md vir", n.max(1))?;
+        // The kernels index the table by the WGSL struct's size: refuse a law whose mirror
+        // differs.
+        simkit_backend::testing::check_struct_size::<L::Gpu>(
+            L::WGSL,
+            "MdCoeff",
+            &format!("pair law '{}'", L::NAME),
+        )?;
         let coeff: Vec<L::Gpu> = system
             .table()
             .coefficients::<f32>(config.shift)

@@ -60,11 +60,13 @@ impl PairLaw for Buckingham {
     const NAME: &'static str = "buck";
     const WGSL: &'static str = simkit_backend::wgsl!("laws/buckingham.wgsl");
 
+    crate::engine::engines_compiled_in_simkit_md!();
+
     fn validate(&self, pair: &str) -> Result<()> {
         non_negative(pair, "a", self.a, "")?;
         bounded(pair, "a", "A", self.a)?;
         positive(pair, "rho", self.rho)?;
-        bounded(pair, "rho", "1 / rho", 1.0 / self.rho)?;
+        bounded(pair, "1 / rho", "1 / rho", 1.0 / self.rho)?;
         non_negative(pair, "c", self.c, "")?;
         bounded(pair, "c", "C", self.c)?;
         check_cutoff(pair, self.r_c)

@@ -85,6 +85,8 @@ impl PairLaw for LennardJones {
     const NAME: &'static str = "lj";
     const WGSL: &'static str = simkit_backend::wgsl!("laws/lennard_jones.wgsl");
 
+    crate::engine::engines_compiled_in_simkit_md!();
+
     fn validate(&self, pair: &str) -> Result<()> {
         let p = *self;
         non_negative(pair, "eps", p.eps, "(0 switches the pair off)")?;

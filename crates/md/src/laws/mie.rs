@@ -80,6 +80,8 @@ impl PairLaw for Mie {
     const NAME: &'static str = "mie";
     const WGSL: &'static str = simkit_backend::wgsl!("laws/mie.wgsl");
 
+    crate::engine::engines_compiled_in_simkit_md!();
+
     fn validate(&self, pair: &str) -> Result<()> {
         non_negative(pair, "eps", self.eps, "(0 switches the pair off)")?;
         positive(pair, "sigma", self.sigma)?;

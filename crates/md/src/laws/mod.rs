@@ -74,10 +74,11 @@ pub(crate) fn check_cutoff(pair: &str, r_c: f64) -> Result<()> {
     Ok(())
 }
 
-/// The smallest `r` in `(0, r_c)` where `phi` has a minimum, found from the sign of `phi'`
-/// (`dphi`): scanning inwards from `r_c` on a geometric grid for the first step where the
-/// derivative turns from positive (attraction outside) to negative (repulsion inside),
-/// then bisecting. `None` when `phi` has no minimum inside the cutoff.
+/// The outermost minimum of `phi` in `(0, r_c)`, found from the sign of `phi'` (`dphi`):
+/// scanning inwards from `r_c` on a geometric grid (down to `1e-4 r_c`) for the first step
+/// where the derivative turns from positive (attraction outside) to negative (repulsion
+/// inside), then bisecting. `None` when `phi` is not attractive at `r_c` or has no such
+/// turn inside the cutoff.
 pub(crate) fn well_inside(r_c: f64, dphi: impl Fn(f64) -> f64) -> Option<f64> {
     let steps = 4000;
     let ratio = 1e-4f64.powf(1.0 / steps as f64);

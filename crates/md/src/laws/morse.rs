@@ -53,6 +53,8 @@ impl PairLaw for Morse {
     const NAME: &'static str = "morse";
     const WGSL: &'static str = simkit_backend::wgsl!("laws/morse.wgsl");
 
+    crate::engine::engines_compiled_in_simkit_md!();
+
     fn validate(&self, pair: &str) -> Result<()> {
         non_negative(pair, "d0", self.d0, "(0 switches the pair off)")?;
         positive(pair, "alpha", self.alpha)?;
@@ -117,7 +119,8 @@ impl PairLaw for Morse {
         }
     }
 
-    /// At the minimum `r0`, where `phi'' = 2 alpha^2 D0`; `None` for `D0 = 0`.
+    /// At the minimum `r0`, where `phi'' = 2 alpha^2 D0`; `None` for `D0 = 0`, and for a
+    /// minimum at 0 or at or beyond the cutoff.
     fn stiffness(&self) -> Option<(f64, f64)> {
         (self.d0 > 0.0 && self.r0 > 0.0 && self.r0 < self.r_c)
             .then_some((self.r0, 2.0 * self.alpha * self.alpha * self.d0))

@@ -39,6 +39,8 @@ impl PairLaw for Wca {
     const NAME: &'static str = "wca";
     const WGSL: &'static str = LennardJones::WGSL;
 
+    crate::engine::engines_compiled_in_simkit_md!();
+
     fn validate(&self, pair: &str) -> Result<()> {
         positive(pair, "sigma", self.sigma)?;
         self.lennard_jones().validate(pair)

@@ -50,17 +50,17 @@ impl PairLaw for Yukawa {
     const NAME: &'static str = "yukawa";
     const WGSL: &'static str = simkit_backend::wgsl!("laws/yukawa.wgsl");
 
+    crate::engine::engines_compiled_in_simkit_md!();
+
     fn validate(&self, pair: &str) -> Result<()> {
-        bounded(
-            pair,
-            "a",
-            "A",
-            if self.a.is_nan() {
-                f64::INFINITY
-            } else {
-                self.a
-            },
-        )?;
+        if self.a.is_nan() {
+            return Err(simkit_backend::Error::invalid(
+                format!("{pair} a"),
+                self.a,
+                "must be a finite strength (A > 0: like charges, A < 0: opposite ones)",
+            ));
+        }
+        bounded(pair, "a", "A", self.a)?;
         non_negative(pair, "kappa", self.kappa, "(0: unscreened)")?;
         bounded(pair, "kappa", "kappa", self.kappa)?;
         check_cutoff(pair, self.r_c)
