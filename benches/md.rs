@@ -132,7 +132,7 @@ const GPU_STEPS: u32 = 20;
 fn config(precision: Precision) -> Config {
     Config {
         precision,
-        ..Config::with_dt(0.005)
+        ..Config::default().with_dt(0.005)
     }
 }
 

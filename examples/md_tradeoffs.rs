@@ -83,7 +83,7 @@ fn liquid() -> Result<System> {
 }
 
 fn config(dt: f64, skin: f64, precision: Precision) -> Config {
-    let mut c = Config::with_dt(dt);
+    let mut c = Config::default().with_dt(dt);
     c.skin = skin;
     c.precision = precision;
     c.shift = true;

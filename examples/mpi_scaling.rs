@@ -177,7 +177,7 @@ fn run(args: &Args) -> Result<()> {
             let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5))?;
             // The velocity seed of in.lj (the one `scenes::lj_melt` uses).
             let system = md_scenes::fcc_lattice([cells; 3], 0.8442, 1.44, table, &[0], 87287)?;
-            let config = MdConfig::with_dt(0.005);
+            let config = MdConfig::default().with_dt(0.005);
             let mut run = DistributedMd::new(&system, &config, comm.clone())?;
             let n = system.particle_count();
             drop(system);

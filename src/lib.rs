@@ -52,7 +52,7 @@ pub mod files;
 pub mod prelude {
     #[cfg(feature = "gpu")]
     pub use crate::backend::GpuContext;
-    pub use crate::backend::{Backend, Error, Precision, Real, Result, Simulation};
+    pub use crate::backend::{Backend, Error, Precision, Real, Restart, Result, Simulation};
     pub use crate::dem::Dem;
     pub use crate::lattice_gas::{Lattice, LatticeGas};
     pub use crate::md::Md;

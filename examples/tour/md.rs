@@ -20,7 +20,7 @@ pub fn run(backend: Backend<'_>, out: &Path) -> Result<Row> {
     let n = system.particle_count() as f64;
     let config = Config {
         shift: true,
-        ..Config::with_dt(0.005)
+        ..Config::default().with_dt(0.005)
     };
     let mut md = Md::new(&system, &config, backend)?;
     let (steps, every) = (600u32, 20u32);

@@ -108,10 +108,69 @@ impl Config {
         self
     }
 
+    /// Settings with another Verlet-list skin (fraction of the largest diameter).
+    pub fn with_skin(mut self, skin: f64) -> Self {
+        self.skin = skin;
+        self
+    }
+
     /// Explicitly accepts a time step over the safe bound.
     pub fn allow_unstable_dt(mut self) -> Self {
         self.allow_unstable_dt = true;
         self
+    }
+
+    /// Checks the settings that do not depend on a scene ([`Dem::new`](crate::Dem::new)
+    /// calls it).
+    ///
+    /// Errors: a `dt` that is not finite and `> 0`, a skin outside `[0, 100]`, a
+    /// `max_overlap` that is NaN or `<= 0`; each naming the value and the fix.
+    pub fn validate(&self) -> Result<()> {
+        if let Some(dt) = self.dt {
+            simkit_backend::require_positive("dt", dt)?;
+        }
+        if !(self.skin.is_finite() && self.skin >= 0.0 && self.skin <= 100.0) {
+            return Err(Error::invalid(
+                "skin",
+                self.skin,
+                "must be finite and in [0, 100] (a fraction of the largest diameter; 0.1 is \
+                 usual)",
+            ));
+        }
+        if self.max_overlap.is_nan() || self.max_overlap <= 0.0 {
+            return Err(Error::invalid(
+                "max_overlap",
+                self.max_overlap,
+                "must be > 0 (a fraction of the smaller radius; f64::INFINITY turns the guard \
+                 off)",
+            ));
+        }
+        Ok(())
+    }
+
+    /// Checks the settings ([`Config::validate`]) and returns the time step the solver
+    /// will use for `scene`: `dt`, or `t_c / 30` of the shortest contact time in the scene.
+    ///
+    /// Errors: those of [`Config::validate`]; [`Error::Unstable`] when the step exceeds
+    /// [`safe_dt`] without [`allow_unstable_dt`](Self::allow_unstable_dt).
+    pub fn resolve_dt<L: ContactLaw>(&self, scene: &Scene<L>) -> Result<f64> {
+        self.validate()?;
+        let dt = match self.dt {
+            Some(dt) => dt,
+            None => scene.min_contact_time() / DEFAULT_STEPS_PER_CONTACT,
+        };
+        let bound = safe_dt(scene);
+        if dt > bound * (1.0 + 1e-12) && !self.allow_unstable_dt {
+            return Err(Error::Unstable {
+                dt,
+                bound,
+                reason: "the smallest ContactLaw::safe_dt over all contact materials (linear \
+                         law: min(t_c / 5, 1 / omega_0)); set Config::allow_unstable_dt to \
+                         override"
+                    .into(),
+            });
+        }
+        Ok(dt)
     }
 }
 
@@ -125,39 +184,4 @@ pub fn safe_dt<L: ContactLaw>(scene: &Scene<L>) -> f64 {
         .chain(scene.walls().iter().map(|w| &w.material))
         .map(L::safe_dt)
         .fold(f64::INFINITY, f64::min)
-}
-
-/// The time step the solver will use for `scene` with `config`, or an
-/// [`Error::Unstable`] when it exceeds [`safe_dt`] without the explicit override.
-pub fn resolve_dt<L: ContactLaw>(scene: &Scene<L>, config: &Config) -> Result<f64> {
-    let dt = match config.dt {
-        Some(dt) => simkit_backend::require_positive("dt", dt)?,
-        None => scene.min_contact_time() / DEFAULT_STEPS_PER_CONTACT,
-    };
-    let bound = safe_dt(scene);
-    if dt > bound * (1.0 + 1e-12) && !config.allow_unstable_dt {
-        return Err(Error::Unstable {
-            dt,
-            bound,
-            reason: "the smallest ContactLaw::safe_dt over all contact materials (linear law: \
-                     min(t_c / 5, 1 / omega_0)); \
-                     set Config::allow_unstable_dt to override"
-                .into(),
-        });
-    }
-    if !(config.skin.is_finite() && config.skin >= 0.0 && config.skin <= 100.0) {
-        return Err(Error::invalid(
-            "skin",
-            config.skin,
-            "must be finite and in [0, 100] (a fraction of the largest diameter; 0.1 is usual)",
-        ));
-    }
-    if config.max_overlap.is_nan() || config.max_overlap <= 0.0 {
-        return Err(Error::invalid(
-            "max_overlap",
-            config.max_overlap,
-            "must be > 0 (a fraction of the smaller radius; f64::INFINITY turns the guard off)",
-        ));
-    }
-    Ok(dt)
 }

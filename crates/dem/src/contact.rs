@@ -135,14 +135,7 @@ impl ContactLaw for Material {
     type Gpu = [f32; 4];
     const NAME: &'static str = "linear";
     const WGSL: &'static str = simkit_backend::wgsl!("contact.wgsl");
-
-    /// The engines of the built-in law are compiled once, in this crate (`inline(never)`
-    /// keeps the function, and so the engines, from being copied into the crates that
-    /// call it).
-    #[inline(never)]
-    fn engines() -> crate::engine::Engines<Self> {
-        crate::engine::Engines::compiled_here()
-    }
+    const BUILT_IN: bool = true;
 
     fn validate(&self, what: &str) -> Result<()> {
         self.check(what)

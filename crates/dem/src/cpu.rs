@@ -1185,7 +1185,7 @@ impl<const D: usize, T: Real, L: ContactLaw> crate::engine::Engine<L> for CpuEng
     }
 
     fn model(&self) -> String {
-        crate::sim::model_name::<L>(false, T::PRECISION, D)
+        crate::engine::model_name::<L>(false, T::PRECISION, D)
     }
 
     fn save(&mut self) -> Result<Dynamics> {

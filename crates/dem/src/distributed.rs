@@ -16,8 +16,9 @@ use crate::cpu::{
     AXES, ForceInput, WallT, contact_force, drift_velocity_verlet, max_displacement2, wall_force,
     walls_of, wrap,
 };
+use crate::engine::model_name;
 use crate::prepared::Prepared;
-use crate::sim::{decode, encode, model_name};
+use crate::sim::{decode, encode};
 use crate::{Config, ContactLaw, Diagnostics, Integrator, Material, Scene, State, diagnostics};
 
 /// Owned particles per rayon task of the per-particle passes.

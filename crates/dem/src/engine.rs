@@ -1,27 +1,21 @@
 //! The backend-neutral engine interface behind [`crate::Dem`].
 
 use simkit_backend::particles::Dynamics;
-use simkit_backend::{Backend, Precision, Result};
+use simkit_backend::{Precision, Result, checkpoint};
 
 use crate::prepared::Prepared;
-use crate::{ContactLaw, State};
+use crate::{ContactLaw, Material, State};
 
-/// The engine constructor of law `L` (`crate::sim::build_engine` compiled for it): the
-/// prepared scene, the CPU's precision, the backend and, on resume, the saved dynamic
-/// state.
-pub(crate) type Build<L> =
-    fn(Prepared<L>, Precision, Backend<'_>, Option<&Dynamics>) -> Result<Box<dyn Engine<L>>>;
-
-/// The engines of one contact law, compiled where this value is made: see
-/// [`ContactLaw::engines`].
-#[doc(hidden)]
-pub struct Engines<L>(pub(crate) Build<L>);
-
-impl<L: ContactLaw> Engines<L> {
-    /// The engines of `L`, compiled in the crate that calls this.
-    pub(crate) fn compiled_here() -> Self {
-        Self(crate::sim::build_engine::<L>)
-    }
+/// The checkpoint model string of an engine: backend, precision, dimension and, for a
+/// contact law other than the default [`Material`], the law's name
+/// ([`checkpoint::model_with_law`]).
+pub(crate) fn model_name<L: ContactLaw>(gpu: bool, precision: Precision, axes: usize) -> String {
+    let kind = if gpu {
+        format!("gpu f32, {axes}")
+    } else {
+        format!("cpu {}, {axes}", precision.wgsl())
+    };
+    checkpoint::model_with_law("Dem", &kind, L::NAME, Material::NAME)
 }
 
 /// One backend instance (CPU at some dimension and precision, or GPU).

@@ -621,7 +621,7 @@ impl<L: ContactLaw> Engine<L> for GpuEngine<L> {
     }
 
     fn model(&self) -> String {
-        crate::sim::model_name::<L>(true, Precision::F32, self.prep.axes)
+        crate::engine::model_name::<L>(true, Precision::F32, self.prep.axes)
     }
 
     fn save(&mut self) -> Result<Dynamics> {

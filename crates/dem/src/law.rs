@@ -7,8 +7,6 @@ use serde::Serialize;
 use serde::de::DeserializeOwned;
 use simkit_backend::{Real, Result};
 
-use crate::engine::Engines;
-
 /// The geometry and kinematics of one contact, as the force loops hand them to a
 /// [`ContactLaw`]: particle `i` touches `j` (another particle, or a wall of infinite mass).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -68,6 +66,14 @@ pub trait ContactLaw:
     /// WGSL declaring `struct DemCoeff` and `fn dem_contact_force` (see the contract).
     const WGSL: &'static str;
 
+    /// Whether the law is one of `simkit-dem`'s own: their engines (the CPU engine of each
+    /// dimension and precision, the GPU engine) are compiled once, in `simkit-dem`, instead
+    /// of again in every crate, test and example that runs them (Rust compiles generic
+    /// code where it is used). Leave it `false`: a law of your own has its engines
+    /// compiled in your crate, and one that claims to be built in is refused.
+    #[doc(hidden)]
+    const BUILT_IN: bool = false;
+
     /// Checks the parameters; `what` names the material for the error message (e.g.
     /// `"species pair (0, 1)"`, `"wall 2"`).
     ///
@@ -105,14 +111,4 @@ pub trait ContactLaw:
 
     /// The elastic energy stored in a contact of reduced mass `m_ij` and overlap `delta`.
     fn elastic_energy<T: Real>(c: &Self::Coeff<T>, m_ij: T, delta: T) -> T;
-
-    /// Where [`Dem`](crate::Dem)'s engines of this law (the CPU engine of each dimension
-    /// and precision, the GPU engine) are compiled. Keep the default, which compiles them
-    /// in the crate that runs the law. The built-in law overrides it with the same engines
-    /// so that they are compiled once, in `simkit-dem`, not again in every crate, test and
-    /// example that runs it (Rust compiles generic code where it is used).
-    #[doc(hidden)]
-    fn engines() -> Engines<Self> {
-        Engines::compiled_here()
-    }
 }

@@ -92,6 +92,7 @@
 // Links to the GPU items resolve when they are compiled (the `gpu` feature, on by default).
 #![cfg_attr(not(feature = "gpu"), allow(rustdoc::broken_intra_doc_links))]
 
+mod build;
 mod config;
 mod contact;
 mod cpu;
@@ -108,9 +109,7 @@ mod sim;
 mod units;
 mod walls;
 
-pub use config::{
-    Config, DEFAULT_MAX_OVERLAP, DEFAULT_STEPS_PER_CONTACT, Integrator, resolve_dt, safe_dt,
-};
+pub use config::{Config, DEFAULT_MAX_OVERLAP, DEFAULT_STEPS_PER_CONTACT, Integrator, safe_dt};
 pub use contact::{ContactCoefficients, friction_force, normal_force, reduced_mass, spring_energy};
 pub use diagnostics::Diagnostics;
 pub use diagnostics::MAX_INITIAL_OVERLAP;
@@ -118,7 +117,7 @@ pub use distributed::DistributedDem;
 pub use input::{Dim, Material, Particle, Scene, Vibration, Wall, WallShape, pair_index};
 pub use law::{Contact, ContactLaw};
 pub use sim::Dem;
-pub use simkit_backend::Precision;
 pub use simkit_backend::particles::State;
+pub use simkit_backend::{Backend, Error, Precision, Real, Restart, Result, Simulation};
 pub use units::Units;
 pub use walls::{cylinder_overlap, plane_overlap, wall_motion};

@@ -4,7 +4,7 @@ use simkit_backend::{Error, Result};
 
 use crate::{
     Config, ContactLaw, Integrator, Scene, Vibration, WallShape, cylinder_overlap, plane_overlap,
-    resolve_dt, safe_dt, wall_motion,
+    safe_dt, wall_motion,
 };
 
 /// Largest magnitude of any length, speed, mass or coefficient the `f64` engines accept:
@@ -118,7 +118,7 @@ impl<L: ContactLaw> Prepared<L> {
     /// same inputs.
     pub fn new(scene: &Scene<L>, config: &Config, single: bool) -> Result<Self> {
         scene.check_ready()?;
-        let dt = resolve_dt(scene, config)?;
+        let dt = config.resolve_dt(scene)?;
         let (limit, precision) = if single {
             (F32_LIMIT, "f32")
         } else {

@@ -3,25 +3,12 @@
 use serde::{Deserialize, Serialize};
 use simkit_backend::{Backend, Error, Restart, Result, Simulation, checkpoint};
 
-use crate::cpu::CpuEngine;
 use crate::diagnostics;
-use crate::engine::Engine;
+use crate::engine::{Engine, model_name};
 use crate::input::SceneRecord;
 use crate::prepared::Prepared;
 use crate::{Config, ContactLaw, Diagnostics, Integrator, Material, Precision, Scene, State};
 use simkit_backend::particles::Dynamics;
-
-/// The checkpoint model string of an engine: backend, precision, dimension and, for a
-/// contact law other than the default [`Material`], the law's name
-/// ([`checkpoint::model_with_law`]).
-pub(crate) fn model_name<L: ContactLaw>(gpu: bool, precision: Precision, axes: usize) -> String {
-    let kind = if gpu {
-        format!("gpu f32, {axes}")
-    } else {
-        format!("cpu {}, {axes}", precision.wgsl())
-    };
-    checkpoint::model_with_law("Dem", &kind, L::NAME, Material::NAME)
-}
 
 /// [`Config`] as a checkpoint stores it.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -105,7 +92,7 @@ impl<L: ContactLaw> Dem<L> {
     /// Validates the scene and settings and builds the backend.
     ///
     /// Errors: an empty scene, a particle outside the box, a time step over the safe bound
-    /// (see [`crate::resolve_dt`]), initial overlaps deeper than [`crate::MAX_INITIAL_OVERLAP`]
+    /// (see [`Config::resolve_dt`]), initial overlaps deeper than [`crate::MAX_INITIAL_OVERLAP`]
     /// of a radius (between particles or with a wall), a periodic axis shorter than twice
     /// the largest diameter times `1 + skin`, magnitudes the precision cannot hold (the GPU
     /// computes in `f32`, as the CPU with [`Precision::F32`]), position Verlet on the GPU,
@@ -132,7 +119,7 @@ impl<L: ContactLaw> Dem<L> {
                     .into(),
             ));
         }
-        let engine = (L::engines().0)(prep, config.precision, backend, saved)?;
+        let engine = crate::build::engine_for(prep, config.precision, backend, saved)?;
         Ok(Self {
             engine,
             scene: scene.clone(),
@@ -143,6 +130,16 @@ impl<L: ContactLaw> Dem<L> {
     /// The time step in use.
     pub fn dt(&self) -> f64 {
         self.engine.prepared().dt
+    }
+
+    /// The scene the run started from.
+    pub fn scene(&self) -> &Scene<L> {
+        &self.scene
+    }
+
+    /// The settings of the run.
+    pub fn config(&self) -> &Config {
+        &self.config
     }
 
     /// Diagnostics of the current state (downloads it on the GPU).
@@ -168,26 +165,6 @@ impl<L: ContactLaw> Dem<L> {
     pub fn wall_displacement(&self, t: f64) -> f64 {
         self.engine.prepared().wall_motion(t).0
     }
-}
-
-/// The engine of a prepared scene on `backend` ([`ContactLaw::engines`] says where it is
-/// compiled).
-pub(crate) fn build_engine<L: ContactLaw>(
-    prep: Prepared<L>,
-    precision: Precision,
-    backend: Backend<'_>,
-    saved: Option<&Dynamics>,
-) -> Result<Box<dyn Engine<L>>> {
-    Ok(match backend {
-        Backend::Cpu => match (prep.axes, precision) {
-            (2, Precision::F64) => Box::new(CpuEngine::<2, f64, L>::new(prep, saved)?),
-            (2, Precision::F32) => Box::new(CpuEngine::<2, f32, L>::new(prep, saved)?),
-            (_, Precision::F64) => Box::new(CpuEngine::<3, f64, L>::new(prep, saved)?),
-            (_, Precision::F32) => Box::new(CpuEngine::<3, f32, L>::new(prep, saved)?),
-        },
-        #[cfg(feature = "gpu")]
-        Backend::Gpu(ctx) => Box::new(crate::gpu::GpuEngine::new(ctx, prep, saved)?),
-    })
 }
 
 impl<L: ContactLaw> Simulation for Dem<L> {

@@ -72,6 +72,7 @@ pub use gpu::GpuLattice;
 pub use lattice::{Lattice, Obstacle, ROW_SPACING};
 pub use rules::{CollisionTable, RuleSet};
 pub use sim::LatticeGas;
+pub use simkit_backend::{Backend, Error, Restart, Result, Simulation};
 
 /// Bit of an east-moving particle (direction 1).
 pub const EAST: u8 = 1;

@@ -109,23 +109,69 @@ impl Default for Config {
 }
 
 impl Config {
-    /// Default settings with time step `dt`.
-    pub fn with_dt(dt: f64) -> Self {
-        Self {
-            dt: Some(dt),
-            ..Self::default()
-        }
+    /// Settings with an explicit time step.
+    pub fn with_dt(mut self, dt: f64) -> Self {
+        self.dt = Some(dt);
+        self
     }
 
-    /// Checks the settings against `system` and returns the time step to use.
+    /// Settings with another integrator.
+    pub fn with_integrator(mut self, integrator: Integrator) -> Self {
+        self.integrator = integrator;
+        self
+    }
+
+    /// Settings with another CPU precision.
+    pub fn with_precision(mut self, precision: Precision) -> Self {
+        self.precision = precision;
+        self
+    }
+
+    /// Settings with another GPU force kernel.
+    pub fn with_gpu_kernel(mut self, kernel: GpuKernel) -> Self {
+        self.gpu_kernel = kernel;
+        self
+    }
+
+    /// Settings with another Verlet-list skin (absolute length).
+    pub fn with_skin(mut self, skin: f64) -> Self {
+        self.skin = skin;
+        self
+    }
+
+    /// Settings with another blow-up check interval (0 = only at the end of each call).
+    pub fn with_check_every(mut self, every: u32) -> Self {
+        self.check_every = every;
+        self
+    }
+
+    /// Settings with energies shifted (`true`) or not at the cutoff.
+    pub fn with_shift(mut self, shift: bool) -> Self {
+        self.shift = shift;
+        self
+    }
+
+    /// Settings with a Langevin thermostat.
+    pub fn with_thermostat(mut self, thermostat: Langevin) -> Self {
+        self.thermostat = Some(thermostat);
+        self
+    }
+
+    /// Explicitly accepts a time step over the safe bound.
+    pub fn allow_unstable_dt(mut self) -> Self {
+        self.allow_unstable_dt = true;
+        self
+    }
+
+    /// Checks the settings that do not depend on a system ([`Md::new`](crate::Md::new)
+    /// calls it).
     ///
-    /// Errors: a non-finite or non-positive `dt`, a negative or non-finite skin, a time
-    /// step over the safe bound without [`allow_unstable_dt`](Self::allow_unstable_dt),
-    /// no `dt` for a system without interacting pairs (no guidance exists then), or a
-    /// thermostat with a negative or non-finite temperature or friction.
-    pub fn resolve_dt<L: PairLaw>(&self, system: &System<L>) -> Result<f64> {
+    /// Errors: a `dt` that is not finite and `> 0`, a negative or non-finite skin, a
+    /// thermostat with a negative or non-finite temperature or friction; each naming the
+    /// value and the fix.
+    pub fn validate(&self) -> Result<()> {
         if let Some(l) = &self.thermostat {
-            crate::thermostat::check_target("thermostat", l.temperature, l.gamma)?;
+            crate::input::check_target("thermostat", l.temperature, l.gamma)?;
         }
         if !(self.skin.is_finite() && self.skin >= 0.0) {
             return Err(Error::invalid(
@@ -134,14 +180,25 @@ impl Config {
                 "must be finite and >= 0 (e.g. 0.3 sigma)",
             ));
         }
+        if let Some(dt) = self.dt
+            && !(dt.is_finite() && dt > 0.0)
+        {
+            return Err(Error::invalid("dt", dt, "must be finite and > 0"));
+        }
+        Ok(())
+    }
+
+    /// Checks the settings ([`Config::validate`]) and returns the time step to use for
+    /// `system`: `dt`, or the default of the system's [`time_step_guide`].
+    ///
+    /// Errors: those of [`Config::validate`]; a time step over the safe bound without
+    /// [`allow_unstable_dt`](Self::allow_unstable_dt); no `dt` for a system without
+    /// interacting pairs (no guidance exists then).
+    pub fn resolve_dt<L: PairLaw>(&self, system: &System<L>) -> Result<f64> {
+        self.validate()?;
         let guide = time_step_guide(system);
         let dt = match (self.dt, guide) {
-            (Some(dt), _) => {
-                if !(dt.is_finite() && dt > 0.0) {
-                    return Err(Error::invalid("dt", dt, "must be finite and > 0"));
-                }
-                dt
-            }
+            (Some(dt), _) => dt,
             (None, Some(g)) => g.default_dt,
             (None, None) => {
                 return Err(Error::invalid(

@@ -14,7 +14,8 @@ use simkit_neighbor::{
 
 use crate::cpu::{AXES, Kernel, beyond, kick_slice, list_range, reflect};
 use crate::diagnostics::assemble;
-use crate::sim::{decode_checkpoint, encode_checkpoint, model_name};
+use crate::engine::model_name;
+use crate::sim::{decode_checkpoint, encode_checkpoint};
 use crate::thermostat::{gaussians, ou_coefficients};
 use crate::{Config, Diagnostics, Dim, Integrator, LennardJones, PairLaw, State, System};
 
@@ -79,7 +80,7 @@ const CAUSE: &str = "a time step too large for the stiffest pair (see time_step_
 /// let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5))?;
 /// let system = scenes::fcc_lattice([4; 3], 0.8442, 1.44, table, &[0], 1)?;
 /// // `Comm::mpi()?` under `mpirun -np P` (feature `mpi`); here one process.
-/// let mut md = DistributedMd::new(&system, &Config::with_dt(0.005), Comm::serial())?;
+/// let mut md = DistributedMd::new(&system, &Config::default().with_dt(0.005), Comm::serial())?;
 /// let e0 = md.diagnostics()?.total; // on every rank
 /// md.step(100)?;
 /// assert!((md.diagnostics()?.total - e0).abs() < 1e-2 * e0.abs());

@@ -1,40 +1,21 @@
 //! The backend-neutral engine interface behind [`crate::Md`].
 
 use simkit_backend::particles::Dynamics;
-use simkit_backend::{Backend, Result};
+use simkit_backend::{Precision, Result, checkpoint};
 
-use crate::{Config, Diagnostics, PairLaw, State, System};
+use crate::{Diagnostics, LennardJones, PairLaw, State};
 
-/// The engine constructor of law `L` (`crate::sim::build_engine` compiled for it): the
-/// system, the settings, the resolved time step, the backend and, on resume, the saved
-/// dynamic state.
-pub(crate) type Build<L> =
-    fn(&System<L>, &Config, f64, Backend<'_>, Option<&Dynamics>) -> Result<Box<dyn Engine>>;
-
-/// The engines of one pair law, compiled where this value is made: see
-/// [`PairLaw::engines`].
-#[doc(hidden)]
-pub struct Engines<L>(pub(crate) Build<L>);
-
-impl<L: PairLaw> Engines<L> {
-    /// The engines of `L`, compiled in the crate that calls this.
-    pub(crate) fn compiled_here() -> Self {
-        Self(crate::sim::build_engine::<L>)
-    }
-}
-
-/// The override of [`PairLaw::engines`] for the built-in laws: their engines are compiled
-/// once, in this crate (`inline(never)` keeps the function, and so the engines, from
-/// being copied into the crates that call it).
-macro_rules! engines_compiled_in_simkit_md {
-    () => {
-        #[inline(never)]
-        fn engines() -> crate::engine::Engines<Self> {
-            crate::engine::Engines::compiled_here()
-        }
+/// The checkpoint model string of an engine: backend, precision, dimension and, for a
+/// law other than the default [`LennardJones`], the law's name (`Md<cpu f64, 3>`,
+/// `Md<gpu f32, 2, morse>`; [`checkpoint::model_with_law`]).
+pub(crate) fn model_name<L: PairLaw>(gpu: bool, precision: Precision, axes: usize) -> String {
+    let kind = if gpu {
+        format!("gpu f32, {axes}")
+    } else {
+        format!("cpu {}, {axes}", precision.wgsl())
     };
+    checkpoint::model_with_law("Md", &kind, L::NAME, LennardJones::NAME)
 }
-pub(crate) use engines_compiled_in_simkit_md;
 
 /// One backend instance (the CPU at some dimension and precision).
 pub(crate) trait Engine: Send {

@@ -165,7 +165,7 @@ impl<L: PairLaw> System<L> {
         }
         for (s, t) in self.species_langevin.iter().enumerate() {
             if let Some([t, g]) = *t {
-                crate::thermostat::check_target(&format!("species {s}"), t, g)?;
+                check_target(&format!("species {s}"), t, g)?;
             }
         }
         Ok(())
@@ -204,7 +204,7 @@ impl<L: PairLaw> System<L> {
     pub fn set_species_langevin(&mut self, species: u32, target: Option<[f64; 2]>) -> Result<()> {
         let s = self.check_species(species)?;
         if let Some([t, g]) = target {
-            crate::thermostat::check_target(&format!("species {s}"), t, g)?;
+            check_target(&format!("species {s}"), t, g)?;
         }
         self.species_langevin[s] = target;
         Ok(())
@@ -390,4 +390,23 @@ impl<L: PairLaw> System<L> {
     pub fn velocities(&self) -> &[[f64; 3]] {
         &self.velocities
     }
+}
+
+/// Checks a target temperature and friction.
+pub(crate) fn check_target(what: &str, temperature: f64, gamma: f64) -> Result<()> {
+    if !(temperature.is_finite() && (0.0..=1e30).contains(&temperature)) {
+        return Err(Error::invalid(
+            format!("{what} temperature"),
+            temperature,
+            "must be finite, >= 0 and <= 1e30",
+        ));
+    }
+    if !(gamma.is_finite() && (0.0..=1e30).contains(&gamma)) {
+        return Err(Error::invalid(
+            format!("{what} friction gamma"),
+            gamma,
+            "must be finite, >= 0 and <= 1e30",
+        ));
+    }
+    Ok(())
 }

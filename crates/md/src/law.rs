@@ -7,8 +7,6 @@ use serde::Serialize;
 use serde::de::DeserializeOwned;
 use simkit_backend::{Real, Result};
 
-use crate::engine::Engines;
-
 /// A pair potential `phi(r)` cut at `r_c`: its parameters for one species pair (the
 /// implementing type itself), the coefficients the force loops read, the force and energy
 /// as one Rust function generic over [`Real`] with its WGSL twin, the cutoff, and the
@@ -57,6 +55,14 @@ pub trait PairLaw:
     /// -> vec2<f32>`, the twin of [`force_energy`](PairLaw::force_energy).
     const WGSL: &'static str;
 
+    /// Whether the law is one of `simkit-md`'s own: their engines (the CPU engine of each
+    /// dimension and precision, the GPU engine) are compiled once, in `simkit-md`, instead
+    /// of again in every crate, test and example that runs them (Rust compiles generic
+    /// code where it is used). Leave it `false`: a law of your own has its engines
+    /// compiled in your crate, and one that claims to be built in is refused.
+    #[doc(hidden)]
+    const BUILT_IN: bool = false;
+
     /// Checks the parameters; `pair` names the species pair for the error message (e.g.
     /// `"pair (0, 1)"`).
     ///
@@ -100,15 +106,5 @@ pub trait PairLaw:
         let c = self.coefficients::<f64>(0.0);
         let (f, e) = Self::force_energy(&c, r * r);
         (f.abs(), e.abs())
-    }
-
-    /// Where [`Md`](crate::Md)'s engines of this law (the CPU engine of each dimension and
-    /// precision, the GPU engine) are compiled. Keep the default, which compiles them in
-    /// the crate that runs the law. The built-in laws override it with the same engines
-    /// so that they are compiled once, in `simkit-md`, not again in every crate, test and
-    /// example that runs them (Rust compiles generic code where it is used).
-    #[doc(hidden)]
-    fn engines() -> Engines<Self> {
-        Engines::compiled_here()
     }
 }

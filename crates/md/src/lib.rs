@@ -55,7 +55,7 @@
 //! // 4 x 4 x 4 FCC cells of Lennard-Jones atoms (256), density 0.8442, T = 1.44.
 //! let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5))?;
 //! let system = scenes::fcc_lattice([4; 3], 0.8442, 1.44, table, &[0], 1)?;
-//! let mut md = Md::new(&system, &Config::with_dt(0.005), Backend::Cpu)?;
+//! let mut md = Md::new(&system, &Config::default().with_dt(0.005), Backend::Cpu)?;
 //! let e0 = md.diagnostics()?.total;
 //! md.step(100)?;
 //! let d = md.diagnostics()?;
@@ -94,6 +94,7 @@
 // Links to the GPU items resolve when they are compiled (the `gpu` feature, on by default).
 #![cfg_attr(not(feature = "gpu"), allow(rustdoc::broken_intra_doc_links))]
 
+mod build;
 mod config;
 mod cpu;
 mod diagnostics;
@@ -128,5 +129,6 @@ pub use laws::{
 };
 pub use sim::Md;
 pub use simkit_backend::particles::State;
+pub use simkit_backend::{Backend, Error, Precision, Real, Restart, Result, Simulation};
 pub use table::{MAX_SPECIES, PairTable};
 pub use thermostat::Langevin;

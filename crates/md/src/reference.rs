@@ -80,7 +80,7 @@ pub fn nist_lj_state_point(
     let atoms = sys.particle_count();
     let config = Config {
         thermostat: Some(Langevin::new(NIST_TEMPERATURE, 1.0, seed)),
-        ..Config::with_dt(0.005)
+        ..Config::default().with_dt(0.005)
     };
     let mut md = Md::new(&sys, &config, backend)?;
     md.step(equilibrate)?;

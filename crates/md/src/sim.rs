@@ -4,23 +4,10 @@ use serde::{Deserialize, Serialize};
 use simkit_backend::particles::Dynamics;
 use simkit_backend::{Backend, Error, Precision, Restart, Result, Simulation, checkpoint};
 
-use crate::cpu::CpuEngine;
-use crate::engine::Engine;
+use crate::engine::{Engine, model_name};
 use crate::{
-    Config, Diagnostics, Dim, GpuKernel, Integrator, Langevin, LennardJones, PairLaw, State, System,
+    Config, Diagnostics, GpuKernel, Integrator, Langevin, LennardJones, PairLaw, State, System,
 };
-
-/// The checkpoint model string of an engine: backend, precision, dimension and, for a
-/// law other than the default [`LennardJones`], the law's name (`Md<cpu f64, 3>`,
-/// `Md<gpu f32, 2, morse>`; [`checkpoint::model_with_law`]).
-pub(crate) fn model_name<L: PairLaw>(gpu: bool, precision: Precision, axes: usize) -> String {
-    let kind = if gpu {
-        format!("gpu f32, {axes}")
-    } else {
-        format!("cpu {}, {axes}", precision.wgsl())
-    };
-    checkpoint::model_with_law("Md", &kind, L::NAME, LennardJones::NAME)
-}
 
 /// [`Config`] as a checkpoint stores it.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -174,7 +161,7 @@ impl<L: PairLaw> Md<L> {
         saved: Option<&Dynamics>,
     ) -> Result<Self> {
         let dt = config.resolve_dt(system)?;
-        let engine = (L::engines().0)(system, config, dt, backend, saved)?;
+        let engine = crate::build::engine_for(system, config, dt, backend, saved)?;
         Ok(Self {
             engine,
             system: system.clone(),
@@ -232,34 +219,6 @@ impl<L: PairLaw> Simulation for Md<L> {
     fn backend_name(&self) -> String {
         self.engine.name()
     }
-}
-
-/// The engine of `system` on `backend` ([`PairLaw::engines`] says where it is compiled).
-pub(crate) fn build_engine<L: PairLaw>(
-    system: &System<L>,
-    config: &Config,
-    dt: f64,
-    backend: Backend<'_>,
-    saved: Option<&Dynamics>,
-) -> Result<Box<dyn Engine>> {
-    Ok(match backend {
-        Backend::Cpu => match (system.dim(), config.precision) {
-            (Dim::Two, Precision::F64) => {
-                Box::new(CpuEngine::<2, f64, L>::new(system, config, dt, saved)?)
-            }
-            (Dim::Two, Precision::F32) => {
-                Box::new(CpuEngine::<2, f32, L>::new(system, config, dt, saved)?)
-            }
-            (Dim::Three, Precision::F64) => {
-                Box::new(CpuEngine::<3, f64, L>::new(system, config, dt, saved)?)
-            }
-            (Dim::Three, Precision::F32) => {
-                Box::new(CpuEngine::<3, f32, L>::new(system, config, dt, saved)?)
-            }
-        },
-        #[cfg(feature = "gpu")]
-        Backend::Gpu(ctx) => Box::new(crate::gpu::GpuEngine::new(ctx, system, config, dt, saved)?),
-    })
 }
 
 /// Checkpoints hold the system, the settings, the step count, the positions and the

@@ -10,7 +10,6 @@
 
 use serde::{Deserialize, Serialize};
 use simkit_backend::rng::rng_uniform;
-use simkit_backend::{Error, Result};
 
 use crate::{PairLaw, System};
 
@@ -39,25 +38,6 @@ impl Langevin {
             seed,
         }
     }
-}
-
-/// Checks a target temperature and friction.
-pub(crate) fn check_target(what: &str, temperature: f64, gamma: f64) -> Result<()> {
-    if !(temperature.is_finite() && (0.0..=1e30).contains(&temperature)) {
-        return Err(Error::invalid(
-            format!("{what} temperature"),
-            temperature,
-            "must be finite, >= 0 and <= 1e30",
-        ));
-    }
-    if !(gamma.is_finite() && (0.0..=1e30).contains(&gamma)) {
-        return Err(Error::invalid(
-            format!("{what} friction gamma"),
-            gamma,
-            "must be finite, >= 0 and <= 1e30",
-        ));
-    }
-    Ok(())
 }
 
 /// The Ornstein–Uhlenbeck coefficients `(c1, amplitude)` of every species for time step

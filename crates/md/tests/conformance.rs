@@ -123,7 +123,7 @@ fn two_dimensional_walls_and_leapfrog_agree_with_the_cpu() -> Result<()> {
     let config = Config {
         integrator: Integrator::Leapfrog,
         shift: true,
-        ..Config::with_dt(0.004)
+        ..Config::default().with_dt(0.004)
     };
     compare(
         "two_dimensional_walls_and_leapfrog_agree_with_the_cpu",
@@ -157,7 +157,7 @@ fn thermostat_in_two_dimensions_with_leapfrog_agrees_with_the_cpu() -> Result<()
         integrator: Integrator::Leapfrog,
         shift: true,
         thermostat: Some(Langevin::new(0.5, 2.0, 7)),
-        ..Config::with_dt(0.004)
+        ..Config::default().with_dt(0.004)
     };
     compare(
         "thermostat_in_two_dimensions_with_leapfrog_agrees_with_the_cpu",
@@ -194,7 +194,7 @@ fn law_liquid<L: PairLaw>(name: &str, law: L, config: &Config) -> Result<()> {
 #[test]
 fn every_built_in_law_agrees_with_the_cpu() -> Result<()> {
     let name = "every_built_in_law_agrees_with_the_cpu";
-    let dt = Config::with_dt(0.002);
+    let dt = Config::default().with_dt(0.002);
     // Morse with two species (the table holds any law).
     let mut t = PairTable::uniform(2, Morse::new(1.0, 4.0, 1.1, 2.5))?;
     t.set(0, 1, Morse::new(0.8, 3.5, 1.15, 2.4))?;

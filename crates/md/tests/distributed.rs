@@ -100,7 +100,7 @@ fn long_run_statistics_agree_with_md() {
     let (steps, every) = (3000, 50);
     let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5)).expect("table");
     let system = scenes::fcc_lattice([4; 3], 0.8442, 1.44, table, &[0], 3).expect("system");
-    let config = Config::with_dt(0.005);
+    let config = Config::default().with_dt(0.005);
     let n = system.particle_count() as f64;
     let md_run = |system: &simkit_md::System| {
         let mut sim = Md::new(system, &config, Backend::Cpu).expect("md");

@@ -99,12 +99,12 @@ fn cell_block_follows_the_per_particle_kernel() -> Result<()> {
         (
             "3D liquid, velocity Verlet",
             liquid(),
-            Config::with_dt(0.005),
+            Config::default().with_dt(0.005),
         ),
         (
             "3D closed box, velocity Verlet",
             closed_box(),
-            Config::with_dt(0.005),
+            Config::default().with_dt(0.005),
         ),
         (
             "3D three-phase mix, three species",
@@ -117,7 +117,7 @@ fn cell_block_follows_the_per_particle_kernel() -> Result<()> {
             Config {
                 integrator: Integrator::Leapfrog,
                 shift: true,
-                ..Config::with_dt(0.004)
+                ..Config::default().with_dt(0.004)
             },
         ),
     ];
@@ -153,7 +153,7 @@ fn cell_block_follows_the_per_particle_kernel() -> Result<()> {
 /// Same inputs, same bits: the slot lists and the summation order are deterministic.
 #[test]
 fn cell_block_runs_are_reproducible() -> Result<()> {
-    let config = with(GpuKernel::cell_block(), Config::with_dt(0.005));
+    let config = with(GpuKernel::cell_block(), Config::default().with_dt(0.005));
     for backend in gpus("cell_block_runs_are_reproducible") {
         let run = || -> Result<State> {
             let mut md = Md::new(&liquid(), &config, backend)?;
@@ -194,7 +194,7 @@ fn a_full_cell_is_an_error_not_a_lost_particle() -> Result<()> {
         check_every: 10,
         ..with(
             GpuKernel::CellBlock { slots: Some(2) },
-            Config::with_dt(0.02),
+            Config::default().with_dt(0.02),
         )
     };
     for backend in gpus("a_full_cell_is_an_error_not_a_lost_particle") {
@@ -215,7 +215,7 @@ fn a_full_cell_is_an_error_not_a_lost_particle() -> Result<()> {
         let two_in_one = free_particles(10.0, &[([1.0; 3], [0.0; 3]), ([2.0; 3], [0.0; 3])]);
         let cfg = with(
             GpuKernel::CellBlock { slots: Some(1) },
-            Config::with_dt(0.02),
+            Config::default().with_dt(0.02),
         );
         let e = Md::new(&two_in_one, &cfg, backend)
             .err()
@@ -223,7 +223,7 @@ fn a_full_cell_is_an_error_not_a_lost_particle() -> Result<()> {
         assert!(e.to_string().contains("fullest cell"), "{e}");
         let cfg = with(
             GpuKernel::CellBlock { slots: Some(0) },
-            Config::with_dt(0.02),
+            Config::default().with_dt(0.02),
         );
         assert!(Md::new(&two_in_one, &cfg, backend).is_err());
         // The per-particle kernel has no capacity.
@@ -246,7 +246,7 @@ fn a_particle_jumping_over_a_cell_is_a_blow_up() -> Result<()> {
     );
     let config = Config {
         check_every: 5,
-        ..with(GpuKernel::cell_block(), Config::with_dt(0.02))
+        ..with(GpuKernel::cell_block(), Config::default().with_dt(0.02))
     };
     for backend in gpus("a_particle_jumping_over_a_cell_is_a_blow_up") {
         let mut md = Md::new(&sys, &config, backend)?;
@@ -282,7 +282,7 @@ fn cell_block_restart_is_bit_exact() {
             liquid,
             Config {
                 check_every: 7,
-                ..with(cb, Config::with_dt(0.005))
+                ..with(cb, Config::default().with_dt(0.005))
             },
         ),
         (
@@ -298,7 +298,7 @@ fn cell_block_restart_is_bit_exact() {
             walls_2d,
             Config {
                 integrator: Integrator::Leapfrog,
-                ..with(cb, Config::with_dt(0.004))
+                ..with(cb, Config::default().with_dt(0.004))
             },
         ),
     ];
@@ -322,7 +322,7 @@ fn a_cell_block_blow_up_is_rolled_back() -> Result<()> {
     let config = Config {
         allow_unstable_dt: true,
         check_every: 10,
-        ..with(GpuKernel::cell_block(), Config::with_dt(0.03))
+        ..with(GpuKernel::cell_block(), Config::default().with_dt(0.03))
     };
     for backend in gpus("a_cell_block_blow_up_is_rolled_back") {
         let mut md = Md::new(&sys, &config, backend)?;

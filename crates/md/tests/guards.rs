@@ -15,14 +15,14 @@ fn unstable() -> Config {
     Config {
         allow_unstable_dt: true,
         check_every: 10,
-        ..Config::with_dt(0.03)
+        ..Config::default().with_dt(0.03)
     }
 }
 
 #[test]
 fn a_step_over_the_bound_is_refused_unless_allowed() -> Result<()> {
     let sys = liquid()?;
-    let e = Md::new(&sys, &Config::with_dt(0.08), Backend::Cpu)
+    let e = Md::new(&sys, &Config::default().with_dt(0.08), Backend::Cpu)
         .err()
         .unwrap();
     match e {
@@ -88,7 +88,7 @@ fn the_check_does_not_perturb_a_stable_run() -> Result<()> {
         let run = |check_every| -> Result<simkit_md::State> {
             let config = Config {
                 check_every,
-                ..Config::with_dt(0.005)
+                ..Config::default().with_dt(0.005)
             };
             let mut md = Md::new(&sys, &config, backend)?;
             md.step(137)?;
@@ -130,7 +130,7 @@ fn a_particle_thrown_through_a_closed_box_is_a_blow_up() -> Result<()> {
     sys.add_particle(0, [5.0, 5.0, 5.0], [3000.0, 0.0, 0.0])?;
     let config = Config {
         check_every: 5,
-        ..Config::with_dt(0.01)
+        ..Config::default().with_dt(0.01)
     };
     let mut md = Md::new(&sys, &config, Backend::Cpu)?;
     let e = md.step(20).err().unwrap();

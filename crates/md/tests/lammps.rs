@@ -186,7 +186,7 @@ fn law_matches_lammps<L: PairLaw>(name: &str, table: PairTable<L>, shift: bool) 
     assert_eq!(r.pos.len(), 500);
     let config = Config {
         shift,
-        ..Config::with_dt(0.001)
+        ..Config::default().with_dt(0.001)
     };
     eprint!("{name}: ");
     let errors = compare_with(&r, table, &config)?;

@@ -47,7 +47,7 @@ fn cluster_of<L: PairLaw>(table: PairTable<L>) -> Result<System<L>> {
 fn energy_error<L: PairLaw>(sys: &System<L>, integrator: Integrator, dt: f64) -> Result<f64> {
     let config = Config {
         integrator,
-        ..Config::with_dt(dt)
+        ..Config::default().with_dt(dt)
     };
     let mut md = Md::new(sys, &config, Backend::Cpu)?;
     let e0 = md.diagnostics()?.total;
@@ -100,7 +100,7 @@ fn the_two_integrators_follow_the_same_trajectory() -> Result<()> {
     let run = |integrator| -> Result<simkit_md::State> {
         let config = Config {
             integrator,
-            ..Config::with_dt(0.002)
+            ..Config::default().with_dt(0.002)
         };
         let mut md = Md::new(&sys, &config, Backend::Cpu)?;
         md.step(300)?;
@@ -132,7 +132,7 @@ fn a_particle_reflects_off_a_closed_wall_with_its_speed() -> Result<()> {
         table,
     )?;
     sys.add_particle(0, [9.0, 5.0, 5.0], [2.0, 0.5, 0.0])?;
-    let mut md = Md::new(&sys, &Config::with_dt(0.01), Backend::Cpu)?;
+    let mut md = Md::new(&sys, &Config::default().with_dt(0.01), Backend::Cpu)?;
     md.step(100)?; // 2 units of travel along x: 1 to the wall at x = 10, 1 back
     let s = md.state()?;
     assert!(
@@ -156,7 +156,7 @@ fn periodic_wrap_and_skin_change_the_trajectory_by_rounding_only() -> Result<()>
     let run = |skin| -> Result<simkit_md::State> {
         let config = Config {
             skin,
-            ..Config::with_dt(0.005)
+            ..Config::default().with_dt(0.005)
         };
         let mut md = Md::new(&sys, &config, Backend::Cpu)?;
         md.step(200)?;
@@ -196,7 +196,7 @@ fn cpu_results_do_not_depend_on_the_thread_count() -> Result<()> {
     for precision in [Precision::F64, Precision::F32] {
         let config = Config {
             precision,
-            ..Config::with_dt(0.005)
+            ..Config::default().with_dt(0.005)
         };
         let run = |threads| -> Result<(simkit_md::State, Vec<[f64; 3]>, f64)> {
             let pool = rayon::ThreadPoolBuilder::new()
@@ -249,7 +249,7 @@ fn two_dimensional_runs_conserve_energy_and_momentum() -> Result<()> {
     }
     let config = Config {
         shift: true,
-        ..Config::with_dt(0.002)
+        ..Config::default().with_dt(0.002)
     };
     let mut md = Md::new(&sys, &config, Backend::Cpu)?;
     let d0 = md.diagnostics()?;
@@ -333,7 +333,7 @@ fn the_lj_melt_scene_is_lammps_in_lj() -> Result<()> {
         0.8442,
         epsilon = 1e-12
     );
-    let mut md = Md::new(&sys, &Config::with_dt(0.005), Backend::Cpu)?;
+    let mut md = Md::new(&sys, &Config::default().with_dt(0.005), Backend::Cpu)?;
     let d = md.diagnostics()?;
     // T = 2 K / (3N - 3) = 1.44 exactly as drawn. Step 0 of LAMMPS's bench/in.lj (29 Sep
     // 2021, `thermo_modify format float %.10g`, `run 0`): E_pair = -6.773368053,

@@ -50,7 +50,7 @@ fn the_listing_order_changes_results_only_by_rounding() -> Result<()> {
     let mut frozen = liquid()?;
     frozen.set_frozen(1, true)?;
     for sys in [liquid()?, frozen] {
-        let config = Config::with_dt(0.005);
+        let config = Config::default().with_dt(0.005);
         let (mixed, idx) = shuffled(&sys)?;
         let (a, ea) = run(&sys, &config, 200)?;
         let (b, eb) = run(&mixed, &config, 200)?;
@@ -100,7 +100,7 @@ fn a_blow_up_rolls_back_bit_for_bit() -> Result<()> {
     let config = Config {
         allow_unstable_dt: true,
         check_every: 10,
-        ..Config::with_dt(0.03)
+        ..Config::default().with_dt(0.03)
     };
     let mut md = Md::new(&sys, &config, Backend::Cpu)?;
     let Err(Error::BlowUp {

@@ -68,7 +68,7 @@ fn restart_is_bit_exact() {
             box_2d,
             Config {
                 integrator: Integrator::Leapfrog,
-                ..Config::with_dt(0.004)
+                ..Config::default().with_dt(0.004)
             },
         ),
         (
@@ -87,7 +87,7 @@ fn restart_is_bit_exact() {
                 precision: Precision::F32,
                 integrator: Integrator::Leapfrog,
                 thermostat: Some(Langevin::new(0.5, 3.0, 5)),
-                ..Config::with_dt(0.004)
+                ..Config::default().with_dt(0.004)
             },
         ),
         (
@@ -108,7 +108,7 @@ fn restart_is_bit_exact() {
 
 #[test]
 fn the_clock_and_the_step_count_are_restored() -> Result<()> {
-    let mut md = Md::new(&box_2d(), &Config::with_dt(0.004), Backend::Cpu)?;
+    let mut md = Md::new(&box_2d(), &Config::default().with_dt(0.004), Backend::Cpu)?;
     md.step(25)?;
     let again = Md::<LennardJones>::resume(&md.checkpoint()?, Backend::Cpu)?;
     assert_eq!(again.steps_done(), 25);
@@ -120,7 +120,7 @@ fn the_clock_and_the_step_count_are_restored() -> Result<()> {
 
 #[test]
 fn bad_checkpoints_are_refused_with_a_checkpoint_error() -> Result<()> {
-    let mut md = Md::new(&box_2d(), &Config::with_dt(0.004), Backend::Cpu)?;
+    let mut md = Md::new(&box_2d(), &Config::default().with_dt(0.004), Backend::Cpu)?;
     md.step(3)?;
     let bytes = md.checkpoint()?;
     let is_ckpt = |r: Result<Md>| matches!(r, Err(Error::Checkpoint { .. }));

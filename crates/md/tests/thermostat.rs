@@ -47,7 +47,7 @@ fn kinetic_temperature_relaxes_to_the_target_per_species_and_per_axis() -> Resul
     let target = [2.0, 1.5];
     let config = Config {
         thermostat: Some(Langevin::new(2.0, 1.0, 2024)),
-        ..Config::with_dt(0.005)
+        ..Config::default().with_dt(0.005)
     };
     let mut md = Md::new(&sys, &config, Backend::Cpu)?;
     md.step(1000)?;
@@ -110,7 +110,7 @@ fn configurational_temperature_matches_the_target() -> Result<()> {
     let l = sys.lengths();
     let config = Config {
         thermostat: Some(Langevin::new(1.0, 1.0, 77)),
-        ..Config::with_dt(0.004)
+        ..Config::default().with_dt(0.004)
     };
     let mut md = Md::new(&sys, &config, Backend::Cpu)?;
     md.step(1000)?;
@@ -168,7 +168,7 @@ fn frozen_particles_do_not_move_bit_for_bit() -> Result<()> {
         for thermostat in [None, Some(Langevin::new(1.0, 1.0, 3))] {
             let config = Config {
                 thermostat,
-                ..Config::with_dt(0.005)
+                ..Config::default().with_dt(0.005)
             };
             let mut md = Md::new(&sys, &config, backend)?;
             let x0 = md.state()?.positions;
@@ -233,7 +233,7 @@ fn mobile_momentum_changes_only_through_forces_from_frozen_particles() -> Result
         let mut sys = free.clone();
         sys.set_frozen(1, true)?;
         let dt = 0.005;
-        let mut md = Md::new(&sys, &Config::with_dt(dt), Backend::Cpu)?;
+        let mut md = Md::new(&sys, &Config::default().with_dt(dt), Backend::Cpu)?;
         let species = sys.species().to_vec();
         let mut p = mobile_momentum(&mut md, 1)?;
         let mut f = mobile_force(&mut md, &species, 1)?;
@@ -247,7 +247,7 @@ fn mobile_momentum_changes_only_through_forces_from_frozen_particles() -> Result
             let s = md.state()?;
             let mut twin = free.clone();
             twin.set_particles(&s.species, &s.positions, &s.velocities)?;
-            let mut twin_md = Md::new(&twin, &Config::with_dt(dt), Backend::Cpu)?;
+            let mut twin_md = Md::new(&twin, &Config::default().with_dt(dt), Backend::Cpu)?;
             let on_frozen: [f64; 3] = {
                 let mut g = [0.0; 3];
                 for (h, &k) in twin_md.forces()?.iter().zip(&species) {

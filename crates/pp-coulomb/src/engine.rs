@@ -4,9 +4,7 @@
 use simkit_backend::{Precision, Real, Result};
 
 use crate::guard::{Checks, Energy};
-
-/// Positions and velocities of a state, in f64.
-pub(crate) type PositionsVelocities = (Vec<[f64; 3]>, Vec<[f64; 3]>);
+use crate::particles::PositionsVelocities;
 
 /// What a backend implements.
 pub(crate) trait Engine: Send {

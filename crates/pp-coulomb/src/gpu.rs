@@ -5,12 +5,13 @@ use simkit_backend::guard::chunks;
 use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Precision, Real, Result};
 
 use crate::config::{Config, ForceLaw, Integrator, coincident_error};
-use crate::engine::{Engine, PositionsVelocities, pad_coordinate};
+use crate::engine::{Engine, pad_coordinate};
 use crate::guard::{
     Checks, Energy, coincident_blow_up, energy_blow_up, energy_jump, jump_fails, non_finite_blow_up,
 };
 use crate::laws;
 use crate::particles::Particles;
+use crate::particles::PositionsVelocities;
 
 const ACCEL_WGSL: &str = simkit_backend::wgsl!("accel.wgsl");
 const UPDATE_WGSL: &str = simkit_backend::wgsl!("update.wgsl");

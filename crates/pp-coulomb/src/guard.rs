@@ -7,7 +7,7 @@ use simkit_backend::guard::blow_up;
 use simkit_backend::{Error, max_or_nan};
 
 use crate::config::Integrator;
-use crate::engine::PositionsVelocities;
+use crate::particles::PositionsVelocities;
 
 /// Kinetic and potential energy of one state (f64 sums).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

@@ -6,6 +6,9 @@ use serde::{Deserialize, Serialize};
 use simkit_backend::vector::IntoVec3;
 use simkit_backend::{Error, Result, require_finite, require_positive};
 
+/// Positions and velocities of a state, in f64.
+pub(crate) type PositionsVelocities = (Vec<[f64; 3]>, Vec<[f64; 3]>);
+
 /// A particle species: normalised charge and mass.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Species {

@@ -7,9 +7,9 @@ use serde::{Deserialize, Serialize};
 use simkit_backend::{Error, Precision, Result, checkpoint};
 
 use crate::config::{Config, ForceLaw, Mode};
-use crate::engine::PositionsVelocities;
 use crate::guard::{Checks, Energy};
 use crate::particles::Particles;
+use crate::particles::PositionsVelocities;
 
 /// The bookkeeping of a run.
 pub(crate) struct Run {

@@ -836,7 +836,7 @@ impl<const D: usize, T: Real, L: PairLaw> Engine for CpuEngine<D, T, L> {
     }
 
     fn model(&self) -> String {
-        crate::sim::model_name::<L>(false, T::PRECISION, D)
+        crate::engine::model_name::<L>(false, T::PRECISION, D)
     }
 
     /// The slots as they are (cell order of the last list build), with that build's

@@ -679,7 +679,7 @@ impl<L: PairLaw> Engine for GpuEngine<L> {
     }
 
     fn model(&self) -> String {
-        crate::sim::model_name::<L>(true, Precision::F32, self.axes)
+        crate::engine::model_name::<L>(true, Precision::F32, self.axes)
     }
 
     fn save(&mut self) -> Result<Dynamics> {

@@ -59,8 +59,7 @@ impl PairLaw for Buckingham {
     type Gpu = [f32; 5];
     const NAME: &'static str = "buck";
     const WGSL: &'static str = simkit_backend::wgsl!("laws/buckingham.wgsl");
-
-    crate::engine::engines_compiled_in_simkit_md!();
+    const BUILT_IN: bool = true;
 
     fn validate(&self, pair: &str) -> Result<()> {
         non_negative(pair, "a", self.a, "")?;

@@ -84,8 +84,7 @@ impl PairLaw for LennardJones {
     type Gpu = [f32; 4];
     const NAME: &'static str = "lj";
     const WGSL: &'static str = simkit_backend::wgsl!("laws/lennard_jones.wgsl");
-
-    crate::engine::engines_compiled_in_simkit_md!();
+    const BUILT_IN: bool = true;
 
     fn validate(&self, pair: &str) -> Result<()> {
         let p = *self;

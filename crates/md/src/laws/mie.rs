@@ -79,8 +79,7 @@ impl PairLaw for Mie {
     type Gpu = [f32; 8];
     const NAME: &'static str = "mie";
     const WGSL: &'static str = simkit_backend::wgsl!("laws/mie.wgsl");
-
-    crate::engine::engines_compiled_in_simkit_md!();
+    const BUILT_IN: bool = true;
 
     fn validate(&self, pair: &str) -> Result<()> {
         non_negative(pair, "eps", self.eps, "(0 switches the pair off)")?;

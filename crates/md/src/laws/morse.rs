@@ -52,8 +52,7 @@ impl PairLaw for Morse {
     type Gpu = [f32; 6];
     const NAME: &'static str = "morse";
     const WGSL: &'static str = simkit_backend::wgsl!("laws/morse.wgsl");
-
-    crate::engine::engines_compiled_in_simkit_md!();
+    const BUILT_IN: bool = true;
 
     fn validate(&self, pair: &str) -> Result<()> {
         non_negative(pair, "d0", self.d0, "(0 switches the pair off)")?;

@@ -38,8 +38,7 @@ impl PairLaw for Wca {
     type Gpu = [f32; 4];
     const NAME: &'static str = "wca";
     const WGSL: &'static str = LennardJones::WGSL;
-
-    crate::engine::engines_compiled_in_simkit_md!();
+    const BUILT_IN: bool = true;
 
     fn validate(&self, pair: &str) -> Result<()> {
         positive(pair, "sigma", self.sigma)?;

@@ -49,8 +49,7 @@ impl PairLaw for Yukawa {
     type Gpu = [f32; 4];
     const NAME: &'static str = "yukawa";
     const WGSL: &'static str = simkit_backend::wgsl!("laws/yukawa.wgsl");
-
-    crate::engine::engines_compiled_in_simkit_md!();
+    const BUILT_IN: bool = true;
 
     fn validate(&self, pair: &str) -> Result<()> {
         if self.a.is_nan() {

@@ -19,11 +19,12 @@ use simkit_backend::guard::{Guarded, Halt, first_non_finite, run_guarded};
 use simkit_backend::{Error, Precision, Result};
 
 use crate::config::{Config, ForceLaw, Integrator, Mode, coincident_error};
-use crate::engine::{Engine, PositionsVelocities, pad_coordinate};
+use crate::engine::{Engine, pad_coordinate};
 use crate::guard::{
     Checks, Energy, coincident_blow_up, energy_blow_up, energy_jump, jump_fails, non_finite_blow_up,
 };
 use crate::particles::Particles;
+use crate::particles::PositionsVelocities;
 
 /// CPU state in precision `T`. Positions are double-buffered: the force pass reads `x`, the
 /// drift writes `x_next`, then the two swap, so no position is written while it is read.

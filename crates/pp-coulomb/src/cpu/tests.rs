@@ -76,7 +76,7 @@ fn plasma() -> Particles {
 /// What a run ends with: positions and velocities, accelerations, energy reference, and
 /// the run's result (`Ok` or the blow-up, as text).
 type Outcome = (
-    crate::engine::PositionsVelocities,
+    crate::particles::PositionsVelocities,
     Vec<[f64; 3]>,
     Option<Energy>,
     String,
