@@ -47,7 +47,7 @@ use std::path::Path;
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 
-use crate::{Backend, Error, Result, Simulation};
+use crate::{Backend, Error, Precision, Result, Simulation};
 
 /// The first eight bytes of every checkpoint.
 pub const MAGIC: [u8; 8] = *b"SIMKITCK";
@@ -289,6 +289,16 @@ pub fn decode_any_model<T: DeserializeOwned>(
     decode_parts(bytes, package, version, None)
 }
 
+/// The backend part of a particle engine's model string: `gpu f32, {axes}` on the GPU
+/// (which computes in `f32`), `cpu {precision}, {axes}` on the CPU (e.g. `cpu f64, 3`).
+pub fn engine_kind(gpu: bool, precision: Precision, axes: usize) -> String {
+    if gpu {
+        format!("gpu f32, {axes}")
+    } else {
+        format!("cpu {}, {axes}", precision.wgsl())
+    }
+}
+
 /// The model string of a run of a crate with pluggable laws: `{name}<{kind}>` for the
 /// crate's default law, `{name}<{kind}, {law}>` for any other (e.g. `Md<cpu f64, 3>`,
 /// `Md<gpu f32, 2, morse>`), so a run resumes only with the law that wrote it and the
@@ -382,6 +392,8 @@ mod tests {
 
     #[test]
     fn a_law_in_the_model_string_is_checked_before_the_payload() {
+        assert_eq!(engine_kind(false, Precision::F64, 3), "cpu f64, 3");
+        assert_eq!(engine_kind(true, Precision::F64, 2), "gpu f32, 2");
         let m = model_with_law("Md", "cpu f64, 3", "morse", "lj");
         assert_eq!(m, "Md<cpu f64, 3, morse>");
         assert_eq!(

@@ -10,11 +10,7 @@ use crate::{ContactLaw, Material, State};
 /// contact law other than the default [`Material`], the law's name
 /// ([`checkpoint::model_with_law`]).
 pub(crate) fn model_name<L: ContactLaw>(gpu: bool, precision: Precision, axes: usize) -> String {
-    let kind = if gpu {
-        format!("gpu f32, {axes}")
-    } else {
-        format!("cpu {}, {axes}", precision.wgsl())
-    };
+    let kind = checkpoint::engine_kind(gpu, precision, axes);
     checkpoint::model_with_law("Dem", &kind, L::NAME, Material::NAME)
 }
 

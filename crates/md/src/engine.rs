@@ -9,11 +9,7 @@ use crate::{Diagnostics, LennardJones, PairLaw, State};
 /// law other than the default [`LennardJones`], the law's name (`Md<cpu f64, 3>`,
 /// `Md<gpu f32, 2, morse>`; [`checkpoint::model_with_law`]).
 pub(crate) fn model_name<L: PairLaw>(gpu: bool, precision: Precision, axes: usize) -> String {
-    let kind = if gpu {
-        format!("gpu f32, {axes}")
-    } else {
-        format!("cpu {}, {axes}", precision.wgsl())
-    };
+    let kind = checkpoint::engine_kind(gpu, precision, axes);
     checkpoint::model_with_law("Md", &kind, L::NAME, LennardJones::NAME)
 }
 
