@@ -1,12 +1,16 @@
-// All-pairs field with workgroup tiles: each invocation owns one target particle; the
-// workgroup stages WG source particles at a time in workgroup memory and every invocation
-// sums their fields on its target. REAL (f32 or f64), rsqrt_real and pair_weight come from
-// the sources concatenated before this one (see crates/pp-coulomb/src/gpu.rs).
+// All-pairs field with workgroup tiles: each invocation owns TPI target particles (1, 2 or
+// 4), WG apart; the workgroup stages WG source particles at a time in workgroup memory and
+// every invocation sums their fields on its targets, so that one read of a source from
+// workgroup memory serves TPI targets. Every target sums its sources in index order whatever
+// WG and TPI are: the result does not depend on the tile. REAL (f32 or f64), rsqrt_real and
+// pair_weight come from the sources concatenated before this one, and the line
+// `const WG: u32 = ..; const TPI: u32 = ..;` from the host (see crates/pp-coulomb/src/gpu.rs).
+// The targets are unrolled by hand behind `TPI >= 2u` / `TPI >= 4u` (constant conditions)
+// rather than looped over: a loop would count against the loop limit of software drivers.
 
 override N: u32;            // particles
-override NPAD: u32;         // particles padded to a multiple of WG (zero-charge padding)
+override NPAD: u32;         // particles padded to a multiple of WG * TPI (zero-charge padding)
 override EXACT: bool;       // flag coincident pairs (exact law only)
-const WG: u32 = 128u;
 
 @group(0) @binding(0) var<storage, read> pos: array<vec4<REAL>>;        // x, y, z, charge
 @group(0) @binding(1) var<storage, read> vel: array<vec4<REAL>>;        // vx, vy, vz, q/m
@@ -20,6 +24,33 @@ const FLAG: u32 = 0x7fc00000u;
 
 var<workgroup> tile: array<vec4<REAL>, WG>;
 
+// The field of source s on a target at x: (field, r^2).
+fn pair_field(x: vec3<REAL>, s: vec4<REAL>, p: REAL) -> vec4<REAL> {
+    let d = x - s.xyz;
+    let r2 = dot(d, d);
+    return vec4<REAL>((s.w * pair_weight(r2, p)) * d, r2);
+}
+
+// The source index j + 1 when target i met source j at distance 0 (exact law only), else
+// `previous`.
+fn coincident_with(previous: u32, r2: REAL, i: u32, j: u32) -> u32 {
+    if (EXACT && r2 == 0.0 && j != i) {
+        return j + 1u;
+    }
+    return previous;
+}
+
+// Writes target i's acceleration and its coincident partner, if any.
+fn store(i: u32, e: vec3<REAL>, coincident: u32) {
+    if (i < N) {
+        acc[i] = vec4<REAL>(e * vel[i].w, 0.0);
+        if (coincident != 0u) {
+            partner[i] = coincident;
+            coincident_flag[i] = FLAG;
+        }
+    }
+}
+
 @compute @workgroup_size(WG)
 fn accel(
     @builtin(workgroup_id) wid: vec3<u32>,
@@ -27,35 +58,63 @@ fn accel(
     @builtin(local_invocation_index) lid: u32,
 ) {
     let g = linear_workgroup(wid, nwg);
-    if (g * WG >= NPAD) {
+    if (g * WG * TPI >= NPAD) {
         return;
     }
-    let i = g * WG + lid;
-    let xi = pos[i].xyz;
+    let i0 = g * WG * TPI + lid;
+    let i1 = i0 + WG;
+    let i2 = i0 + 2u * WG;
+    let i3 = i0 + 3u * WG;
+    let x0 = pos[i0].xyz;
+    var x1 = x0;
+    var x2 = x0;
+    var x3 = x0;
+    if (TPI >= 2u) {
+        x1 = pos[i1].xyz;
+    }
+    if (TPI >= 4u) {
+        x2 = pos[i2].xyz;
+        x3 = pos[i3].xyz;
+    }
     let p = coef[0];
-    var e = vec3<REAL>(0.0, 0.0, 0.0);
-    var coincident = 0u;
+    var e0 = vec3<REAL>(0.0, 0.0, 0.0);
+    var e1 = e0;
+    var e2 = e0;
+    var e3 = e0;
+    var c0 = 0u;
+    var c1 = 0u;
+    var c2 = 0u;
+    var c3 = 0u;
     for (var t = 0u; t < NPAD; t += WG) {
         workgroupBarrier();
         tile[lid] = pos[t + lid];
         workgroupBarrier();
         for (var k = 0u; k < WG; k++) {
             let s = tile[k];
-            let d = xi - s.xyz;
-            let r2 = dot(d, d);
-            e += (s.w * pair_weight(r2, p)) * d;
-            if (EXACT) {
-                if (r2 == 0.0 && t + k != i) {
-                    coincident = t + k + 1u;
-                }
+            let f0 = pair_field(x0, s, p);
+            e0 += f0.xyz;
+            c0 = coincident_with(c0, f0.w, i0, t + k);
+            if (TPI >= 2u) {
+                let f1 = pair_field(x1, s, p);
+                e1 += f1.xyz;
+                c1 = coincident_with(c1, f1.w, i1, t + k);
+            }
+            if (TPI >= 4u) {
+                let f2 = pair_field(x2, s, p);
+                e2 += f2.xyz;
+                c2 = coincident_with(c2, f2.w, i2, t + k);
+                let f3 = pair_field(x3, s, p);
+                e3 += f3.xyz;
+                c3 = coincident_with(c3, f3.w, i3, t + k);
             }
         }
     }
-    if (i < N) {
-        acc[i] = vec4<REAL>(e * vel[i].w, 0.0);
-        if (coincident != 0u) {
-            partner[i] = coincident;
-            coincident_flag[i] = FLAG;
-        }
+    store(i0, e0, c0);
+    if (TPI >= 2u) {
+        store(i1, e1, c1);
+    }
+    if (TPI >= 4u) {
+        store(i2, e2, c2);
+        store(i3, e3, c3);
     }
 }

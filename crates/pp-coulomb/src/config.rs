@@ -167,6 +167,60 @@ pub struct Config {
     /// less than the tolerance and pass: the guard catches runs whose energy is visibly
     /// wrong, not every unresolved pair.
     pub energy_tolerance: Option<f64>,
+    /// The GPU force kernel's tile ([`GpuTile`]); `None` (the default) uses
+    /// [`GpuTile::default`]. Every tile gives the same bits (each target sums its
+    /// sources in index order), so it is a speed setting: not recorded in checkpoints, and
+    /// ignored by the CPU backend.
+    #[serde(skip)]
+    pub gpu_tile: Option<GpuTile>,
+}
+
+/// The tile of the GPU force kernel: `workgroup` invocations stage that many source
+/// particles at a time in workgroup memory, and each invocation sums the field on
+/// `targets` particles, so that one read of a source serves `targets` of them (the scheme
+/// of the CUDA `nbody` sample and its successors).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GpuTile {
+    /// Invocations per workgroup = sources per tile: 32, 64, 128 or 256.
+    pub workgroup: u32,
+    /// Target particles per invocation: 1, 2 or 4.
+    pub targets: u32,
+}
+
+impl Default for GpuTile {
+    /// 128 x 4, the tile used where [`Config::gpu_tile`] is `None`: the fastest of the eight
+    /// tiles (workgroups of 64, 128, 256; 1, 2, 4 targets) timed at N = 10^6 (f32) on an
+    /// NVIDIA H200, 1.44e12 interactions/s against 0.96e12 for 128 x 1 (2026-11-28,
+    /// `benches/gpu/`, docs/gpu.md), and on lavapipe 3.3x the rate of 128 x 1 at N = 2048.
+    /// The targets add no loop iterations, so the loop limit of software drivers
+    /// ([`crate::gpu_max_particles`]) does not depend on them.
+    fn default() -> Self {
+        Self {
+            workgroup: 128,
+            targets: 4,
+        }
+    }
+}
+
+impl GpuTile {
+    /// Checks the workgroup size (32, 64, 128 or 256) and the targets (1, 2 or 4).
+    pub fn validate(&self) -> Result<()> {
+        if ![32, 64, 128, 256].contains(&self.workgroup) {
+            return Err(Error::invalid(
+                "gpu_tile.workgroup",
+                self.workgroup,
+                "must be 32, 64, 128 or 256",
+            ));
+        }
+        if ![1, 2, 4].contains(&self.targets) {
+            return Err(Error::invalid(
+                "gpu_tile.targets",
+                self.targets,
+                "must be 1, 2 or 4",
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// `Precision` as a string in checkpoints (`"f32"`, `"f64"`).
@@ -204,6 +258,7 @@ impl Config {
             mixed: false,
             check_every: DEFAULT_CHECK_EVERY,
             energy_tolerance: Some(DEFAULT_ENERGY_TOLERANCE),
+            gpu_tile: None,
         }
     }
 
@@ -255,10 +310,19 @@ impl Config {
         self
     }
 
-    /// Checks the time step, the force-law parameter, the energy tolerance and that
-    /// [`Config::mixed`] comes with [`Precision::F32`].
+    /// Sets the GPU force kernel's tile (see [`Config::gpu_tile`]).
+    pub fn with_gpu_tile(mut self, tile: GpuTile) -> Self {
+        self.gpu_tile = Some(tile);
+        self
+    }
+
+    /// Checks the time step, the force-law parameter, the energy tolerance, the GPU tile and
+    /// that [`Config::mixed`] comes with [`Precision::F32`].
     pub fn validate(&self) -> Result<()> {
         require_positive("dt", self.dt)?;
+        if let Some(tile) = self.gpu_tile {
+            tile.validate()?;
+        }
         if self.mixed && self.precision != Precision::F32 {
             return Err(Error::invalid(
                 "mixed",

@@ -7,6 +7,7 @@ use rayon::prelude::*;
 
 use crate::config::ForceLaw;
 use crate::particles::Particles;
+use crate::{Error, Result};
 
 /// Energies, momenta and the force balance of one state.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -57,10 +58,33 @@ pub(crate) fn potential_rows(p: &Particles, law: ForceLaw, range: Range<usize>, 
 /// weights of [`crate::laws`], without SIMD, blocking or reciprocal square-root estimates.
 /// Under the exact law a coincident pair contributes nothing (as the kernels' self pair).
 pub fn reference_accelerations(p: &Particles, law: ForceLaw) -> Vec<[f64; 3]> {
+    let all: Vec<usize> = (0..p.len()).collect();
+    accelerations_of(p, law, &all)
+}
+
+/// [`reference_accelerations`] of the particles `targets` only (each against every
+/// particle): a check of a large run on a subset, `O(targets.len() N)`. Errors if a target
+/// is not below `p.len()`.
+pub fn reference_accelerations_of(
+    p: &Particles,
+    law: ForceLaw,
+    targets: &[usize],
+) -> Result<Vec<[f64; 3]>> {
+    if let Some(&bad) = targets.iter().find(|&&i| i >= p.len()) {
+        return Err(Error::invalid(
+            "target",
+            bad,
+            format!("must be below the particle count {}", p.len()),
+        ));
+    }
+    Ok(accelerations_of(p, law, targets))
+}
+
+fn accelerations_of(p: &Particles, law: ForceLaw, targets: &[usize]) -> Vec<[f64; 3]> {
     let x = &p.position;
-    (0..p.len())
-        .into_par_iter()
-        .map(|i| {
+    targets
+        .par_iter()
+        .map(|&i| {
             let mut e = [0.0; 3];
             for j in 0..p.len() {
                 if j == i {

@@ -4,7 +4,7 @@ use simkit_backend::gpu::{DISPATCH_WGSL, GpuGuard, Watch};
 use simkit_backend::guard::chunks;
 use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Precision, Real, Result};
 
-use crate::config::{Config, ForceLaw, Integrator, coincident_error};
+use crate::config::{Config, ForceLaw, GpuTile, Integrator, coincident_error};
 use crate::engine::{Engine, pad_coordinate};
 use crate::guard::{
     Checks, Energy, coincident_blow_up, energy_blow_up, energy_jump, jump_fails, non_finite_blow_up,
@@ -17,16 +17,22 @@ const ACCEL_WGSL: &str = simkit_backend::wgsl!("accel.wgsl");
 const UPDATE_WGSL: &str = simkit_backend::wgsl!("update.wgsl");
 const KICK_WGSL: &str = simkit_backend::wgsl!("kick.wgsl");
 const ENERGY_WGSL: &str = simkit_backend::wgsl!("energy.wgsl");
-/// Workgroup size and tile length (the `WG` constant of the shaders).
+/// Workgroup size of the energy and integrator kernels (their `WG` constant).
 const WG: usize = 128;
 
-/// The most particles the GPU backend takes on `ctx`'s adapter: unlimited (`usize::MAX`)
-/// except where the driver ends shader loops early ([`GpuContext::shader_loop_limit`]):
-/// every invocation walks all source tiles, `WG + 2` loop iterations per tile of `WG`
-/// particles, so llvmpipe (65,535 iterations) takes at most 64,512 particles.
+/// The most particles the GPU backend takes on `ctx`'s adapter with the default tile
+/// ([`GpuTile::default`]): unlimited (`usize::MAX`) except where the driver ends shader
+/// loops early ([`GpuContext::shader_loop_limit`]): every invocation walks all source tiles,
+/// `WG + 2` loop iterations per tile of `WG` particles, so llvmpipe (65,535 iterations) takes
+/// at most 64,512 particles.
 pub fn gpu_max_particles(ctx: &GpuContext) -> usize {
+    max_particles(ctx, GpuTile::default())
+}
+
+fn max_particles(ctx: &GpuContext, tile: GpuTile) -> usize {
+    let wg = tile.workgroup as usize;
     match ctx.shader_loop_limit() {
-        Some(limit) => (limit.saturating_sub(1) as usize / (WG + 2)) * WG,
+        Some(limit) => (limit.saturating_sub(1) as usize / (wg + 2)) * wg,
         None => usize::MAX,
     }
 }
@@ -47,7 +53,20 @@ pub(crate) fn engine(
             ctx.adapter_info().name
         )));
     }
-    let max = gpu_max_particles(ctx);
+    let tile = c.gpu_tile.unwrap_or_default();
+    tile.validate()?;
+    let most = ctx.limits().max_compute_invocations_per_workgroup;
+    if tile.workgroup > most {
+        return Err(Error::invalid(
+            "gpu_tile.workgroup",
+            tile.workgroup,
+            format!(
+                "over the {most} invocations per workgroup of adapter '{}'; use a smaller one",
+                ctx.adapter_info().name
+            ),
+        ));
+    }
+    let max = max_particles(ctx, tile);
     if p.len() > max {
         return Err(Error::Unsupported(format!(
             "{} particles on adapter '{}': it ends a shader's loops after {} iterations per \
@@ -60,7 +79,7 @@ pub(crate) fn engine(
         )));
     }
     Ok(match c.precision {
-        Precision::F32 => Box::new(GpuEngine::<f32>::new(ctx, p, c, accelerations)?),
+        Precision::F32 => Box::new(GpuEngine::<f32>::new(ctx, p, c, tile, accelerations)?),
         Precision::F64 => {
             if !ctx.has_f64() {
                 return Err(Error::Unsupported(format!(
@@ -69,7 +88,7 @@ pub(crate) fn engine(
                     ctx.adapter_info().name
                 )));
             }
-            Box::new(GpuEngine::<f64>::new(ctx, p, c, accelerations)?)
+            Box::new(GpuEngine::<f64>::new(ctx, p, c, tile, accelerations)?)
         }
     })
 }
@@ -91,6 +110,8 @@ struct GpuEngine<T: Real> {
     ctx: GpuContext,
     n: usize,
     npad: usize,
+    /// Targets per workgroup of the force kernel (its tile's `workgroup * targets`).
+    per_group: usize,
     pos: [GpuBuffer<[T; 4]>; 2],
     vel: GpuBuffer<[T; 4]>,
     acc: GpuBuffer<[T; 4]>,
@@ -122,11 +143,15 @@ impl<T: Real> GpuEngine<T> {
         ctx: &GpuContext,
         p: &Particles,
         c: &Config,
+        tile: GpuTile,
         accelerations: Option<&[[f64; 3]]>,
     ) -> Result<Self> {
         let prelude = laws::wgsl_prelude(T::PRECISION);
         let n = p.len();
-        let npad = n.next_multiple_of(WG).max(WG);
+        // A whole number of force tiles (WG * TPI) and of the other kernels' workgroups
+        // (WG); both are powers of two.
+        let per_group = (tile.workgroup * tile.targets) as usize;
+        let npad = n.next_multiple_of(per_group.max(WG)).max(per_group.max(WG));
         let mut pos: Vec<[T; 4]> = (0..n)
             .map(|i| {
                 let x = p.position[i];
@@ -179,13 +204,17 @@ impl<T: Real> GpuEngine<T> {
         };
         let exact = if c.force == ForceLaw::Exact { 1.0 } else { 0.0 };
         let sizes = [("N", n as f64), ("NPAD", npad as f64)];
+        let tile_wgsl = format!(
+            "const WG: u32 = {}u;\nconst TPI: u32 = {}u;\n",
+            tile.workgroup, tile.targets
+        );
         let accel = Kernel::new(
             ctx,
             &KernelDesc {
                 label: "pp-coulomb accel",
-                sources: &[prelude, DISPATCH_WGSL, law_wgsl, ACCEL_WGSL],
+                sources: &[prelude, DISPATCH_WGSL, law_wgsl, &tile_wgsl, ACCEL_WGSL],
                 entry: "accel",
-                workgroup_size: WG as u32,
+                workgroup_size: tile.workgroup,
                 constants: &[sizes[0], sizes[1], ("EXACT", exact)],
             },
         )?;
@@ -273,6 +302,7 @@ impl<T: Real> GpuEngine<T> {
             ctx: ctx.clone(),
             n,
             npad,
+            per_group,
             pos,
             vel,
             acc,
@@ -326,7 +356,7 @@ impl<T: Real> GpuEngine<T> {
             &self.ctx,
             pass,
             &self.accel_bind[cur],
-            (self.npad / WG) as u64,
+            (self.npad / self.per_group) as u64,
         )
     }
 

@@ -97,8 +97,10 @@ pub mod scenes;
 mod sim;
 pub mod units;
 
-pub use config::{Config, DEFAULT_ENERGY_TOLERANCE, ForceLaw, Integrator};
-pub use diagnostics::{Diagnostics, diagnostics, potential_energy, reference_accelerations};
+pub use config::{Config, DEFAULT_ENERGY_TOLERANCE, ForceLaw, GpuTile, Integrator};
+pub use diagnostics::{
+    Diagnostics, diagnostics, potential_energy, reference_accelerations, reference_accelerations_of,
+};
 pub use distributed::DistributedCoulomb;
 #[cfg(feature = "gpu")]
 pub use gpu::gpu_max_particles;

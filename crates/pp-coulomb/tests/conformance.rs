@@ -207,3 +207,57 @@ fn cpu_f32_trajectory_tracks_f64() {
     assert!(dx < 1.2e-6, "positions: {dx:e}");
     assert!(dv < 7.6e-6, "velocities: {dv:e}");
 }
+
+/// Every GPU force tile gives the same bits (each target sums its sources in index order
+/// whatever the tile), and the same as the default tile, under each law, in f32 and (where
+/// the adapter has it) f64; N = 1000 is a multiple of no tile. A tile outside the allowed
+/// sizes is an error naming the field.
+#[cfg(feature = "gpu")]
+#[test]
+fn every_gpu_tile_gives_the_same_accelerations() {
+    use simkit_pp_coulomb::GpuTile;
+    let Some(ctx) =
+        simkit_backend::testing::shared_gpu("every_gpu_tile_gives_the_same_accelerations")
+    else {
+        return;
+    };
+    let p = plasma(1000, 17);
+    let tiles = [
+        (128, 1),
+        (32, 4),
+        (64, 2),
+        (256, 4),
+        (256, 1),
+        (32, 1),
+        (128, 2),
+    ];
+    for law in LAWS {
+        for prec in [Precision::F32, Precision::F64] {
+            if prec == Precision::F64 && !ctx.has_f64() {
+                continue;
+            }
+            let reference = accelerations(&p, law, prec, Backend::Gpu(ctx));
+            for (workgroup, targets) in tiles {
+                let config = Config::new(0.01, law)
+                    .with_precision(prec)
+                    .with_gpu_tile(GpuTile { workgroup, targets });
+                let a = PpCoulomb::new(p.clone(), &config, Backend::Gpu(ctx))
+                    .unwrap()
+                    .accelerations()
+                    .unwrap();
+                assert_eq!(
+                    a, reference,
+                    "{law:?} {prec:?} tile {workgroup} x {targets}"
+                );
+            }
+        }
+    }
+    for (workgroup, targets) in [(100, 1), (128, 3), (512, 1), (128, 0)] {
+        let config = Config::new(0.01, LAWS[0]).with_gpu_tile(GpuTile { workgroup, targets });
+        let Err(e) = PpCoulomb::new(p.clone(), &config, Backend::Gpu(ctx)) else {
+            panic!("tile {workgroup} x {targets} accepted");
+        };
+        let e = e.to_string();
+        assert!(e.contains("gpu_tile"), "{e}");
+    }
+}
