@@ -186,3 +186,60 @@ fn check_written(values: impl Iterator<Item = f64>) -> Result<()> {
         ))
     }
 }
+
+/// One invocation bumps a counter that every dispatch reads and writes, so that the driver
+/// must order the dispatches (a barrier between each two, as between the kernels of a step).
+const BUMP_WGSL: &str = "
+@group(0) @binding(0) var<storage, read_write> counter: array<u32>;
+@compute @workgroup_size(64)
+fn bump(@builtin(local_invocation_index) lid: u32) {
+    if (lid == 0u) { counter[0] = counter[0] + 1u; }
+}
+";
+
+/// The cost of one dependent dispatch, split into recording it on the host (wgpu's
+/// validation and tracking, per dispatch) and executing it on the device (submit to done,
+/// per dispatch): `count` dispatches of [`BUMP_WGSL`] in one pass, `samples` times after a
+/// warm-up. Returns the samples of `(record seconds, execute seconds)` per dispatch.
+pub fn dispatch_cost(ctx: &GpuContext, count: u32, samples: usize) -> Result<Vec<(f64, f64)>> {
+    let counter = GpuBuffer::<u32>::zeroed(ctx, "dispatch counter", 1)?;
+    let kernel = Kernel::new(
+        ctx,
+        &KernelDesc {
+            label: "dispatch cost",
+            sources: &[BUMP_WGSL],
+            entry: "bump",
+            workgroup_size: 64,
+            constants: &[],
+        },
+    )?;
+    let bind = kernel.bind(ctx, &[counter.binding()])?;
+    let run = || -> Result<(f64, f64)> {
+        let start = Instant::now();
+        let mut encoder = ctx.encoder("dispatch cost");
+        record_pass(&mut encoder, "dispatch cost", |pass| {
+            for _ in 0..count {
+                kernel.dispatch_grid(pass, &bind, 1, 1);
+            }
+            Ok(())
+        })?;
+        let recorded = start.elapsed().as_secs_f64();
+        ctx.submit(encoder);
+        ctx.wait()?;
+        let done = start.elapsed().as_secs_f64();
+        let per = f64::from(count);
+        Ok((recorded / per, (done - recorded) / per))
+    };
+    run()?;
+    let t = (0..samples).map(|_| run()).collect::<Result<Vec<_>>>()?;
+    let expected = u64::from(count) * (samples as u64 + 1);
+    let got = counter.download(ctx)?[0];
+    if u64::from(got) != expected {
+        return Err(simkit::backend::Error::invalid(
+            "dispatch counter",
+            got,
+            format!("expected {expected}: the dispatches were not ordered on this adapter"),
+        ));
+    }
+    Ok(t)
+}

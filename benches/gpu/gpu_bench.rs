@@ -262,6 +262,23 @@ fn measure_ceilings(ctx: &GpuContext, quick: bool, samples: usize) -> Result<(Ce
             fma_f32,
         ),
     ];
+    // What one dependent dispatch costs: the floor under a step made of many small kernels.
+    let cost = ceilings::dispatch_cost(ctx, if quick { 100 } else { 2000 }, samples)?;
+    for (what, pick) in [("recorded on the host", 0), ("executed on the device", 1)] {
+        let t: Vec<f64> = cost
+            .iter()
+            .map(|c| if pick == 0 { c.0 } else { c.1 })
+            .collect();
+        rows.push(Row {
+            name: format!("dependent dispatch, {what}"),
+            unit: "dispatches/s".into(),
+            work_per_sample: 1.0,
+            samples: t,
+            limit: Limit::None,
+            peer: None,
+            check: Ok("every dispatch counted, in order".into()),
+        });
+    }
     if let Some(r) = fma_f64 {
         rows.push(row(
             "ceiling: FMA f64 (WGSL)".into(),
@@ -332,7 +349,7 @@ fn table(
             (Limit::FlopsF64(f), Some(x)) => c.fma_f64.map_or("n/a".into(), |p| {
                 format!("{:.0} % of FMA f64", 100.0 * x * f / p)
             }),
-            _ => "n/a".into(),
+            (Limit::None, _) | (_, None) => "n/a".into(),
         };
         let peer = r.peer.as_ref().and_then(|p| {
             peers

@@ -23,6 +23,8 @@ pub enum Limit {
     FlopsF32(f64),
     /// f64 flops per unit, against the measured f64 FMA rate.
     FlopsF64(f64),
+    /// No ceiling applies (e.g. a latency).
+    None,
 }
 
 /// A row's function: checks and times one GPU path.

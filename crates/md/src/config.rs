@@ -37,7 +37,8 @@ pub const DEFAULT_SKIN: f64 = 0.3;
 pub enum GpuKernel {
     /// One invocation per particle gathering its pair terms over the full shell of
     /// neighbour cells of a cell list sorted from scratch every step (default: the faster
-    /// of the two on lavapipe; no hardware GPU has been measured yet).
+    /// of the two on lavapipe and on an NVIDIA H200, where it runs `in.lj` at 7.4e7
+    /// atom-steps/s with 32,000 atoms and 2.75e8 with 10^6; docs/gpu.md).
     #[default]
     PerParticle,
     /// One workgroup per cell, one invocation per slot of the cell: the positions of each
