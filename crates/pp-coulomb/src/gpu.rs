@@ -21,19 +21,34 @@ const ENERGY_WGSL: &str = simkit_backend::wgsl!("energy.wgsl");
 const WG: usize = 128;
 
 /// The most particles the GPU backend takes on `ctx`'s adapter with the default tile
-/// ([`GpuTile::default`]): unlimited (`usize::MAX`) except where the driver ends shader
-/// loops early ([`GpuContext::shader_loop_limit`]): every invocation walks all source tiles,
-/// `WG + 2` loop iterations per tile of `WG` particles, so llvmpipe (65,535 iterations) takes
-/// at most 64,512 particles.
+/// ([`GpuTile::default`]; [`GpuTile::max_particles`] for another).
 pub fn gpu_max_particles(ctx: &GpuContext) -> usize {
-    max_particles(ctx, GpuTile::default())
+    GpuTile::default().max_particles(ctx)
 }
 
-fn max_particles(ctx: &GpuContext, tile: GpuTile) -> usize {
-    let wg = tile.workgroup as usize;
-    match ctx.shader_loop_limit() {
-        Some(limit) => (limit.saturating_sub(1) as usize / (wg + 2)) * wg,
-        None => usize::MAX,
+impl GpuTile {
+    /// The most particles the GPU backend takes on `ctx`'s adapter with this tile: unlimited
+    /// (`usize::MAX`) except where the driver ends shader loops early
+    /// ([`GpuContext::shader_loop_limit`]). The force kernel walks all padded sources in
+    /// tiles of `workgroup`, `workgroup + 2` loop iterations per tile (its targets are
+    /// unrolled, not looped over), the energy kernel likewise in tiles of 128; and the
+    /// padded count is a multiple of `workgroup * targets` and of 128. With the default tile
+    /// llvmpipe (65,535 iterations) takes at most 64,512 particles.
+    pub fn max_particles(&self, ctx: &GpuContext) -> usize {
+        let Some(limit) = ctx.shader_loop_limit() else {
+            return usize::MAX;
+        };
+        let limit = limit.saturating_sub(1) as usize;
+        let walks = |wg: usize| limit / (wg + 2) * wg;
+        let most = walks(self.workgroup as usize).min(walks(WG));
+        let step = self.padding();
+        most / step * step
+    }
+
+    /// The padded particle count is a multiple of this: the force kernel's targets per
+    /// workgroup and the other kernels' workgroup (all powers of two).
+    fn padding(&self) -> usize {
+        ((self.workgroup * self.targets) as usize).max(WG)
     }
 }
 
@@ -66,7 +81,7 @@ pub(crate) fn engine(
             ),
         ));
     }
-    let max = max_particles(ctx, tile);
+    let max = tile.max_particles(ctx);
     if p.len() > max {
         return Err(Error::Unsupported(format!(
             "{} particles on adapter '{}': it ends a shader's loops after {} iterations per \
@@ -148,10 +163,8 @@ impl<T: Real> GpuEngine<T> {
     ) -> Result<Self> {
         let prelude = laws::wgsl_prelude(T::PRECISION);
         let n = p.len();
-        // A whole number of force tiles (WG * TPI) and of the other kernels' workgroups
-        // (WG); both are powers of two.
         let per_group = (tile.workgroup * tile.targets) as usize;
-        let npad = n.next_multiple_of(per_group.max(WG)).max(per_group.max(WG));
+        let npad = n.next_multiple_of(tile.padding()).max(tile.padding());
         let mut pos: Vec<[T; 4]> = (0..n)
             .map(|i| {
                 let x = p.position[i];

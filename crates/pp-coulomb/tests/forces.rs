@@ -192,4 +192,20 @@ fn gpu_refuses_more_particles_than_the_adapter_loops_allow() {
         e.contains("64513 particles") && e.contains("at most 64512"),
         "{e}"
     );
+    // Other tiles: the limit counts the force kernel's loop per tile of its workgroup, the
+    // energy kernel's (tiles of 128) and the padding to a whole number of targets per
+    // workgroup (32 x 4: 1927 tiles of 32 fit, 61,664, padded down to 128s: 61,568; 256 x 1:
+    // 254 tiles of 256 would fit, the energy kernel's 64,512 binds).
+    for (workgroup, targets, expected) in [(32, 4, 61_568), (256, 1, 64_512), (64, 2, 63_488)] {
+        let tile = simkit_pp_coulomb::GpuTile { workgroup, targets };
+        let most = tile.max_particles(&ctx);
+        assert_eq!(most, expected, "tile {workgroup} x {targets}");
+        assert!(most / workgroup as usize * (workgroup as usize + 2) < limit as usize);
+        let config = config.with_gpu_tile(tile);
+        PpCoulomb::new(plasma(most, 5), &config, Backend::Gpu(&ctx)).unwrap();
+        let e = PpCoulomb::new(plasma(most + 1, 5), &config, Backend::Gpu(&ctx))
+            .expect_err("one particle over the limit")
+            .to_string();
+        assert!(e.contains(&format!("at most {most}")), "{e}");
+    }
 }
