@@ -226,6 +226,10 @@ pub fn all(quick: bool, f64_ok: bool) -> Vec<Spec> {
         (256, 2),
         (64, 4),
         (128, 4),
+        (256, 4),
+        (32, 8),
+        (64, 8),
+        (128, 8),
     ] {
         let tile = pp_coulomb::GpuTile { workgroup, targets };
         v.push(spec(

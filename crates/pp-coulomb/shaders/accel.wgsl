@@ -1,11 +1,11 @@
-// All-pairs field with workgroup tiles: each invocation owns TPI target particles (1, 2 or
-// 4), WG apart; the workgroup stages WG source particles at a time in workgroup memory and
+// All-pairs field with workgroup tiles: each invocation owns TPI target particles (1, 2, 4
+// or 8), WG apart; the workgroup stages WG source particles at a time in workgroup memory and
 // every invocation sums their fields on its targets, so that one read of a source from
 // workgroup memory serves TPI targets. Every target sums its sources in index order whatever
 // WG and TPI are: the result does not depend on the tile. REAL (f32 or f64), rsqrt_real and
 // pair_weight come from the sources concatenated before this one, and the line
 // `const WG: u32 = ..; const TPI: u32 = ..;` from the host (see crates/pp-coulomb/src/gpu.rs).
-// The targets are unrolled by hand behind `TPI >= 2u` / `TPI >= 4u` (constant conditions)
+// The targets are unrolled by hand behind `TPI >= 2u`, `>= 4u`, `>= 8u` (constant conditions)
 // rather than looped over: a loop would count against the loop limit of software drivers.
 
 override N: u32;            // particles
@@ -65,10 +65,18 @@ fn accel(
     let i1 = i0 + WG;
     let i2 = i0 + 2u * WG;
     let i3 = i0 + 3u * WG;
+    let i4 = i0 + 4u * WG;
+    let i5 = i0 + 5u * WG;
+    let i6 = i0 + 6u * WG;
+    let i7 = i0 + 7u * WG;
     let x0 = pos[i0].xyz;
     var x1 = x0;
     var x2 = x0;
     var x3 = x0;
+    var x4 = x0;
+    var x5 = x0;
+    var x6 = x0;
+    var x7 = x0;
     if (TPI >= 2u) {
         x1 = pos[i1].xyz;
     }
@@ -76,15 +84,29 @@ fn accel(
         x2 = pos[i2].xyz;
         x3 = pos[i3].xyz;
     }
+    if (TPI >= 8u) {
+        x4 = pos[i4].xyz;
+        x5 = pos[i5].xyz;
+        x6 = pos[i6].xyz;
+        x7 = pos[i7].xyz;
+    }
     let p = coef[0];
     var e0 = vec3<REAL>(0.0, 0.0, 0.0);
     var e1 = e0;
     var e2 = e0;
     var e3 = e0;
+    var e4 = e0;
+    var e5 = e0;
+    var e6 = e0;
+    var e7 = e0;
     var c0 = 0u;
     var c1 = 0u;
     var c2 = 0u;
     var c3 = 0u;
+    var c4 = 0u;
+    var c5 = 0u;
+    var c6 = 0u;
+    var c7 = 0u;
     for (var t = 0u; t < NPAD; t += WG) {
         workgroupBarrier();
         tile[lid] = pos[t + lid];
@@ -107,6 +129,20 @@ fn accel(
                 e3 += f3.xyz;
                 c3 = coincident_with(c3, f3.w, i3, t + k);
             }
+            if (TPI >= 8u) {
+                let f4 = pair_field(x4, s, p);
+                e4 += f4.xyz;
+                c4 = coincident_with(c4, f4.w, i4, t + k);
+                let f5 = pair_field(x5, s, p);
+                e5 += f5.xyz;
+                c5 = coincident_with(c5, f5.w, i5, t + k);
+                let f6 = pair_field(x6, s, p);
+                e6 += f6.xyz;
+                c6 = coincident_with(c6, f6.w, i6, t + k);
+                let f7 = pair_field(x7, s, p);
+                e7 += f7.xyz;
+                c7 = coincident_with(c7, f7.w, i7, t + k);
+            }
         }
     }
     store(i0, e0, c0);
@@ -116,5 +152,11 @@ fn accel(
     if (TPI >= 4u) {
         store(i2, e2, c2);
         store(i3, e3, c3);
+    }
+    if (TPI >= 8u) {
+        store(i4, e4, c4);
+        store(i5, e5, c5);
+        store(i6, e6, c6);
+        store(i7, e7, c7);
     }
 }

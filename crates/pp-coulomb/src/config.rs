@@ -183,15 +183,15 @@ pub struct Config {
 pub struct GpuTile {
     /// Invocations per workgroup = sources per tile: 32, 64, 128 or 256.
     pub workgroup: u32,
-    /// Target particles per invocation: 1, 2 or 4.
+    /// Target particles per invocation: 1, 2, 4 or 8.
     pub targets: u32,
 }
 
 impl Default for GpuTile {
-    /// 128 x 4, the tile used where [`Config::gpu_tile`] is `None`: the fastest of the eight
-    /// tiles (workgroups of 64, 128, 256; 1, 2, 4 targets) timed at N = 10^6 (f32) on an
-    /// NVIDIA H200, 1.44e12 interactions/s against 0.96e12 for 128 x 1 (2026-11-28,
-    /// `benches/gpu/`, docs/gpu.md), and on lavapipe 3.3x the rate of 128 x 1 at N = 2048.
+    /// 128 x 4, the tile used where [`Config::gpu_tile`] is `None`: at N = 10^6 (f32) on an
+    /// NVIDIA H200 1.44e12 interactions/s against 0.96e12 for 128 x 1, within 5 % of the
+    /// fastest of twelve tiles (32 x 8; 2026-11-28, `benches/gpu/`, docs/gpu.md), and on
+    /// lavapipe 3.3x the rate of 128 x 1 at N = 2048.
     /// The targets add no loop iterations, so the loop limit of software drivers
     /// ([`crate::gpu_max_particles`]) does not depend on them.
     fn default() -> Self {
@@ -203,7 +203,7 @@ impl Default for GpuTile {
 }
 
 impl GpuTile {
-    /// Checks the workgroup size (32, 64, 128 or 256) and the targets (1, 2 or 4).
+    /// Checks the workgroup size (32, 64, 128 or 256) and the targets (1, 2, 4 or 8).
     pub fn validate(&self) -> Result<()> {
         if ![32, 64, 128, 256].contains(&self.workgroup) {
             return Err(Error::invalid(
@@ -212,11 +212,11 @@ impl GpuTile {
                 "must be 32, 64, 128 or 256",
             ));
         }
-        if ![1, 2, 4].contains(&self.targets) {
+        if ![1, 2, 4, 8].contains(&self.targets) {
             return Err(Error::invalid(
                 "gpu_tile.targets",
                 self.targets,
-                "must be 1, 2 or 4",
+                "must be 1, 2, 4 or 8",
             ));
         }
         Ok(())

@@ -223,6 +223,8 @@ fn every_gpu_tile_gives_the_same_accelerations() {
     };
     let p = plasma(1000, 17);
     let tiles = [
+        (64, 8),
+        (256, 8),
         (128, 1),
         (32, 4),
         (64, 2),
@@ -252,7 +254,7 @@ fn every_gpu_tile_gives_the_same_accelerations() {
             }
         }
     }
-    for (workgroup, targets) in [(100, 1), (128, 3), (512, 1), (128, 0)] {
+    for (workgroup, targets) in [(100, 1), (128, 3), (512, 1), (128, 0), (128, 16)] {
         let config = Config::new(0.01, LAWS[0]).with_gpu_tile(GpuTile { workgroup, targets });
         let Err(e) = PpCoulomb::new(p.clone(), &config, Backend::Gpu(ctx)) else {
             panic!("tile {workgroup} x {targets} accepted");
