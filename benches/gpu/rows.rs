@@ -247,6 +247,18 @@ pub fn all(quick: bool, f64_ok: bool) -> Vec<Spec> {
     v
 }
 
+/// Times `sim`'s steps with [`Timing::time`], waiting for the device after each call.
+fn time_gpu<S: Simulation>(
+    timing: Timing,
+    ctx: &GpuContext,
+    sim: &mut S,
+) -> Result<(u32, Vec<f64>)> {
+    timing.time(|k| {
+        sim.step(k)?;
+        ctx.wait()
+    })
+}
+
 /// `Ok(text)` when `error <= tolerance`, else `Err(text)`.
 fn verdict(what: &str, error: f64, tolerance: f64) -> std::result::Result<String, String> {
     let text = format!("{what} {error:.1e}, tolerance {tolerance:.0e}");
@@ -259,15 +271,15 @@ fn verdict(what: &str, error: f64, tolerance: f64) -> std::result::Result<String
 
 /// `sqrt(sum |a - b|^2 / sum |b|^2)` over 3-vectors.
 fn relative_l2(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    if a.len() != b.len() {
+        return f64::INFINITY;
+    }
     let (mut num, mut den) = (0.0, 0.0);
     for (x, y) in a.iter().zip(b) {
         for k in 0..3 {
             num += (x[k] - y[k]).powi(2);
             den += y[k] * y[k];
         }
-    }
-    if a.len() != b.len() {
-        return f64::INFINITY;
     }
     (num / den).sqrt()
 }
@@ -296,10 +308,7 @@ fn md_row(
     cpu.step(10)?;
     gpu.step(10)?;
     let error = relative_l2(&gpu.forces()?, &cpu.forces()?);
-    let (steps, samples) = timing.time(|k| {
-        gpu.step(k)?;
-        ctx.wait()
-    })?;
+    let (steps, samples) = time_gpu(timing, ctx, &mut gpu)?;
     let e1 = gpu.diagnostics()?.total / system.particle_count() as f64;
     let check = verdict("forces rel. L2", error, 1e-4).map(|s| {
         format!(
@@ -338,10 +347,7 @@ fn dem_row(ctx: &GpuContext, timing: Timing, side: usize) -> Result<Measured> {
         .zip(&b.positions)
         .map(|(x, y)| (0..3).map(|k| (x[k] - y[k]).abs()).fold(0.0, f64::max))
         .fold(0.0, f64::max);
-    let (steps, samples) = timing.time(|k| {
-        gpu.step(k)?;
-        ctx.wait()
-    })?;
+    let (steps, samples) = time_gpu(timing, ctx, &mut gpu)?;
     Ok(Measured {
         unit: "particle-steps/s".into(),
         work_per_step: scene.particles().len() as f64,
@@ -376,10 +382,7 @@ fn lattice_gas_row(
     cpu.step(4)?;
     gpu.step(4)?;
     let same = cpu.state()? == gpu.state()?;
-    let (steps, samples) = timing.time(|k| {
-        gpu.step(k)?;
-        ctx.wait()
-    })?;
+    let (steps, samples) = time_gpu(timing, ctx, &mut gpu)?;
     Ok(Measured {
         unit: "site-updates/s".into(),
         work_per_step: (n * n) as f64,
@@ -445,10 +448,7 @@ fn rd_measure<M: rd::Model + Clone>(
             scale = scale.max(f64::from(*y).abs());
         }
     }
-    let (steps, samples) = timing.time(|k| {
-        gpu.step(k)?;
-        ctx.wait()
-    })?;
+    let (steps, samples) = time_gpu(timing, ctx, &mut gpu)?;
     Ok(Measured {
         unit: "cell-updates/s".into(),
         work_per_step: cells,
@@ -507,10 +507,7 @@ fn pp_row(
         samples: timing.samples.min(3),
         ..timing
     };
-    let (steps, samples) = timing.time(|k| {
-        gpu.step(k)?;
-        ctx.wait()
-    })?;
+    let (steps, samples) = time_gpu(timing, ctx, &mut gpu)?;
     Ok(Measured {
         unit: "interactions/s".into(),
         work_per_step: n as f64 * (n as f64 - 1.0),

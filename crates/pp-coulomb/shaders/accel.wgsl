@@ -24,20 +24,23 @@ const FLAG: u32 = 0x7fc00000u;
 
 var<workgroup> tile: array<vec4<REAL>, WG>;
 
-// The field of source s on a target at x: (field, r^2).
-fn pair_field(x: vec3<REAL>, s: vec4<REAL>, p: REAL) -> vec4<REAL> {
+// Adds source j (s) to the field e of target i at x, and records j + 1 in c when the two
+// coincide (exact law only).
+fn add_source(
+    e: ptr<function, vec3<REAL>>,
+    c: ptr<function, u32>,
+    x: vec3<REAL>,
+    s: vec4<REAL>,
+    p: REAL,
+    i: u32,
+    j: u32,
+) {
     let d = x - s.xyz;
     let r2 = dot(d, d);
-    return vec4<REAL>((s.w * pair_weight(r2, p)) * d, r2);
-}
-
-// The source index j + 1 when target i met source j at distance 0 (exact law only), else
-// `previous`.
-fn coincident_with(previous: u32, r2: REAL, i: u32, j: u32) -> u32 {
+    *e += (s.w * pair_weight(r2, p)) * d;
     if (EXACT && r2 == 0.0 && j != i) {
-        return j + 1u;
+        *c = j + 1u;
     }
-    return previous;
 }
 
 // Writes target i's acceleration and its coincident partner, if any.
@@ -113,35 +116,19 @@ fn accel(
         workgroupBarrier();
         for (var k = 0u; k < WG; k++) {
             let s = tile[k];
-            let f0 = pair_field(x0, s, p);
-            e0 += f0.xyz;
-            c0 = coincident_with(c0, f0.w, i0, t + k);
+            add_source(&e0, &c0, x0, s, p, i0, t + k);
             if (TPI >= 2u) {
-                let f1 = pair_field(x1, s, p);
-                e1 += f1.xyz;
-                c1 = coincident_with(c1, f1.w, i1, t + k);
+                add_source(&e1, &c1, x1, s, p, i1, t + k);
             }
             if (TPI >= 4u) {
-                let f2 = pair_field(x2, s, p);
-                e2 += f2.xyz;
-                c2 = coincident_with(c2, f2.w, i2, t + k);
-                let f3 = pair_field(x3, s, p);
-                e3 += f3.xyz;
-                c3 = coincident_with(c3, f3.w, i3, t + k);
+                add_source(&e2, &c2, x2, s, p, i2, t + k);
+                add_source(&e3, &c3, x3, s, p, i3, t + k);
             }
             if (TPI >= 8u) {
-                let f4 = pair_field(x4, s, p);
-                e4 += f4.xyz;
-                c4 = coincident_with(c4, f4.w, i4, t + k);
-                let f5 = pair_field(x5, s, p);
-                e5 += f5.xyz;
-                c5 = coincident_with(c5, f5.w, i5, t + k);
-                let f6 = pair_field(x6, s, p);
-                e6 += f6.xyz;
-                c6 = coincident_with(c6, f6.w, i6, t + k);
-                let f7 = pair_field(x7, s, p);
-                e7 += f7.xyz;
-                c7 = coincident_with(c7, f7.w, i7, t + k);
+                add_source(&e4, &c4, x4, s, p, i4, t + k);
+                add_source(&e5, &c5, x5, s, p, i5, t + k);
+                add_source(&e6, &c6, x6, s, p, i6, t + k);
+                add_source(&e7, &c7, x7, s, p, i7, t + k);
             }
         }
     }
