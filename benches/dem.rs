@@ -53,7 +53,7 @@ fn bench_scene(
             .expect("thread pool");
         g.bench_function(BenchmarkId::new("cpu_f64_threads", threads), |b| {
             b.iter_batched(
-                || Dem::new(scene, config, Backend::Cpu).expect("cpu sim"),
+                || Dem::new(scene.clone(), config, Backend::Cpu).expect("cpu sim"),
                 |mut sim| {
                     pool.install(|| sim.step(steps)).expect("step");
                     black_box(sim.steps_done())
@@ -68,7 +68,7 @@ fn bench_scene(
         g.throughput(Throughput::Elements(n * u64::from(steps)));
         g.bench_function(BenchmarkId::new("gpu_f32", &ctx.adapter_info().name), |b| {
             b.iter_batched(
-                || Dem::new(scene, config, Backend::Gpu(ctx)).expect("gpu sim"),
+                || Dem::new(scene.clone(), config, Backend::Gpu(ctx)).expect("gpu sim"),
                 |mut sim| {
                     sim.step(steps).expect("step");
                     ctx.wait().expect("gpu wait");

@@ -43,7 +43,7 @@ fn cases() -> Vec<Case> {
             build: Box::new(|every| {
                 let scene = granular_box(25, 25, 32, 4_928_459)?;
                 let config = simkit::dem::Config::default().with_check_every(every);
-                Ok(stepper(Dem::new(&scene, &config, Backend::Cpu)?))
+                Ok(stepper(Dem::new(scene, &config, Backend::Cpu)?))
             }),
         },
         Case {

@@ -12,8 +12,8 @@
 use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use simkit::backend::{GpuContext, Simulation};
-use simkit::lattice_gas::{Config, GpuLattice, GpuLayout, Lattice, LutCpu, MultiSpinCpu, RuleSet};
+use simkit::backend::{Backend, GpuContext, Simulation};
+use simkit::lattice_gas::{Config, CpuMethod, GpuLayout, Lattice, LatticeGas, RuleSet};
 
 fn bench(c: &mut Criterion) {
     let gpu = GpuContext::new().ok();
@@ -24,32 +24,27 @@ fn bench(c: &mut Criterion) {
     for n in [1024usize, 4096] {
         let mut lattice = Lattice::new(n, n).expect("size");
         lattice.fill_random(0.3, 1).expect("density");
-        let p = Config::default();
-        let full = Config {
-            rules: RuleSet::Full,
+        let cpu = |method: CpuMethod, rules: RuleSet| Config {
+            cpu: method,
+            rules,
             ..Config::default()
         };
-        type Sim = Box<dyn Simulation<State = Lattice>>;
-        let mut sims: Vec<(&str, Sim)> = vec![
-            (
-                "lut",
-                Box::new(LutCpu::new(lattice.clone(), &p).expect("lut")),
-            ),
+        let mut runs: Vec<(&str, Config, Backend<'_>)> = vec![
+            ("lut", cpu(CpuMethod::Lut, RuleSet::FhpI), Backend::Cpu),
             (
                 "lut-scalar",
-                Box::new(
-                    LutCpu::new(lattice.clone(), &p)
-                        .expect("lut")
-                        .force_scalar(),
-                ),
+                cpu(CpuMethod::LutPortable, RuleSet::FhpI),
+                Backend::Cpu,
             ),
             (
                 "multispin",
-                Box::new(MultiSpinCpu::new(lattice.clone(), &p).expect("multispin")),
+                cpu(CpuMethod::MultiSpin, RuleSet::FhpI),
+                Backend::Cpu,
             ),
             (
                 "multispin-full",
-                Box::new(MultiSpinCpu::new(lattice.clone(), &full).expect("multispin")),
+                cpu(CpuMethod::MultiSpin, RuleSet::Full),
+                Backend::Cpu,
             ),
         ];
         if let Some(ctx) = gpu.as_ref() {
@@ -61,10 +56,13 @@ fn bench(c: &mut Criterion) {
                     gpu_layout: Some(layout),
                     ..Config::default()
                 };
-                let sim = GpuLattice::new(lattice.clone(), &config, ctx).expect("gpu");
-                sims.push((name, Box::new(sim)));
+                runs.push((name, config, Backend::Gpu(ctx)));
             }
         }
+        let sims = runs.into_iter().map(|(name, config, backend)| {
+            let sim = LatticeGas::new(lattice.clone(), &config, backend).expect(name);
+            (name, sim)
+        });
         for (name, mut sim) in sims {
             let steps: u32 = match (n, name) {
                 (_, "gpu-bytes") => 1,

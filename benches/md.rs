@@ -161,7 +161,7 @@ fn benches(c: &mut Criterion) {
             };
             g.bench_function(BenchmarkId::new(label, &ctx.adapter_info().name), |b| {
                 b.iter_batched(
-                    || Md::new(&system, &config, Backend::Gpu(ctx)).expect("gpu run"),
+                    || Md::new(system.clone(), &config, Backend::Gpu(ctx)).expect("gpu run"),
                     |mut md| {
                         md.step(GPU_STEPS).expect("step");
                         ctx.wait().expect("gpu wait");
@@ -192,7 +192,7 @@ fn cpu_rows<L: PairLaw>(
         g.bench_function(BenchmarkId::new(label, threads), |b| {
             b.iter_batched(
                 || {
-                    pool.install(|| Md::new(system, &config, Backend::Cpu))
+                    pool.install(|| Md::new(system.clone(), &config, Backend::Cpu))
                         .expect("cpu run")
                 },
                 |mut md| {

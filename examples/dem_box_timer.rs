@@ -50,7 +50,7 @@ fn run(args: &Args) -> Result<()> {
     let steps = args.steps;
     let scene = granular_box(args.nx, args.ny, args.nz, 4_928_459)?;
     let n = scene.particles().len();
-    let mut sim = Dem::new(&scene, &Config::default(), Backend::Cpu)?;
+    let mut sim = Dem::new(scene, &Config::default(), Backend::Cpu)?;
     // The bar advances in pieces of at least 100 steps (one `step` call each, aligned with
     // the blow-up check's interval; the state is the same as with one call).
     let bar = progress::bar("dem box", u64::from(steps), "steps");

@@ -55,7 +55,7 @@ fn restitution(cfg: &Config, e: f64, phase: f64) -> Result<f64> {
     let x1 = 5.0 + (2.0 * TC + phase * dt) * (v0 - v1);
     s.add_particle(Particle::new([4.0, 2.0, 0.0], 0.5, 1.0).with_velocity([v0, 0.0, 0.0]))?;
     s.add_particle(Particle::new([x1, 2.0, 0.0], 0.5, 3.0).with_velocity([v1, 0.0, 0.0]))?;
-    let mut sim = Dem::new(&s, cfg, Backend::Cpu)?;
+    let mut sim = Dem::new(s, cfg, Backend::Cpu)?;
     let steps = ((4.0 * TC + 4.0 * dt) / dt).ceil() as u32;
     sim.step(steps)?;
     let st = sim.state()?;
@@ -79,7 +79,7 @@ fn gas() -> Result<Scene> {
 
 /// (max relative energy error, seconds per step).
 fn energy(scene: &Scene, cfg: &Config, div: f64) -> Result<(f64, f64)> {
-    let mut sim = Dem::new(scene, cfg, Backend::Cpu)?;
+    let mut sim = Dem::new(scene.clone(), cfg, Backend::Cpu)?;
     let d = sim.diagnostics()?;
     let e0 = d.kinetic + d.elastic;
     let chunk = (div as u32).max(1);

@@ -24,7 +24,7 @@ use std::time::Instant;
 
 use clap::Parser;
 use simkit::backend::comm::Comm;
-use simkit::backend::{Result, Simulation, checkpoint};
+use simkit::backend::{Distributed, Result, Simulation};
 use simkit::dem::scenes::{BedParams, vibrating_bed};
 use simkit::dem::{Config, DistributedDem};
 use simkit::output::csv::CsvWriter;
@@ -74,17 +74,8 @@ fn run(args: &Args) -> Result<()> {
     let (scene, units) = vibrating_bed(&params)?;
     let mut sim = match &args.resume {
         // Rank 0 reads the file and every rank resumes from its bytes.
-        Some(path) => {
-            let bytes = comm
-                .is_root()
-                .then(|| checkpoint::read_file(path))
-                .transpose()?;
-            DistributedDem::<simkit::dem::Material>::resume(
-                &comm.broadcast_from_root(bytes)?,
-                comm.clone(),
-            )?
-        }
-        None => DistributedDem::new(&scene, &Config::default(), comm.clone())?,
+        Some(path) => DistributedDem::<simkit::dem::Material>::resume_file(path, comm.clone())?,
+        None => DistributedDem::new(scene, &Config::default(), comm.clone())?,
     };
     let scene = sim.scene().clone();
     // Four frames per vibration cycle (time unit 1/omega: a cycle is 2 pi).

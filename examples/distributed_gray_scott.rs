@@ -1,6 +1,6 @@
 //! Gray–Scott spots (Pearson 1993 set-up, as `examples/gray_scott.rs`) on however many MPI
 //! ranks `mpirun` starts: the grid is block-decomposed over the ranks (`DistributedRd`, CPU,
-//! bit-identical to one process), rank 0 gathers the grid for the pictures and the CSV, and
+//! bit-identical to one process), every rank gets the grid, rank 0 writes the pictures and the CSV, and
 //! the checkpoint written at the end resumes on any number of ranks.
 //!
 //! ```text
@@ -22,7 +22,7 @@ use std::time::Instant;
 
 use clap::Parser;
 use simkit::backend::comm::Comm;
-use simkit::backend::{Result, checkpoint};
+use simkit::backend::{Distributed, Result, Simulation};
 use simkit::output::csv::CsvWriter;
 use simkit::output::heatmap::{HeatmapOptions, write_heatmap};
 use simkit::rd::scenes::{count_spots, gray_scott_square, variance};
@@ -59,19 +59,12 @@ fn run(args: &Args) -> Result<()> {
     let out = PathBuf::from("out/distributed_gray_scott");
     let mut sim = match &args.resume {
         // Rank 0 reads the file and every rank resumes from its bytes.
-        Some(path) => {
-            let bytes = if comm.is_root() {
-                Some(checkpoint::read_file(path)?)
-            } else {
-                None
-            };
-            DistributedRd::resume(&comm.broadcast_from_root(bytes)?, comm.clone())?
-        }
+        Some(path) => DistributedRd::resume_file(path, comm.clone())?,
         None => {
             let n = args.size;
             let grid = gray_scott_square::<f64>(n, GrayScott::PEARSON_H, n / 8, 1)?;
             let config = Config::new(Stepping::euler(1.0));
-            DistributedRd::new(&grid, GrayScott::spots(), &config, comm.clone())?
+            DistributedRd::new(grid, GrayScott::spots(), &config, comm.clone())?
         }
     };
     let [nx, ny] = sim.decomposition().global();
@@ -106,8 +99,9 @@ fn run(args: &Args) -> Result<()> {
         if let Some(bar) = &bar {
             bar.inc(k);
         }
-        // Collective: every rank sends its block; rank 0 writes.
-        if let (Some(grid), Some(csv)) = (sim.gather()?, csv.as_mut()) {
+        // Collective: every rank sends its block and gets the grid; rank 0 writes.
+        let grid = sim.state()?;
+        if let Some(csv) = csv.as_mut() {
             frame(&out, &grid, sim.steps_done(), csv)?;
         }
     }

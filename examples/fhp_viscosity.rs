@@ -24,10 +24,10 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use clap::Parser;
-use simkit::backend::{Result, Simulation};
-use simkit::lattice_gas::observables::{BlockField, TimeAverage};
-use simkit::lattice_gas::viscosity::{ShearWave, fhp1_viscosity};
-use simkit::lattice_gas::{Config, Lattice, MultiSpinCpu, ROW_SPACING, RuleSet};
+use simkit::backend::{Backend, Result, Simulation};
+use simkit::lattice_gas::{BlockField, TimeAverage};
+use simkit::lattice_gas::{Config, CpuMethod, Lattice, LatticeGas, ROW_SPACING, RuleSet};
+use simkit::lattice_gas::{ShearWave, fhp1_viscosity};
 use simkit::output::plot::{Plot, Scale, Series, Style};
 
 #[path = "common/progress.rs"]
@@ -145,7 +145,11 @@ fn noise_sweep(out: &tradeoffs::TradeoffArgs) -> Result<()> {
     let windows = [1usize, 4, 16, 64];
     let mut lattice = Lattice::new(n, n)?;
     lattice.fill_random(d, 5)?;
-    let mut sim = MultiSpinCpu::new(lattice, &Config::default())?;
+    let multispin = Config {
+        cpu: CpuMethod::MultiSpin,
+        ..Config::default()
+    };
+    let mut sim = LatticeGas::new(lattice, &multispin, Backend::Cpu)?;
     sim.step(50)?;
     let max_window = *windows.last().expect("windows");
     let mut snapshots = Vec::with_capacity(max_window);

@@ -169,7 +169,7 @@ fn run(args: &Args) -> Result<()> {
         ..Config::default()
     };
     let mut md = checkpoints.start(backend, |backend| {
-        Md::new(&system(args.cells)?, &config, backend)
+        Md::new(system(args.cells)?, &config, backend)
     })?;
     let n = md.system().particle_count();
     let total = u64::from(args.steps);

@@ -75,7 +75,11 @@ struct Row {
 fn liquid() -> Result<System> {
     let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5))?;
     let mut system = scenes::fcc_lattice([8; 3], 0.8442, 1.44, table, &[0], 87287)?;
-    let mut melt = Md::new(&system, &config(0.005, 0.3, Precision::F64), Backend::Cpu)?;
+    let mut melt = Md::new(
+        system.clone(),
+        &config(0.005, 0.3, Precision::F64),
+        Backend::Cpu,
+    )?;
     melt.step(400)?;
     let s = melt.state()?;
     system.set_particles(&s.species, &s.positions, &s.velocities)?;
@@ -106,7 +110,7 @@ fn force_error(reference: &[[f64; 3]], forces: &[[f64; 3]]) -> (f64, f64) {
 
 /// Runs `system` to t = DURATION: (max relative energy error, atom-steps/s).
 fn energy_run(system: &System, cfg: &Config, backend: Backend<'_>) -> Result<(f64, f64)> {
-    let mut md = Md::new(system, cfg, backend)?;
+    let mut md = Md::new(system.clone(), cfg, backend)?;
     let e0 = md.diagnostics()?.total;
     let dt = md.dt();
     let steps = (DURATION / dt).round() as u64;
@@ -152,14 +156,19 @@ fn run(args: &Args) -> Result<()> {
             Backend::Gpu(ctx),
         ));
     }
-    let reference =
-        Md::new(&system, &config(0.005, 0.3, Precision::F64), Backend::Cpu)?.forces()?;
+    let reference = Md::new(
+        system.clone(),
+        &config(0.005, 0.3, Precision::F64),
+        Backend::Cpu,
+    )?
+    .forces()?;
 
     let runs = (modes.len() * DTS.len() + SKINS.len()) as u64;
     let bar = progress::bar("md sweep", runs, "runs");
     let mut rows = Vec::new();
     for (mode, precision, backend) in &modes {
-        let forces = Md::new(&system, &config(0.005, 0.3, *precision), *backend)?.forces()?;
+        let forces =
+            Md::new(system.clone(), &config(0.005, 0.3, *precision), *backend)?.forces()?;
         let (force_max, force_rms) = force_error(&reference, &forces);
         for &dt in &DTS {
             let (energy, rate) = energy_run(&system, &config(dt, 0.3, *precision), *backend)?;

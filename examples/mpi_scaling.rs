@@ -138,7 +138,7 @@ fn run(args: &Args) -> Result<()> {
             let grid = gray_scott_square::<f64>(size, 1.0, size / 8, 1)?;
             let model = GrayScott::new(1.0, 0.5, 0.04, 0.06)?;
             let config = RdConfig::new(Stepping::euler(0.2));
-            let mut run = DistributedRd::new(&grid, model, &config, comm.clone())?;
+            let mut run = DistributedRd::new(grid.clone(), model, &config, comm.clone())?;
             drop(grid);
             let cells = (size * size) as f64;
             time(&comm, args, "rd", size, cells, "cell-updates/s", |n| {
@@ -148,7 +148,8 @@ fn run(args: &Args) -> Result<()> {
         Problem::LatticeGas { size } => {
             let mut lattice = Lattice::new(size, size)?;
             lattice.fill_random(0.3, 7)?;
-            let mut run = DistributedLatticeGas::new(&lattice, &LgConfig::default(), comm.clone())?;
+            let mut run =
+                DistributedLatticeGas::new(lattice.clone(), &LgConfig::default(), comm.clone())?;
             drop(lattice);
             let sites = (size * size) as f64;
             time(
@@ -167,7 +168,7 @@ fn run(args: &Args) -> Result<()> {
                 dt: Some(1e-4),
                 ..DemConfig::default()
             };
-            let mut run = DistributedDem::new(&scene, &config, comm.clone())?;
+            let mut run = DistributedDem::new(scene.clone(), &config, comm.clone())?;
             let n = scene.particles().len();
             time(&comm, args, "dem", n, n as f64, "particle-steps/s", |k| {
                 run.step(k)
@@ -178,7 +179,7 @@ fn run(args: &Args) -> Result<()> {
             // The velocity seed of in.lj (the one `scenes::lj_melt` uses).
             let system = md_scenes::fcc_lattice([cells; 3], 0.8442, 1.44, table, &[0], 87287)?;
             let config = MdConfig::default().with_dt(0.005);
-            let mut run = DistributedMd::new(&system, &config, comm.clone())?;
+            let mut run = DistributedMd::new(system.clone(), &config, comm.clone())?;
             let n = system.particle_count();
             drop(system);
             time(&comm, args, "md", n, n as f64, "atom-steps/s", |k| {

@@ -18,7 +18,7 @@ use std::time::Instant;
 
 use clap::Parser;
 use simkit::backend::{Backend, GpuContext, Result, Simulation};
-use simkit::lattice_gas::observables::{BlockField, TimeAverage};
+use simkit::lattice_gas::{BlockField, TimeAverage};
 use simkit::lattice_gas::{Config, Lattice, LatticeGas, Obstacle, ROW_SPACING, RuleSet};
 use simkit::output::gif::GifWriter;
 use simkit::output::vector_field::render_vector_field;

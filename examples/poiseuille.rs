@@ -18,7 +18,7 @@ use std::time::Duration;
 use clap::Parser;
 use indicatif::{ProgressBar, ProgressStyle};
 use simkit::backend::Result;
-use simkit::lattice_gas::poiseuille::PoiseuilleChannel;
+use simkit::lattice_gas::PoiseuilleChannel;
 use simkit::output::csv::write_csv;
 
 /// Plane Poiseuille flow of the FHP lattice gas: fits the velocity profile and compares the

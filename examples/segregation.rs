@@ -118,7 +118,7 @@ fn run(args: &Args) -> Result<()> {
         units.amplitude(params.gamma),
         units.time(params.contact_time_s)
     );
-    let mut sim = Dem::new(&scene, &Config::default(), backend)?;
+    let mut sim = Dem::new(scene.clone(), &Config::default(), backend)?;
     let per_cycle = (2.0 * std::f64::consts::PI / sim.dt()).round() as u32;
     let cycles_per_sample = (cycles / samples.max(1)).max(1);
     println!(

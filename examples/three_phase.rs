@@ -254,7 +254,7 @@ fn run(args: &Args) -> Result<()> {
         dt: (args.dt != 0.0).then_some(args.dt),
         ..Config::default()
     };
-    let mut md = checkpoints.start(backend, |backend| Md::new(&slab(args)?, &config, backend))?;
+    let mut md = checkpoints.start(backend, |backend| Md::new(slab(args)?, &config, backend))?;
     let system = md.system().clone();
     let counts = NAMES
         .iter()

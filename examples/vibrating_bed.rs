@@ -112,7 +112,7 @@ fn run(args: &Args) -> Result<()> {
     );
     let out = Path::new("out/vibrating_bed");
     let checkpoints = args.checkpoint.checkpoints(out);
-    let mut sim = checkpoints.start(backend, |b| Dem::new(&scene, &Config::default(), b))?;
+    let mut sim = checkpoints.start(backend, |b| Dem::new(scene.clone(), &Config::default(), b))?;
     let period = 2.0 * std::f64::consts::PI;
     let per_frame = (period / f64::from(frames_per_cycle) / sim.dt()).round() as u32;
     println!(

@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use crate::backend::Result;
-use crate::lattice_gas::observables::BlockField;
+use crate::lattice_gas::BlockField;
 use crate::output::heatmap::HeatmapOptions;
 use crate::output::vector_field::{VectorFieldOptions, write_vector_field};
 use crate::output::vtk::ImageData;

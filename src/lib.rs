@@ -41,6 +41,7 @@ pub use simkit_output as output;
 pub use simkit_pp_coulomb as pp_coulomb;
 pub use simkit_rd as rd;
 
+pub mod api;
 pub mod cli;
 pub mod files;
 
@@ -52,7 +53,9 @@ pub mod files;
 pub mod prelude {
     #[cfg(feature = "gpu")]
     pub use crate::backend::GpuContext;
-    pub use crate::backend::{Backend, Error, Precision, Real, Restart, Result, Simulation};
+    pub use crate::backend::{
+        Backend, Distributed, Error, Precision, Real, Restart, Result, Simulation,
+    };
     pub use crate::dem::Dem;
     pub use crate::lattice_gas::{Lattice, LatticeGas};
     pub use crate::md::Md;

@@ -59,7 +59,7 @@ fn the_user_law_passes_the_law_level_gpu_test() {
 
 #[test]
 fn the_user_law_conserves_energy_on_the_cpu() -> Result<()> {
-    let mut md = Md::new(&fluid()?, &Config::default(), Backend::Cpu)?;
+    let mut md = Md::new(fluid()?, &Config::default(), Backend::Cpu)?;
     let e0 = md.diagnostics()?.total;
     md.step(400)?;
     let e1 = md.diagnostics()?.total;
@@ -84,8 +84,8 @@ fn the_user_law_runs_on_the_gpu_as_on_the_cpu() -> Result<()> {
         precision: Precision::F32,
         ..Config::default()
     };
-    let mut cpu = Md::new(&sys, &config, Backend::Cpu)?;
-    let mut gpu = Md::new(&sys, &config, Backend::Gpu(&ctx))?;
+    let mut cpu = Md::new(sys.clone(), &config, Backend::Cpu)?;
+    let mut gpu = Md::new(sys, &config, Backend::Gpu(&ctx))?;
     let (d_cpu, d_gpu) = (cpu.diagnostics()?, gpu.diagnostics()?);
     assert!((d_cpu.potential - d_gpu.potential).abs() < 1e-5 * d_cpu.potential.abs());
     cpu.step(100)?;

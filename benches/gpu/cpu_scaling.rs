@@ -43,8 +43,7 @@ fn cases(quick: bool) -> Vec<Case> {
             let table = md::PairTable::uniform(1, md::LennardJones::new(1.0, 1.0, 2.5))?;
             let system = md::scenes::fcc_lattice([cells; 3], 0.8442, 1.44, table, &[0], 87287)?;
             let n = system.particle_count() as f64;
-            let mut sim =
-                md::Md::new(&system, &md::Config::default().with_dt(0.005), Backend::Cpu)?;
+            let mut sim = md::Md::new(system, &md::Config::default().with_dt(0.005), Backend::Cpu)?;
             Ok((n, Box::new(move |k| sim.step(k)) as Stepper))
         }),
     ));
@@ -56,7 +55,7 @@ fn cases(quick: bool) -> Vec<Case> {
             let scene = dem::scenes::granular_box(nx, nx, nz, 4_928_459)?;
             let n = scene.particles().len() as f64;
             let mut sim =
-                dem::Dem::new(&scene, &dem::Config::default().with_dt(1e-4), Backend::Cpu)?;
+                dem::Dem::new(scene, &dem::Config::default().with_dt(1e-4), Backend::Cpu)?;
             Ok((n, Box::new(move |k| sim.step(k)) as Stepper))
         }),
     ));

@@ -300,9 +300,9 @@ fn md_row(
     let base = md::Config::default()
         .with_dt(0.005)
         .with_precision(Precision::F32);
-    let mut cpu = md::Md::new(&system, &base, Backend::Cpu)?;
+    let mut cpu = md::Md::new(system.clone(), &base, Backend::Cpu)?;
     let config = base.with_gpu_kernel(kernel).with_check_every(check_every);
-    let mut gpu = md::Md::new(&system, &config, Backend::Gpu(ctx))?;
+    let mut gpu = md::Md::new(system.clone(), &config, Backend::Gpu(ctx))?;
     let e0 = cpu.diagnostics()?.total / system.particle_count() as f64;
     // The lattice's forces vanish by symmetry: compare once the atoms have moved.
     cpu.step(10)?;
@@ -336,8 +336,8 @@ fn dem_row(ctx: &GpuContext, timing: Timing, side: usize) -> Result<Measured> {
     let nz = side;
     let scene = dem::scenes::granular_box(side, side, nz, 4_928_459)?;
     let config = dem::Config::default().with_dt(1e-4);
-    let mut cpu = dem::Dem::new(&scene, &config, Backend::Cpu)?;
-    let mut gpu = dem::Dem::new(&scene, &config, Backend::Gpu(ctx))?;
+    let mut cpu = dem::Dem::new(scene.clone(), &config, Backend::Cpu)?;
+    let mut gpu = dem::Dem::new(scene.clone(), &config, Backend::Gpu(ctx))?;
     cpu.step(20)?;
     gpu.step(20)?;
     let (a, b) = (gpu.state()?, cpu.state()?);

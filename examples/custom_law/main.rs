@@ -79,7 +79,7 @@ fn run_on(
     backend: Backend<'_>,
     steps: u32,
 ) -> Result<Run> {
-    let mut md = Md::new(system, config, backend)?;
+    let mut md = Md::new(system.clone(), config, backend)?;
     let n = system.particle_count() as f64;
     let bar = progress::bar(&md.backend_name(), u64::from(steps), "steps");
     let mut rows = Vec::new();
@@ -108,7 +108,7 @@ fn drift(rows: &[[f64; 4]]) -> f64 {
 fn run(args: &Args) -> Result<()> {
     let system = system(args.cells)?;
     let config = Config::default();
-    let dt = Md::new(&system, &config, Backend::Cpu)?.dt();
+    let dt = Md::new(system.clone(), &config, Backend::Cpu)?.dt();
     println!(
         "Gaussian core fluid: {} particles, density 0.5, T 0.02, dt {dt:.4} (from the law's \
          stiffness), {} steps",

@@ -21,7 +21,7 @@ pub fn run(backend: Backend<'_>, out: &Path) -> Result<Row> {
         ..BedParams::default()
     };
     let (scene, _) = vibrating_bed(&params)?;
-    let mut sim = Dem::new(&scene, &Config::default(), backend)?;
+    let mut sim = Dem::new(scene.clone(), &Config::default(), backend)?;
     let rest = sim.diagnostics()?.com_height;
     let per_cycle = (2.0 * std::f64::consts::PI / sim.dt()).round() as u32;
     let cycles = 2;

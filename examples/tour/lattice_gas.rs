@@ -4,8 +4,8 @@ use std::path::Path;
 use std::time::Instant;
 
 use simkit::backend::{Backend, Result, Simulation};
-use simkit::lattice_gas::observables::{BlockField, TimeAverage};
-use simkit::lattice_gas::{Config, Lattice, LatticeGas, LutCpu, Obstacle, ROW_SPACING, RuleSet};
+use simkit::lattice_gas::{BlockField, TimeAverage};
+use simkit::lattice_gas::{Config, CpuMethod, Lattice, LatticeGas, Obstacle, ROW_SPACING, RuleSet};
 
 use crate::Row;
 
@@ -54,7 +54,11 @@ pub fn run(backend: Backend<'_>, out: &Path) -> Result<Row> {
     let (ux, _) = field.velocity();
     let mean_ux = ux.iter().sum::<f64>() / ux.len() as f64;
     // The portable scalar lookup table: another code path than any backend above.
-    let mut reference = LutCpu::new(lattice, &config)?.force_scalar();
+    let portable = Config {
+        cpu: CpuMethod::LutPortable,
+        ..config.clone()
+    };
+    let mut reference = LatticeGas::new(lattice, &portable, Backend::Cpu)?;
     reference.step(steps)?;
     let same = reference.state()? == sim.state()?;
     Ok(Row {

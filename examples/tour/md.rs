@@ -22,7 +22,7 @@ pub fn run(backend: Backend<'_>, out: &Path) -> Result<Row> {
         shift: true,
         ..Config::default().with_dt(0.005)
     };
-    let mut md = Md::new(&system, &config, backend)?;
+    let mut md = Md::new(system.clone(), &config, backend)?;
     let (steps, every) = (600u32, 20u32);
     let mut rows: Vec<[f64; 4]> = Vec::new();
     let d = md.diagnostics()?;

@@ -15,7 +15,8 @@
 //!   to the last good state); [`checkpoint`]: the versioned, checksummed checkpoint format
 //!   and the [`Restart`] trait; [`atomic`]: atomic file writes.
 //! - [`comm`]: the communicator of a distributed run ([`comm::Comm`]: serial always, MPI with
-//!   the `mpi` feature), Cartesian block decomposition, halo exchange, gather and reductions.
+//!   the `mpi` feature), Cartesian block decomposition, halo exchange, gather and reductions;
+//!   [`Distributed`]: the common trait of every distributed simulation.
 //! - [`vector`]: positions and velocities at the public API as `glam` vectors or arrays.
 //!
 //! The GPU half (everything wgpu) is the `gpu` cargo feature, on by default; without it the
@@ -44,6 +45,7 @@ macro_rules! wgsl {
 pub mod atomic;
 pub mod checkpoint;
 pub mod comm;
+mod distributed;
 pub mod error;
 #[cfg(feature = "gpu")]
 pub mod gpu;
@@ -58,6 +60,7 @@ pub mod testing;
 pub mod vector;
 
 pub use checkpoint::Restart;
+pub use distributed::Distributed;
 pub use error::{Error, Result, require_finite, require_non_negative, require_positive};
 #[cfg(feature = "gpu")]
 pub use gpu::{GpuBuffer, GpuContext, GpuScan, Kernel, KernelDesc};

@@ -142,13 +142,13 @@ mod tests {
     #[test]
     fn a_law_that_claims_to_be_built_in_is_refused() {
         let m = Material::new(0.9, 0.05);
-        match Dem::new(&two_discs(Pretender(m)), &Config::default(), Backend::Cpu) {
+        match Dem::new(two_discs(Pretender(m)), &Config::default(), Backend::Cpu) {
             Err(Error::InvalidParameter { name, .. }) => {
                 assert_eq!(name, "ContactLaw::BUILT_IN")
             }
             other => panic!("expected the BUILT_IN error, got {:?}", other.err()),
         }
         // The same scene under the built-in law runs.
-        assert!(Dem::new(&two_discs(m), &Config::default(), Backend::Cpu).is_ok());
+        assert!(Dem::new(two_discs(m), &Config::default(), Backend::Cpu).is_ok());
     }
 }

@@ -6,10 +6,10 @@ use rayon::prelude::*;
 use simkit_backend::comm::{Comm, ParticleDomain};
 use simkit_backend::guard::{Guarded, Halt, run_guarded, verdict};
 use simkit_backend::particles::Dynamics;
-use simkit_backend::{Error, Precision, Result, Simulation};
+use simkit_backend::{Distributed, Error, Precision, Result, Simulation};
 use simkit_neighbor::{
-    ByDim, DistributedRun, Finding, GhostedList, RECORD, RankParticles, RankRun, RankView,
-    agree_inputs, by_dim, distributed_accessors,
+    ByDim, DistributedRun, Finding, GhostedList, RECORD, RankParticles, RankRun, RankView, by_dim,
+    distributed_accessors,
 };
 
 use crate::cpu::{
@@ -70,7 +70,7 @@ const ACC: usize = 1;
 /// # fn main() -> simkit_backend::Result<()> {
 /// let (scene, _) = vibrating_bed(&BedParams { n: 64, width: 8, ..BedParams::default() })?;
 /// // `Comm::mpi()?` under `mpirun -np P` (feature `mpi`); here one process.
-/// let mut sim = DistributedDem::new(&scene, &Config::default(), Comm::serial())?;
+/// let mut sim = DistributedDem::new(scene, &Config::default(), Comm::serial())?;
 /// sim.step(200)?;
 /// let d = sim.diagnostics()?; // on every rank
 /// assert!(d.finite);
@@ -98,51 +98,26 @@ impl<L: ContactLaw> DistributedDem<L> {
     /// (not offered here); more ranks than regions at least a list range wide fit in the
     /// box; ranks whose scenes or settings differ. An error on one rank is an error on
     /// every rank (the others name the rank that failed).
-    pub fn new(scene: &Scene<L>, config: &Config, comm: Comm) -> Result<Self> {
+    pub fn new(scene: Scene<L>, config: &Config, comm: Comm) -> Result<Self> {
         Self::build(scene, config, comm, None)
     }
 
-    /// Rebuilds a run from the bytes of [`DistributedDem::checkpoint`] (any rank count) or
-    /// of [`crate::Dem`]'s `Restart::checkpoint` on the CPU in `f64`, on any rank count.
-    /// Each rank takes the particles its region held at the last list build, the lists are
-    /// made from the list-build positions, and the run continues with the bits of the
-    /// uninterrupted distributed run. Collective; every rank passes the same bytes (e.g.
-    /// from [`Comm::broadcast_from_root`] of the file rank 0 read).
-    ///
-    /// Errors: another crate's or model's checkpoint, a truncated, corrupt or inconsistent
-    /// one (as `Dem::resume`), those of [`DistributedDem::new`]. An error on one rank is an
-    /// error on every rank.
-    pub fn resume(bytes: &[u8], comm: Comm) -> Result<Self> {
-        let saved = comm.agree(decode::<L>(bytes).and_then(|s| {
-            let want = model_name::<L>(false, Precision::F64, s.scene.dim().axes());
-            if s.model == want {
-                Ok(s)
-            } else {
-                Err(Error::checkpoint(format!(
-                    "holds a {} run; DistributedDem resumes {want} runs (CPU, f64)",
-                    s.model
-                )))
-            }
-        }))?;
-        Self::build(&saved.scene, &saved.config, comm, Some(&saved.engine))
-    }
-
     fn build(
-        scene: &Scene<L>,
+        scene: Scene<L>,
         config: &Config,
         comm: Comm,
         saved: Option<&Dynamics>,
     ) -> Result<Self> {
-        let prep = comm.agree(prepare(scene, config))?;
+        let prep = comm.agree(prepare(&scene, config))?;
         // Everything the ranks must agree on: the scene and settings as a checkpoint stores
         // them (with the state, when resuming).
         let encoded = comm.agree(encode(
-            scene,
+            &scene,
             config,
             "",
             saved.cloned().unwrap_or_default(),
         ))?;
-        agree_inputs(&comm, &encoded, "DistributedDem inputs")?;
+        comm.agree_inputs(&encoded, "DistributedDem inputs")?;
         let engine = if prep.axes == 2 {
             ByDim::Two(comm.agree(Engine::new(prep, &comm))?)
         } else {
@@ -156,7 +131,7 @@ impl<L: ContactLaw> DistributedDem<L> {
         }))?;
         Ok(Self {
             run,
-            scene: scene.clone(),
+            scene,
             config: *config,
         })
     }
@@ -202,18 +177,6 @@ impl<L: ContactLaw> DistributedDem<L> {
     pub fn wall_displacement(&self, t: f64) -> f64 {
         by_dim!(self.run.engine(), e => e.prep.wall_motion(t).0)
     }
-
-    /// The complete state in the single-process checkpoint format (the particles in scene
-    /// order, with their list-build positions), on every rank: resumes with
-    /// [`DistributedDem::resume`] on any rank count, or with [`crate::Dem`]'s
-    /// `Restart::resume` on the CPU in one process. Collective.
-    ///
-    /// Errors: a failed exchange.
-    pub fn checkpoint(&mut self) -> Result<Vec<u8>> {
-        let model = model_name::<L>(false, Precision::F64, self.scene.dim().axes());
-        let (scene, config) = (&self.scene, &self.config);
-        self.run.checkpoint(|d| encode(scene, config, &model, d))
-    }
 }
 
 impl<L: ContactLaw> Simulation for DistributedDem<L> {
@@ -246,6 +209,49 @@ impl<L: ContactLaw> Simulation for DistributedDem<L> {
             "cpu f64 ({} ranks, {threads} thread{plural} each)",
             self.run.comm().size()
         )
+    }
+}
+
+impl<L: ContactLaw> Distributed for DistributedDem<L> {
+    fn comm(&self) -> &Comm {
+        self.run.comm()
+    }
+
+    /// The complete state in the single-process checkpoint format (the particles in scene
+    /// order, with their list-build positions), on every rank: resumes with
+    /// [`Distributed::resume`] on any rank count, or with [`crate::Dem`]'s
+    /// `Restart::resume` on the CPU in one process. Collective.
+    ///
+    /// Errors: a failed exchange.
+    fn checkpoint(&mut self) -> Result<Vec<u8>> {
+        let model = model_name::<L>(false, Precision::F64, self.scene.dim().axes());
+        let (scene, config) = (&self.scene, &self.config);
+        self.run.checkpoint(|d| encode(scene, config, &model, d))
+    }
+
+    /// Rebuilds a run from the bytes of [`Distributed::checkpoint`] (any rank count) or
+    /// of [`crate::Dem`]'s `Restart::checkpoint` on the CPU in `f64`, on any rank count.
+    /// Each rank takes the particles its region held at the last list build, the lists are
+    /// made from the list-build positions, and the run continues with the bits of the
+    /// uninterrupted distributed run. Collective; every rank passes the same bytes (checked;
+    /// [`Distributed::resume_file`] reads a file on rank 0 and sends it).
+    ///
+    /// Errors: another crate's or model's checkpoint, a truncated, corrupt or inconsistent
+    /// one (as `Dem::resume`), those of [`DistributedDem::new`]. An error on one rank is an
+    /// error on every rank.
+    fn resume(bytes: &[u8], comm: Comm) -> Result<Self> {
+        let saved = comm.agree(decode::<L>(bytes).and_then(|s| {
+            let want = model_name::<L>(false, Precision::F64, s.scene.dim().axes());
+            if s.model == want {
+                Ok(s)
+            } else {
+                Err(Error::checkpoint(format!(
+                    "holds a {} run; DistributedDem resumes {want} runs (CPU, f64)",
+                    s.model
+                )))
+            }
+        }))?;
+        Self::build(saved.scene, &saved.config, comm, Some(&saved.engine))
     }
 }
 

@@ -582,6 +582,13 @@ impl<L: ContactLaw> Engine<L> for GpuEngine<L> {
             } => {
                 let (what, cause) = self.explain(&label, index)?;
                 self.guard.rollback(ctx)?;
+                // The cell list is derived state: rebuilt from the restored positions, so
+                // that it (and its count of rejected particles) is that of the good state.
+                let mut encoder = ctx.encoder("dem rollback cells");
+                record_pass(&mut encoder, "dem rollback cells", |pass| {
+                    self.cells.encode(ctx, pass)
+                })?;
+                ctx.submit(encoder);
                 self.steps = good;
                 Err(blow_up(bad, good, what, cause))
             }

@@ -60,7 +60,7 @@
 //! let mut scene = Scene::new(Dim::Two, [0.0; 3], [4.0, 4.0, 0.0], Material::new(0.9, 0.05))?;
 //! scene.set_gravity(1.0)?.add_box_walls(Material::new(0.8, 0.05), false)?;
 //! scene.add_particle(Particle::new([2.0, 2.0, 0.0], 0.5, 1.0))?;
-//! let mut sim = Dem::new(&scene, &Config::default(), Backend::Cpu)?;
+//! let mut sim = Dem::new(scene, &Config::default(), Backend::Cpu)?;
 //! sim.step(150)?;
 //! let bytes = sim.checkpoint()?; // or sim.write_checkpoint("run.ckpt")?
 //! let mut resumed = Dem::<Material>::resume(&bytes, Backend::Cpu)?;
@@ -81,7 +81,7 @@
 //! scene.set_gravity(1.0)?.set_vibration(0.05, 2.0)?;
 //! scene.add_box_walls(Material::new(0.8, 0.02).with_friction(0.5, 50.0), true)?;
 //! scene.add_particle(Particle::new([2.0, 1.0, 0.0], 0.5, 1.0))?;
-//! let mut sim = Dem::new(&scene, &Config::default(), Backend::Cpu)?;
+//! let mut sim = Dem::new(scene, &Config::default(), Backend::Cpu)?;
 //! sim.step(3000)?;
 //! let d = sim.diagnostics()?;
 //! assert!(d.finite && d.com_height > 0.0 && d.com_height < 8.0);
@@ -118,6 +118,8 @@ pub use input::{Dim, Material, Particle, Scene, Vibration, Wall, WallShape, pair
 pub use law::{Contact, ContactLaw};
 pub use sim::Dem;
 pub use simkit_backend::particles::State;
-pub use simkit_backend::{Backend, Error, Precision, Real, Restart, Result, Simulation};
+pub use simkit_backend::{
+    Backend, Distributed, Error, Precision, Real, Restart, Result, Simulation,
+};
 pub use units::Units;
 pub use walls::{cylinder_overlap, plane_overlap, wall_motion};

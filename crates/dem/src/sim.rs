@@ -73,7 +73,7 @@ struct Payload<L> {
 /// let mut scene = Scene::new(Dim::Two, [0.0; 3], [4.0, 4.0, 0.0], Material::new(0.9, 0.05))?;
 /// scene.add_particle(Particle::new([1.0, 2.0, 0.0], 0.5, 1.0).with_velocity([1.0, 0.0, 0.0]))?;
 /// scene.add_particle(Particle::new([2.5, 2.0, 0.0], 0.5, 1.0))?;
-/// let mut sim = Dem::new(&scene, &Config::default(), Backend::Cpu)?;
+/// let mut sim = Dem::new(scene, &Config::default(), Backend::Cpu)?;
 /// // dt = t_c / 30: the gap of 0.5 closes after 300 steps, the contact lasts 30 more.
 /// sim.step(400)?;
 /// let v = sim.state()?.velocities;
@@ -97,19 +97,19 @@ impl<L: ContactLaw> Dem<L> {
     /// the largest diameter times `1 + skin`, magnitudes the precision cannot hold (the GPU
     /// computes in `f32`, as the CPU with [`Precision::F32`]), position Verlet on the GPU,
     /// or any GPU failure. The checks are shared: both backends accept the same inputs.
-    pub fn new(scene: &Scene<L>, config: &Config, backend: Backend<'_>) -> Result<Self> {
+    pub fn new(scene: Scene<L>, config: &Config, backend: Backend<'_>) -> Result<Self> {
         Self::build(scene, config, backend, None)
     }
 
     /// [`Dem::new`], at a checkpointed state when `saved` is given.
     fn build(
-        scene: &Scene<L>,
+        scene: Scene<L>,
         config: &Config,
         backend: Backend<'_>,
         saved: Option<&Dynamics>,
     ) -> Result<Self> {
         let single = backend.is_gpu() || config.precision == Precision::F32;
-        let prep = Prepared::new(scene, config, single)?;
+        let prep = Prepared::new(&scene, config, single)?;
         diagnostics::check_initial_overlaps(&prep)?;
         #[cfg(feature = "gpu")]
         if backend.is_gpu() && config.integrator != Integrator::VelocityVerlet {
@@ -122,7 +122,7 @@ impl<L: ContactLaw> Dem<L> {
         let engine = crate::build::engine_for(prep, config.precision, backend, saved)?;
         Ok(Self {
             engine,
-            scene: scene.clone(),
+            scene,
             config: *config,
         })
     }
@@ -218,7 +218,7 @@ impl<L: ContactLaw> Restart for Dem<L> {
                 backend.name()
             )));
         }
-        Self::build(&saved.scene, &saved.config, backend, Some(&saved.engine))
+        Self::build(saved.scene, &saved.config, backend, Some(&saved.engine))
     }
 }
 

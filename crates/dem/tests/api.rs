@@ -5,7 +5,7 @@ use simkit_backend::{Backend, Simulation};
 use simkit_dem::{Config, Dem, Dim, Material, Particle, Scene};
 
 fn run(scene: &Scene) -> simkit_dem::State {
-    let mut sim = Dem::new(scene, &Config::default(), Backend::Cpu).unwrap();
+    let mut sim = Dem::new(scene.clone(), &Config::default(), Backend::Cpu).unwrap();
     sim.step(50).unwrap();
     sim.state().unwrap()
 }
@@ -56,7 +56,7 @@ fn observed_runs_equal_plain_runs_and_can_stop_early() {
     scene
         .add_particle(Particle::new(Vec2::new(2.5, 2.0), 0.5, 1.0))
         .unwrap();
-    let new = || Dem::new(&scene, &Config::default(), Backend::Cpu).unwrap();
+    let new = || Dem::new(scene.clone(), &Config::default(), Backend::Cpu).unwrap();
 
     let mut plain = new();
     plain.step(400).unwrap();

@@ -86,7 +86,7 @@ fn collide(
             .unwrap();
     }
     let cfg = Config::default().with_dt(dt).with_integrator(integrator);
-    let mut sim = Dem::new(&scene, &cfg, Backend::Cpu).unwrap();
+    let mut sim = Dem::new(scene, &cfg, Backend::Cpu).unwrap();
     let gap = |s: &simkit_dem::State, sim: &Dem| -> (f64, f64) {
         match target {
             Target::Particle => (
@@ -296,7 +296,7 @@ fn velocity_and_position_verlet_give_the_same_trajectory() {
         let cfg = Config::default()
             .with_dt(TC / 30.0)
             .with_integrator(integrator);
-        let mut sim = Dem::new(&scene, &cfg, Backend::Cpu).unwrap();
+        let mut sim = Dem::new(scene.clone(), &cfg, Backend::Cpu).unwrap();
         let mut worst = 0.0f64;
         let mut states = Vec::new();
         for _ in 0..20 {

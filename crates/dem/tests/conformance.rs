@@ -81,7 +81,7 @@ fn dilute_gas_positions_agree_after_50_steps() {
     let mut contacts = 0;
     for backend in backends("dilute_gas_positions_agree_after_50_steps") {
         let cpu = matches!(backend, Backend::Cpu);
-        let mut sim = Dem::new(&scene, &cfg, backend).unwrap();
+        let mut sim = Dem::new(scene.clone(), &cfg, backend).unwrap();
         for _ in 0..5 {
             sim.step(10).unwrap();
             if cpu {
@@ -154,7 +154,7 @@ fn gpu_follows_the_cpu_step_by_step_in_2d() {
     let steps = 20;
     let mut sims: Vec<Dem> = all
         .iter()
-        .map(|&b| Dem::new(&scene, &Config::default(), b).unwrap())
+        .map(|&b| Dem::new(scene.clone(), &Config::default(), b).unwrap())
         .collect();
     let ulp = 40.0 * 2f64.powi(-24);
     let mut contacts = 0;
@@ -239,7 +239,7 @@ fn vibrated_bed_statistics_agree() {
     let stats = |backend: Backend<'_>| {
         let (mut ke, mut h) = (0.0, 0.0);
         for replica in 0..replicas {
-            let mut sim = Dem::new(&bed(replica), &cfg, backend).unwrap();
+            let mut sim = Dem::new(bed(replica), &cfg, backend).unwrap();
             let period = 2.0 * std::f64::consts::PI / 1.5;
             let per_sample = (period / 16.0 / sim.dt()).round() as u32;
             sim.step(per_sample * 32).unwrap(); // 2 cycles of transient
@@ -286,7 +286,7 @@ fn cylinder_monolayer_agrees_after_50_steps() {
         simkit_dem::scenes::segregation_monolayer(&simkit_dem::scenes::MonolayerParams::default())
             .unwrap();
     let cfg = Config::default();
-    let mut cpu = Dem::new(&scene, &cfg, Backend::Cpu).unwrap();
+    let mut cpu = Dem::new(scene.clone(), &cfg, Backend::Cpu).unwrap();
     // Start from a state a quarter cycle in (spheres bouncing on the floor); the restart puts
     // the plates back at their t = 0 position.
     cpu.step(300).unwrap();
@@ -297,7 +297,7 @@ fn cylinder_monolayer_agrees_after_50_steps() {
     let mut wall_contacts = 0;
     for backend in backends("cylinder_monolayer_agrees_after_50_steps") {
         let cpu = matches!(backend, Backend::Cpu);
-        let mut sim = Dem::new(&moved, &cfg, backend).unwrap();
+        let mut sim = Dem::new(moved.clone(), &cfg, backend).unwrap();
         for _ in 0..5 {
             sim.step(10).unwrap();
             if cpu {
@@ -328,7 +328,7 @@ fn gpu_refuses_position_verlet() {
     };
     let cfg = Config::default().with_integrator(Integrator::PositionVerlet);
     assert!(matches!(
-        Dem::new(&bed(0), &cfg, Backend::Gpu(&ctx)),
+        Dem::new(bed(0), &cfg, Backend::Gpu(&ctx)),
         Err(Error::Unsupported(_))
     ));
 }
@@ -355,7 +355,7 @@ fn gpu_wall_count_within_the_adapter_loop_limit() {
             ))
             .unwrap();
     }
-    let r = Dem::new(&scene, &Config::default(), Backend::Gpu(&ctx));
+    let r = Dem::new(scene, &Config::default(), Backend::Gpu(&ctx));
     match ctx.shader_loop_limit() {
         Some(_) => {
             let Err(e) = r else {

@@ -106,7 +106,7 @@ fn a_user_contact_law_bounces_elastically_on_every_backend() -> Result<()> {
                 precision,
                 ..Config::default()
             };
-            let mut dem = Dem::new(&scene, &config, backend)?;
+            let mut dem = Dem::new(scene.clone(), &config, backend)?;
             // dt = t_c / 30; the gap of 0.5 closes at t = 0.25, the contact lasts pi / 40.
             let dt = dem.dt();
             assert!((dt - std::f64::consts::PI / 40.0 / 30.0).abs() < 1e-15);

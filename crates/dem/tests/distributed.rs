@@ -6,6 +6,7 @@
 
 mod decomposed;
 
+use simkit_backend::Distributed;
 use simkit_backend::comm::Comm;
 use simkit_backend::{Backend, Error, Restart, Simulation};
 use simkit_dem::{Config, Dem, Dim, DistributedDem, Integrator, Precision, State};
@@ -25,7 +26,7 @@ fn max_rel(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
 }
 
 fn run_distributed(scene: &simkit_dem::Scene, config: &Config, steps: u32) -> State {
-    let mut sim = DistributedDem::new(scene, config, Comm::serial()).expect("distributed");
+    let mut sim = DistributedDem::new(scene.clone(), config, Comm::serial()).expect("distributed");
     sim.step(steps).expect("step");
     sim.state().expect("state")
 }
@@ -36,7 +37,7 @@ fn agrees_with_dem_to_rounding_after_100_steps() {
     // sums a particle's contacts in another order than Dem (by scene index instead of the
     // half list's cell order), so the two differ by rounding only.
     for (name, scene, config, steps) in cases() {
-        let mut dem = Dem::new(&scene, &config, Backend::Cpu).expect("dem");
+        let mut dem = Dem::new(scene, &config, Backend::Cpu).expect("dem");
         dem.step(steps).expect("step");
         let contacts = dem.diagnostics().expect("diagnostics").contacts;
         let bytes = dem.checkpoint().expect("checkpoint");
@@ -78,7 +79,7 @@ fn long_run_statistics_agree_with_dem() {
     let config = Config::default();
     let dem_run = |scene: &simkit_dem::Scene| {
         cooling(|every, push| {
-            let mut sim = Dem::new(scene, &config, Backend::Cpu).expect("dem");
+            let mut sim = Dem::new(scene.clone(), &config, Backend::Cpu).expect("dem");
             sim.step_observed(u64::from(steps), every, |s| {
                 push(s.diagnostics()?.kinetic);
                 Ok(std::ops::ControlFlow::Continue(()))
@@ -88,7 +89,8 @@ fn long_run_statistics_agree_with_dem() {
     };
     let reference = dem_run(&scene);
     let distributed = cooling(|every, push| {
-        let mut sim = DistributedDem::new(&scene, &config, Comm::serial()).expect("distributed");
+        let mut sim =
+            DistributedDem::new(scene.clone(), &config, Comm::serial()).expect("distributed");
         for _ in 0..steps / every {
             sim.step(every).expect("step");
             push(sim.diagnostics().expect("diagnostics").kinetic);
@@ -121,7 +123,8 @@ fn long_run_statistics_agree_with_dem() {
 fn checkpoints_move_between_dem_and_distributed_dem() {
     let (_, scene, config, _) = cases().remove(0);
     // DistributedDem -> Dem: the same state, and Dem goes on.
-    let mut dist = DistributedDem::new(&scene, &config, Comm::serial()).expect("distributed");
+    let mut dist =
+        DistributedDem::new(scene.clone(), &config, Comm::serial()).expect("distributed");
     dist.step(300).expect("step");
     let bytes = dist.checkpoint().expect("checkpoint");
     let mut dem =
@@ -133,7 +136,7 @@ fn checkpoints_move_between_dem_and_distributed_dem() {
     );
     dem.step(10).expect("Dem goes on");
     // Dem -> DistributedDem: the same state, and both go on to rounding of each other.
-    let mut dem = Dem::new(&scene, &config, Backend::Cpu).expect("dem");
+    let mut dem = Dem::new(scene, &config, Backend::Cpu).expect("dem");
     dem.step(300).expect("step");
     let bytes = dem.checkpoint().expect("checkpoint");
     let mut dist = DistributedDem::<simkit_dem::Material>::resume(&bytes, Comm::serial())
@@ -186,7 +189,7 @@ fn refuses_what_it_does_not_offer_and_bad_checkpoints() {
         },
     ];
     for c in unsupported {
-        match DistributedDem::new(&scene, &c, Comm::serial()) {
+        match DistributedDem::new(scene.clone(), &c, Comm::serial()) {
             Err(Error::Unsupported(m)) => assert!(m.contains("Dem for"), "{m}"),
             other => panic!("expected Unsupported, got {other:?}"),
         }
@@ -196,14 +199,15 @@ fn refuses_what_it_does_not_offer_and_bad_checkpoints() {
         dt: Some(1.0),
         ..Config::default()
     };
-    let e = DistributedDem::new(&scene, &bad, Comm::serial()).expect_err("dt over the bound");
+    let e =
+        DistributedDem::new(scene.clone(), &bad, Comm::serial()).expect_err("dt over the bound");
     assert!(e.to_string().contains("dt"), "{e}");
     // An f32 Dem checkpoint is another model; garbage is no checkpoint.
     let f32 = Config {
         precision: Precision::F32,
         ..Config::default()
     };
-    let mut dem = Dem::new(&scene, &f32, Backend::Cpu).expect("dem");
+    let mut dem = Dem::new(scene, &f32, Backend::Cpu).expect("dem");
     let bytes = dem.checkpoint().expect("checkpoint");
     let e = DistributedDem::<simkit_dem::Material>::resume(&bytes, Comm::serial())
         .expect_err("f32 model");

@@ -40,7 +40,7 @@ fn sliding_disc_stops_after_the_coulomb_distance() {
     scene
         .add_particle(Particle::new([x0, y0, 0.0], 0.5, mass).with_velocity([v0, 0.0, 0.0]))
         .unwrap();
-    let mut sim = Dem::new(&scene, &Config::default(), Backend::Cpu).unwrap();
+    let mut sim = Dem::new(scene, &Config::default(), Backend::Cpu).unwrap();
     let dt = sim.dt();
     let v_star = mu_s * g / mu_k;
     let t1 = (v0 - v_star) / (mu_s * g);
@@ -134,7 +134,7 @@ fn oblique_wall_impact_loses_mu_times_the_normal_impulse() {
                     Particle::new([2.0, y, 0.0], 0.5, 2.0).with_velocity([vt0, -vn0, 0.0]),
                 )
                 .unwrap();
-            let mut sim = Dem::new(&scene, &Config::default().with_dt(dt), Backend::Cpu).unwrap();
+            let mut sim = Dem::new(scene, &Config::default().with_dt(dt), Backend::Cpu).unwrap();
             // 10 t_c of approach, the contact, then 10 t_c of flight.
             sim.step((21.0 * TC / dt).round() as u32).unwrap();
             let s = sim.state().unwrap();

@@ -52,7 +52,7 @@ fn unstable_step_returns_blow_up_with_the_last_good_state() {
     let cfg = Config::default().with_dt(dt).allow_unstable_dt();
     for backend in backends("unstable_step_returns_blow_up_with_the_last_good_state") {
         let name = backend.name();
-        let mut sim = Dem::new(&scene, &cfg, backend).unwrap();
+        let mut sim = Dem::new(scene.clone(), &cfg, backend).unwrap();
         let err = run_to_failure(&mut sim, 20, 250);
         let Error::BlowUp {
             step,
@@ -90,7 +90,7 @@ fn unstable_step_returns_blow_up_with_the_last_good_state() {
         );
         if matches!(backend, Backend::Cpu) {
             // Bit-identical to the same run stepped exactly to that step.
-            let mut again = Dem::new(&scene, &cfg, backend).unwrap();
+            let mut again = Dem::new(scene.clone(), &cfg, backend).unwrap();
             let mut left = rolled_back_to;
             while left > 0 {
                 let n = left.min(250) as u32;
@@ -123,7 +123,7 @@ fn the_check_does_not_perturb_a_stable_run() {
     for backend in backends("the_check_does_not_perturb_a_stable_run") {
         let run = |every: u32| {
             let cfg = Config::default().with_check_every(every);
-            let mut sim = Dem::new(&scene, &cfg, backend).unwrap();
+            let mut sim = Dem::new(scene.clone(), &cfg, backend).unwrap();
             sim.step(130).unwrap();
             sim.step(270).unwrap();
             sim.state().unwrap()
@@ -144,7 +144,8 @@ fn a_particle_leaving_a_closed_box_is_a_blow_up() {
     s.add_particle(Particle::new([1.0, 1.0, 0.0], 0.5, 1.0))
         .unwrap();
     for backend in backends("a_particle_leaving_a_closed_box_is_a_blow_up") {
-        let mut sim = Dem::new(&s, &Config::default().with_check_every(10), backend).unwrap();
+        let mut sim =
+            Dem::new(s.clone(), &Config::default().with_check_every(10), backend).unwrap();
         // x = 3.05 + 2 t leaves [0, 6] by a radius at t = 1.725, step 1035 (dt = t_c / 30):
         // the check at step 1030 passes, the one at 1040 fails.
         let err = sim.step(2000).unwrap_err();
@@ -183,7 +184,7 @@ fn a_contact_deeper_than_max_overlap_is_a_blow_up() {
     s.add_particle(Particle::new([6.0, 5.0, 5.0], 0.5, 1.0).with_velocity([-4.0, 0.0, 0.0]))
         .unwrap();
     for backend in backends("a_contact_deeper_than_max_overlap_is_a_blow_up") {
-        let mut sim = Dem::new(&s, &Config::default().with_check_every(1), backend).unwrap();
+        let mut sim = Dem::new(s.clone(), &Config::default().with_check_every(1), backend).unwrap();
         let err = sim.step(200).unwrap_err();
         let Error::BlowUp {
             ref what,
@@ -207,7 +208,7 @@ fn a_contact_deeper_than_max_overlap_is_a_blow_up() {
         );
         // With the guard off the same run goes on.
         let off = Config::default().with_max_overlap(f64::INFINITY);
-        let mut sim = Dem::new(&s, &off, backend).unwrap();
+        let mut sim = Dem::new(s.clone(), &off, backend).unwrap();
         sim.step(40).unwrap();
     }
 }
@@ -215,7 +216,7 @@ fn a_contact_deeper_than_max_overlap_is_a_blow_up() {
 #[test]
 fn diagnostics_of_a_non_finite_state_are_nan() {
     let scene = pile();
-    let sim = Dem::new(&scene, &Config::default(), Backend::Cpu).unwrap();
+    let sim = Dem::new(scene.clone(), &Config::default(), Backend::Cpu).unwrap();
     let mut state = State {
         time: 0.0,
         positions: scene.particles().iter().map(|p| p.position).collect(),
@@ -242,7 +243,7 @@ fn same_verdict(test: &str, scene: &Scene, config: &Config) -> Result<(), String
     let results: Vec<Result<(), String>> = backends(test)
         .into_iter()
         .map(|b| {
-            Dem::new(scene, config, b)
+            Dem::new(scene.clone(), config, b)
                 .map(|_| ())
                 .map_err(|e| e.to_string())
         })
@@ -297,11 +298,11 @@ fn inputs_are_accepted_and_refused_alike_by_every_backend() {
     s.add_particle(Particle::new([5.0, 5.0, 0.0], 0.5, 1.0))
         .unwrap();
     let single = Config::default().with_precision(simkit_dem::Precision::F32);
-    let e = Dem::new(&s, &single, Backend::Cpu)
+    let e = Dem::new(s.clone(), &single, Backend::Cpu)
         .err()
         .expect("f32 took 1e35");
     assert!(e.to_string().contains("rescale"), "{e}");
-    Dem::new(&s, &Config::default(), Backend::Cpu).unwrap();
+    Dem::new(s, &Config::default(), Backend::Cpu).unwrap();
 }
 
 #[test]
@@ -321,7 +322,7 @@ fn a_sparse_box_is_accepted_and_runs() {
     deep.add_particle(Particle::new([300.5, 300.0, 300.0], 0.5, 1.0))
         .unwrap();
     for backend in backends("a_sparse_box_is_accepted_and_runs") {
-        let mut sim = Dem::new(&s, &Config::default(), backend).unwrap();
+        let mut sim = Dem::new(s.clone(), &Config::default(), backend).unwrap();
         sim.step(100).unwrap();
         let x = sim.state().unwrap().positions[0][0];
         // Free flight at speed 1; the GPU adds 100 roundings of x ~ 300 in f32 (ulp 3e-5).
@@ -329,7 +330,7 @@ fn a_sparse_box_is_accepted_and_runs() {
             abs_diff_eq!(x, 300.0 + 100.0 * sim.dt(), epsilon = 5e-3),
             "{x}"
         );
-        let e = Dem::new(&deep, &Config::default(), backend)
+        let e = Dem::new(deep.clone(), &Config::default(), backend)
             .err()
             .expect("deep overlap");
         let e = e.to_string();

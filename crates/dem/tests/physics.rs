@@ -47,7 +47,7 @@ fn elastic_gas_energy_is_bounded() {
     // 1000 spheres, e = 1, no friction, no gravity, periodic box, packing fraction 0.3.
     let spacing = (std::f64::consts::PI / 6.0 / 0.3).cbrt();
     let scene = gas(Dim::Three, 10, spacing, 1.0, false);
-    let mut sim = Dem::new(&scene, &Config::default(), Backend::Cpu).unwrap();
+    let mut sim = Dem::new(scene, &Config::default(), Backend::Cpu).unwrap();
     let e0 = {
         let d = sim.diagnostics().unwrap();
         d.kinetic + d.elastic
@@ -109,8 +109,12 @@ fn energy_error_falls_as_dt_squared() {
     let scene = spring_lattice(10);
     let mut worst = Vec::new();
     for div in [20.0, 40.0, 80.0] {
-        let mut sim =
-            Dem::new(&scene, &Config::default().with_dt(0.05 / div), Backend::Cpu).unwrap();
+        let mut sim = Dem::new(
+            scene.clone(),
+            &Config::default().with_dt(0.05 / div),
+            Backend::Cpu,
+        )
+        .unwrap();
         let d = sim.diagnostics().unwrap();
         let (e0, contacts) = (d.kinetic + d.elastic, d.contacts);
         let mut w = 0.0f64;
@@ -147,7 +151,7 @@ fn energy_error_falls_as_dt_squared() {
 fn momentum_is_conserved_to_round_off() {
     for dim in [Dim::Two, Dim::Three] {
         let scene = gas(dim, if dim == Dim::Two { 20 } else { 8 }, 1.1, 0.5, true);
-        let mut sim = Dem::new(&scene, &Config::default(), Backend::Cpu).unwrap();
+        let mut sim = Dem::new(scene.clone(), &Config::default(), Backend::Cpu).unwrap();
         let d0 = sim.diagnostics().unwrap();
         let (p0, ke0) = (d0.momentum, d0.kinetic);
         let scale: f64 = scene
@@ -195,7 +199,7 @@ fn results_do_not_depend_on_thread_count() {
             .build()
             .unwrap();
         pool.install(|| {
-            let mut sim = Dem::new(&scene, &Config::default(), Backend::Cpu).unwrap();
+            let mut sim = Dem::new(scene.clone(), &Config::default(), Backend::Cpu).unwrap();
             sim.step(200).unwrap();
             sim.state().unwrap()
         })
@@ -211,9 +215,9 @@ fn splitting_the_steps_over_calls_does_not_change_results() {
     // inside one `step(n)` call: the arithmetic is the same, so the bits must be too.
     let scene = gas(Dim::Three, 17, 1.05, 0.7, true);
     let config = Config::default();
-    let mut one = Dem::new(&scene, &config, Backend::Cpu).unwrap();
+    let mut one = Dem::new(scene.clone(), &config, Backend::Cpu).unwrap();
     one.step(200).unwrap();
-    let mut split = Dem::new(&scene, &config, Backend::Cpu).unwrap();
+    let mut split = Dem::new(scene, &config, Backend::Cpu).unwrap();
     for n in [1, 6, 93, 0, 100] {
         split.step(n).unwrap();
     }
@@ -246,7 +250,7 @@ fn pile(friction: bool) -> Scene {
 #[test]
 fn settled_pile_stays_at_rest_for_1e5_steps() {
     let scene = pile(true);
-    let mut sim = Dem::new(&scene, &Config::default(), Backend::Cpu).unwrap();
+    let mut sim = Dem::new(scene, &Config::default(), Backend::Cpu).unwrap();
     let mut max_overlap = 0.0f64;
     let chunk = 5000;
     let mut check = |sim: &mut Dem| {
@@ -350,7 +354,12 @@ fn coarse_step_stays_bounded_and_guard_refuses_larger() {
         walls.add_particle(*p).unwrap();
     }
     let tc = 0.02;
-    let mut sim = Dem::new(&walls, &Config::default().with_dt(tc / 5.0), Backend::Cpu).unwrap();
+    let mut sim = Dem::new(
+        walls.clone(),
+        &Config::default().with_dt(tc / 5.0),
+        Backend::Cpu,
+    )
+    .unwrap();
     // Every 50 steps for 1e4 steps: the deepest contact (disc-disc or disc-wall, the
     // vibrating walls where they are at that time) as a fraction of the radius.
     let mut deepest = 0.0f64;
@@ -364,7 +373,12 @@ fn coarse_step_stays_bounded_and_guard_refuses_larger() {
     // Measured 7.5e-3 R (this test, f64); bound 3x. A disc tunnelling through a wall or a
     // neighbour would have to pass overlaps up to 1 R (wall) or 2 R (disc).
     assert!(deepest < 2.2e-2, "overlap of {deepest} R at dt = t_c/5");
-    let err = Dem::new(&walls, &Config::default().with_dt(tc / 4.0), Backend::Cpu).err();
+    let err = Dem::new(
+        walls.clone(),
+        &Config::default().with_dt(tc / 4.0),
+        Backend::Cpu,
+    )
+    .err();
     match err {
         Some(Error::Unstable { bound, .. }) => {
             assert_abs_diff_eq!(bound, tc / 5.0, epsilon = 1e-15)
@@ -373,14 +387,14 @@ fn coarse_step_stays_bounded_and_guard_refuses_larger() {
     }
     assert!(
         Dem::new(
-            &walls,
+            walls.clone(),
             &Config::default().with_dt(tc / 4.0).allow_unstable_dt(),
             Backend::Cpu
         )
         .is_ok()
     );
     // Default step is t_c / 30.
-    let sim = Dem::new(&walls, &Config::default(), Backend::Cpu).unwrap();
+    let sim = Dem::new(walls, &Config::default(), Backend::Cpu).unwrap();
     assert_abs_diff_eq!(sim.dt(), tc / 30.0, epsilon = 1e-15);
 }
 
@@ -388,7 +402,12 @@ fn coarse_step_stays_bounded_and_guard_refuses_larger() {
 fn f32_matches_f64_over_a_short_run() {
     let scene = gas(Dim::Two, 10, 1.1, 0.8, true);
     let run = |p: Precision| {
-        let mut sim = Dem::new(&scene, &Config::default().with_precision(p), Backend::Cpu).unwrap();
+        let mut sim = Dem::new(
+            scene.clone(),
+            &Config::default().with_precision(p),
+            Backend::Cpu,
+        )
+        .unwrap();
         sim.step(100).unwrap();
         sim.state().unwrap()
     };
@@ -408,7 +427,7 @@ fn f32_matches_f64_over_a_short_run() {
 fn position_verlet_runs_a_bed() {
     let scene = pile(false);
     let cfg = Config::default().with_integrator(Integrator::PositionVerlet);
-    let mut sim = Dem::new(&scene, &cfg, Backend::Cpu).unwrap();
+    let mut sim = Dem::new(scene, &cfg, Backend::Cpu).unwrap();
     sim.step(3000).unwrap();
     let d = sim.diagnostics().unwrap();
     assert!(d.finite && d.com_height > 0.5 && d.com_height < 6.0);
@@ -451,13 +470,13 @@ fn bad_input_is_refused_with_clear_errors() {
     );
     assert!(s.set_pair(0, 2, m).is_err());
     // Empty scene.
-    assert!(Dem::new(&s, &Config::default(), Backend::Cpu).is_err());
+    assert!(Dem::new(s.clone(), &Config::default(), Backend::Cpu).is_err());
     // Overlapping particles: reported, not exploded.
     s.add_particle(Particle::new([1.0, 1.0, 0.0], 0.5, 1.0))
         .unwrap();
     s.add_particle(Particle::new([1.5, 1.0, 0.0], 0.5, 1.0))
         .unwrap();
-    let err = Dem::new(&s, &Config::default(), Backend::Cpu)
+    let err = Dem::new(s, &Config::default(), Backend::Cpu)
         .err()
         .expect("overlap accepted");
     assert!(err.to_string().contains("particles 0 and 1"), "{err}");
@@ -467,7 +486,7 @@ fn bad_input_is_refused_with_clear_errors() {
         .unwrap();
     s.add_particle(Particle::new([1.98, 1.0, 0.0], 0.5, 1.0))
         .unwrap();
-    let mut sim = Dem::new(&s, &Config::default(), Backend::Cpu).unwrap();
+    let mut sim = Dem::new(s.clone(), &Config::default(), Backend::Cpu).unwrap();
     let d = sim.diagnostics().unwrap();
     assert_eq!(d.contacts, 1);
     assert_abs_diff_eq!(d.max_overlap, 0.02, epsilon = 1e-12);
@@ -480,7 +499,7 @@ fn bad_input_is_refused_with_clear_errors() {
             .is_err()
     );
     assert!(matches!(
-        Dem::new(&s, &Config::default().with_dt(f64::NAN), Backend::Cpu),
+        Dem::new(s, &Config::default().with_dt(f64::NAN), Backend::Cpu),
         Err(Error::InvalidParameter { .. })
     ));
 }
@@ -562,7 +581,7 @@ fn ready_made_scenes_build_and_run() {
         (mono, Config::default()),
         (boxed, Config::default().with_dt(1e-4)),
     ] {
-        let mut sim = Dem::new(&scene, &cfg, Backend::Cpu).unwrap();
+        let mut sim = Dem::new(scene, &cfg, Backend::Cpu).unwrap();
         sim.step(200).unwrap();
         let d = sim.diagnostics().unwrap();
         assert!(d.finite && d.max_overlap_ratio < 0.1, "{d:?}");

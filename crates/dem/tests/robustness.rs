@@ -6,54 +6,20 @@
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use proptest::prelude::*;
-use proptest::test_runner::{
-    Config as RunnerConfig, RngAlgorithm, TestCaseError, TestRng, TestRunner,
-};
+use simkit_backend::testing::robust::{self, awkward_f64, clear};
 use simkit_backend::{Backend, Error, Restart, Simulation};
 use simkit_dem::{Config, Dem, Dim, Material, Particle, Scene, Wall};
 
 const SEED: [u8; 32] = *b"simkit-dem robustness seed 2024!";
 
-fn run<S: Strategy>(cases: u32, strategy: S, test: impl Fn(S::Value) -> Result<(), TestCaseError>) {
-    let config = RunnerConfig {
-        cases,
-        failure_persistence: None,
-        ..RunnerConfig::default()
-    };
-    let mut runner =
-        TestRunner::new_with_rng(config, TestRng::from_seed(RngAlgorithm::ChaCha, &SEED));
-    if let Err(e) = runner.run(&strategy, test) {
-        panic!("{e}");
-    }
-}
-
-/// Any f64, with the awkward ones often.
-fn num() -> impl Strategy<Value = f64> {
-    prop_oneof![
-        Just(f64::NAN),
-        Just(f64::INFINITY),
-        Just(f64::NEG_INFINITY),
-        Just(0.0),
-        Just(-0.0),
-        Just(1e300),
-        Just(-1e300),
-        Just(1e-300),
-        Just(f64::MIN_POSITIVE),
-        Just(1e35),
-        -10.0..10.0f64,
-        0.0..2.0f64,
-        any::<f64>(),
-    ]
-}
-
 /// Mostly sensible positive values, sometimes anything.
 fn pos_num() -> impl Strategy<Value = f64> {
-    prop_oneof![3 => 0.05..2.0f64, 1 => num()]
+    prop_oneof![3 => 0.05..2.0f64, 1 => awkward_f64()]
 }
 
 /// Mostly moderate speeds, sometimes anything.
 fn speed() -> impl Strategy<Value = f64> {
-    prop_oneof![3 => -3.0..3.0f64, 1 => num()]
+    prop_oneof![3 => -3.0..3.0f64, 1 => awkward_f64()]
 }
 
 fn dim() -> impl Strategy<Value = Dim> {
@@ -62,7 +28,7 @@ fn dim() -> impl Strategy<Value = Dim> {
 
 fn material() -> impl Strategy<Value = Material> {
     (
-        prop_oneof![3 => 0.1..1.0f64, 1 => num()],
+        prop_oneof![3 => 0.1..1.0f64, 1 => awkward_f64()],
         pos_num(),
         pos_num(),
         pos_num(),
@@ -74,16 +40,11 @@ fn material() -> impl Strategy<Value = Material> {
         })
 }
 
-/// An error must say something (the name and the fix).
-fn clear(e: &Error) -> Result<(), TestCaseError> {
-    prop_assert!(e.to_string().len() > 20, "unclear error: {e}");
-    Ok(())
-}
-
 #[test]
 fn scene_builders_never_panic() {
-    let v3 = || [num(), num(), num()];
-    run(
+    let v3 = || [awkward_f64(), awkward_f64(), awkward_f64()];
+    robust::run(
+        &SEED,
         3000,
         (
             dim(),
@@ -120,17 +81,25 @@ fn scene_builders_never_panic() {
 
 #[test]
 fn scene_setters_never_panic() {
-    let v3 = || [num(), num(), num()];
-    run(
+    let v3 = || [awkward_f64(), awkward_f64(), awkward_f64()];
+    robust::run(
+        &SEED,
         3000,
         (
             dim(),
-            (v3(), v3(), num(), num(), num(), material()),
+            (
+                v3(),
+                v3(),
+                awkward_f64(),
+                awkward_f64(),
+                awkward_f64(),
+                material(),
+            ),
             (v3(), v3(), pos_num(), pos_num(), 0u32..3),
             (
-                num(),
-                num(),
-                num(),
+                awkward_f64(),
+                awkward_f64(),
+                awkward_f64(),
                 [any::<bool>(), any::<bool>(), any::<bool>()],
             ),
             (0usize..4, 0usize..4),
@@ -161,7 +130,7 @@ fn scene_setters_never_panic() {
 fn tiny_scene() -> impl Strategy<Value = Scene> {
     (
         dim(),
-        prop_oneof![3 => 2.0..20.0f64, 1 => num()],
+        prop_oneof![3 => 2.0..20.0f64, 1 => awkward_f64()],
         material(),
         prop::collection::vec(
             (
@@ -175,7 +144,7 @@ fn tiny_scene() -> impl Strategy<Value = Scene> {
         (
             any::<bool>(),
             any::<bool>(),
-            prop_oneof![Just(0.0), num()],
+            prop_oneof![Just(0.0), awkward_f64()],
             any::<bool>(),
             [any::<bool>(), any::<bool>(), any::<bool>()],
         ),
@@ -206,12 +175,12 @@ fn tiny_scene() -> impl Strategy<Value = Scene> {
 
 fn config() -> impl Strategy<Value = Config> {
     (
-        prop_oneof![2 => Just(None), 1 => num().prop_map(Some), 1 => (1e-4..1e-1f64).prop_map(Some)],
+        prop_oneof![2 => Just(None), 1 => awkward_f64().prop_map(Some), 1 => (1e-4..1e-1f64).prop_map(Some)],
         any::<bool>(),
         any::<bool>(),
-        prop_oneof![3 => Just(0.1), 1 => num()],
+        prop_oneof![3 => Just(0.1), 1 => awkward_f64()],
         prop_oneof![Just(0u32), Just(1), Just(7), Just(100), any::<u32>()],
-        prop_oneof![3 => Just(0.5), 1 => num()],
+        prop_oneof![3 => Just(0.5), 1 => awkward_f64()],
         any::<bool>(),
     )
         .prop_map(|(dt, unstable, pv, skin, every, overlap, single)| {
@@ -236,11 +205,12 @@ fn config() -> impl Strategy<Value = Config> {
 #[test]
 fn dem_new_and_step_never_panic() {
     static BUILT: AtomicUsize = AtomicUsize::new(0);
-    run(
+    robust::run(
+        &SEED,
         3000,
         (tiny_scene(), config(), 0u32..60, 0u32..40),
         |(scene, cfg, n1, n2)| {
-            let mut sim = match Dem::new(&scene, &cfg, Backend::Cpu) {
+            let mut sim = match Dem::new(scene, &cfg, Backend::Cpu) {
                 Ok(sim) => {
                     BUILT.fetch_add(1, Ordering::Relaxed);
                     sim
@@ -299,11 +269,12 @@ fn checkpoint_decode_of_garbage_never_panics() {
         m.add_particle(Particle::new([1.0 + 1.5 * k as f64, 1.0, 0.0], 0.5, 1.0))
             .unwrap();
     }
-    let mut sim = Dem::new(&m, &Config::default(), Backend::Cpu).unwrap();
+    let mut sim = Dem::new(m, &Config::default(), Backend::Cpu).unwrap();
     sim.step(20).unwrap();
     let good = sim.checkpoint().unwrap();
     let len = good.len();
-    run(
+    robust::run(
+        &SEED,
         3000,
         (
             prop::collection::vec(any::<u8>(), 0..300),
@@ -341,12 +312,12 @@ fn gpu_new_and_step_never_panic() {
         return;
     };
     // A small set: each case builds GPU kernels. Both backends must agree on acceptance.
-    run(40, (tiny_scene(), config()), |(scene, cfg)| {
+    robust::run(&SEED, 40, (tiny_scene(), config()), |(scene, cfg)| {
         let mut cfg = cfg;
         cfg.integrator = simkit_dem::Integrator::VelocityVerlet;
         cfg.precision = simkit_dem::Precision::F32;
-        let cpu = Dem::new(&scene, &cfg, Backend::Cpu);
-        let gpu = Dem::new(&scene, &cfg, Backend::Gpu(&ctx));
+        let cpu = Dem::new(scene.clone(), &cfg, Backend::Cpu);
+        let gpu = Dem::new(scene, &cfg, Backend::Gpu(&ctx));
         prop_assert_eq!(
             cpu.is_ok(),
             gpu.is_ok(),

@@ -115,7 +115,7 @@ fn vibrated_monolayer_stays_well_mixed_over_300_cycles() {
             ..MonolayerParams::default()
         };
         let (scene, _) = segregation_monolayer(&p).unwrap();
-        let mut sim = Dem::new(&scene, &Config::default(), Backend::Cpu).unwrap();
+        let mut sim = Dem::new(scene.clone(), &Config::default(), Backend::Cpu).unwrap();
         let per_cycle = (2.0 * std::f64::consts::PI / sim.dt()).round() as u32;
         let s0 = sim.state().unwrap();
         let (mixed, se0) = mixed_band(p.n, &s0.positions);

@@ -10,16 +10,19 @@ use crate::{Lattice, RuleSet};
 /// bit for bit; they differ in speed and in the widths they accept.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum CpuMethod {
-    /// The lookup table where the CPU has AVX-512 VBMI ([`crate::cpu::lut::has_vbmi`]: as
-    /// fast per step as multi-spin, and its snapshot is a plain copy), else multi-spin when
-    /// the width is a multiple of 64, else the lookup table.
+    /// The lookup table where the CPU has AVX-512 VBMI (as fast per step as multi-spin, and
+    /// its snapshot is a plain copy), else multi-spin when the width is a multiple of 64,
+    /// else the lookup table.
     #[default]
     Auto,
-    /// [`crate::LutCpu`]: one byte per site, table lookup, rayon over bands of rows, four
-    /// steps per pass over the lattice (any width).
+    /// The lookup table: one byte per site, rayon over bands of rows, four steps per pass
+    /// over the lattice (any width); 64 sites per `vpermi2b` where the CPU has AVX-512
+    /// VBMI.
     Lut,
-    /// [`crate::MultiSpinCpu`]: 64-site bit-planes, boolean collisions (width a multiple
-    /// of 64).
+    /// The lookup table's portable loop, one site at a time, whatever the CPU has: the
+    /// reference the SIMD paths are checked against (slower; any width).
+    LutPortable,
+    /// Multi-spin: 64-site bit-planes, boolean collisions (width a multiple of 64).
     MultiSpin,
 }
 

@@ -1,11 +1,9 @@
 //! [`DistributedLatticeGas`]: one lattice cut into blocks over the ranks of a [`Comm`], each
 //! rank stepping its block on the CPU, bit-identical to the single-process run.
 
-use std::path::Path;
-
 use rayon::prelude::*;
 use simkit_backend::comm::{Block, CartDecomposition, Comm};
-use simkit_backend::{Backend, Result};
+use simkit_backend::{Backend, Distributed, Result, Simulation};
 
 use crate::cpu::lut::LutRule;
 use crate::sim::{decode_checkpoint, encode_checkpoint};
@@ -17,39 +15,41 @@ use crate::{Config, Lattice};
 /// The `width x height` lattice is cut by [`CartDecomposition::new`] (blocks as even as the
 /// rank count allows, uneven splits included; a periodic axis makes the blocks wrap). Each
 /// rank keeps its block with one ghost layer of sites. A step runs the row update of
-/// [`crate::LutCpu`] on the block's rows, each row knowing its global row (whose parity sets
+/// the lookup-table backend ([`crate::CpuMethod::Lut`]) on the block's rows, each row knowing its global row (whose parity sets
 /// the neighbour offsets of the shifted rows, so blocks may start on odd rows) and the
 /// global index of its first site (which keys the chirality and body-force bits of
-/// [`crate::random`]); the inflow and outflow columns act on the ranks that hold the
+/// [`crate::laws`]); the inflow and outflow columns act on the ranks that hold the
 /// lattice's first and last columns. Then the ghosts are refreshed by a halo exchange in
 /// the shift pattern (x, then y with whole padded rows, so the diagonal neighbours of the
 /// hexagonal lattice arrive in the corners; 4 messages). Ghosts on a non-periodic edge of
 /// the lattice stay empty, as the single-process run pads it. Every site therefore sees the
-/// inputs and random bits of the single-process run, and [`DistributedLatticeGas::gather`]
+/// inputs and random bits of the single-process run, and [`Simulation::state`]
 /// returns a lattice bit-identical to [`crate::LatticeGas`] (any backend) for every rank
 /// count, lattice size, boundary setting, obstacle and body force.
 ///
-/// Every method that takes `&mut self` or returns a `Result` is collective: all ranks call
-/// it, in the same order. Each rank builds the run from the whole lattice (one byte per
-/// site, so a copy of the whole lattice on every rank while the run is built).
+/// It implements [`Distributed`]: its checkpoints are those of [`crate::LatticeGas`], so a
+/// run moves between one process and any rank count. Every method that takes `&mut self`
+/// or returns a `Result` is collective: all ranks call it, in the same order. Each rank
+/// builds the run from the whole lattice (one byte per site, so a copy of the whole
+/// lattice, and its encoding for the check that the ranks agree, on every rank while the
+/// run is built); [`Simulation::state`] and [`Distributed::checkpoint`] return the whole
+/// lattice on every rank.
 ///
 /// ```
 /// use simkit_backend::comm::Comm;
-/// use simkit_backend::{Backend, Simulation};
-/// use simkit_lattice_gas::{Config, DistributedLatticeGas, Lattice, LatticeGas, Obstacle};
+/// use simkit_lattice_gas::{Backend, Config, DistributedLatticeGas, Lattice, LatticeGas};
+/// use simkit_lattice_gas::{Obstacle, Simulation};
 /// # fn main() -> simkit_backend::Result<()> {
 /// let mut lattice = Lattice::new(37, 22)?;
 /// lattice.fill_random(0.3, 4)?;
 /// lattice.add_obstacle(&Obstacle::Disc { cx: 18.0, cy: 9.0, radius: 4.0 })?;
 /// let config = Config { body_force: 0.02, ..Config::default() };
 /// // `Comm::mpi()?` under `mpirun -np P` (feature `mpi`); here one process.
-/// let mut dist = DistributedLatticeGas::new(&lattice, &config, Comm::serial())?;
+/// let mut dist = DistributedLatticeGas::new(lattice.clone(), &config, Comm::serial())?;
 /// dist.step(25)?;
 /// let mut one = LatticeGas::new(lattice, &config, Backend::Cpu)?;
 /// one.step(25)?;
-/// if let Some(gathered) = dist.gather()? {
-///     assert_eq!(gathered, one.state()?); // on rank 0
-/// }
+/// assert_eq!(dist.state()?, one.state()?); // on every rank
 /// # Ok(())
 /// # }
 /// ```
@@ -86,14 +86,14 @@ impl std::fmt::Debug for DistributedLatticeGas {
 
 impl DistributedLatticeGas {
     /// Validates `config` against `lattice` ([`Config::validate_for`], the errors of
-    /// [`crate::LatticeGas::new`] on every rank), cuts the lattice into `comm.size()` blocks
-    /// and keeps this rank's (`config.cpu` and `config.gpu_layout` are not read). Collective;
-    /// every rank passes the same lattice and config.
+    /// [`crate::LatticeGas::new`] on every rank), checks that every rank passed the same
+    /// lattice and config, cuts the lattice into `comm.size()` blocks and keeps this
+    /// rank's (`config.cpu` and `config.gpu_layout` are not read). Collective.
     ///
-    /// Errors: invalid settings, or a lattice too small for `comm.size()` blocks of at
-    /// least one site.
-    pub fn new(lattice: &Lattice, config: &Config, comm: Comm) -> Result<Self> {
-        Self::at_step(lattice, config, comm, 0, Backend::Cpu)
+    /// Errors: invalid settings, ranks whose inputs differ, or a lattice too small for
+    /// `comm.size()` blocks of at least one site; on every rank.
+    pub fn new(lattice: Lattice, config: &Config, comm: Comm) -> Result<Self> {
+        Self::at_step(&lattice, config, comm, 0, Backend::Cpu)
     }
 
     /// [`DistributedLatticeGas::new`] on `backend`: `Backend::Cpu` as `new`, or
@@ -107,26 +107,15 @@ impl DistributedLatticeGas {
     ///
     /// Errors: those of `new`, and any GPU failure (on every rank).
     pub fn with_backend(
-        lattice: &Lattice,
+        lattice: Lattice,
         config: &Config,
         comm: Comm,
         backend: Backend<'_>,
     ) -> Result<Self> {
-        Self::at_step(lattice, config, comm, 0, backend)
+        Self::at_step(&lattice, config, comm, 0, backend)
     }
 
-    /// Resumes from checkpoint bytes of [`crate::LatticeGas`] (`Restart::checkpoint`) or of
-    /// [`DistributedLatticeGas::checkpoint`], on any rank count: the run continues bit for
-    /// bit. Every rank passes the same bytes (read a file with
-    /// [`simkit_backend::checkpoint::read_file`] on every rank). Collective.
-    ///
-    /// Errors: those of `LatticeGas::resume` (corrupt bytes, another crate, version or
-    /// model, invalid settings) and of [`DistributedLatticeGas::new`].
-    pub fn resume(bytes: &[u8], comm: Comm) -> Result<Self> {
-        Self::resume_with_backend(bytes, comm, Backend::Cpu)
-    }
-
-    /// [`DistributedLatticeGas::resume`] on `backend` (see
+    /// [`Distributed::resume`] on `backend` (see
     /// [`DistributedLatticeGas::with_backend`]). Collective.
     ///
     /// Errors: those of `resume` and of `with_backend`.
@@ -145,12 +134,16 @@ impl DistributedLatticeGas {
         backend: Backend<'_>,
     ) -> Result<Self> {
         comm.agree(config.validate_for(lattice))?;
+        // Everything the ranks must agree on, as a checkpoint stores it.
+        let encoded = comm.agree(encode_checkpoint(config, lattice, steps))?;
+        comm.agree_inputs(&encoded, "DistributedLatticeGas inputs")?;
+        drop(encoded);
         let (gw, gh) = (lattice.width(), lattice.height());
-        let decomposition = CartDecomposition::new(
+        let decomposition = comm.agree(CartDecomposition::new(
             [gw, gh],
             comm.size(),
             [config.periodic_x, config.periodic_y],
-        )?;
+        ))?;
         let block = decomposition.block(comm.rank());
         let [nx, ny] = block.len;
         let [x0, y0] = block.start;
@@ -184,20 +177,6 @@ impl DistributedLatticeGas {
         })
     }
 
-    /// `"cpu lookup table"` or `"gpu bytes (<adapter>)"`: how this rank steps its block.
-    pub fn backend_name(&self) -> String {
-        #[cfg(feature = "gpu")]
-        if let Some(g) = &self.gpu {
-            return format!("gpu bytes ({})", g.adapter());
-        }
-        "cpu lookup table".into()
-    }
-
-    /// The communicator.
-    pub fn comm(&self) -> &Comm {
-        &self.comm
-    }
-
     /// How the lattice is cut over the ranks (x = columns, y = rows).
     pub fn decomposition(&self) -> &CartDecomposition {
         &self.decomposition
@@ -211,38 +190,6 @@ impl DistributedLatticeGas {
     /// The settings the run was built with.
     pub fn config(&self) -> &Config {
         &self.config
-    }
-
-    /// Steps taken so far (the same on every rank).
-    pub fn steps_done(&self) -> u64 {
-        self.steps
-    }
-
-    /// Advances `steps` steps, with one halo exchange after each. Collective.
-    ///
-    /// Errors: a step counter that would overflow, or a failed exchange.
-    pub fn step(&mut self, steps: u32) -> Result<()> {
-        simkit_backend::guard::end_step(self.steps, steps)?;
-        for _ in 0..steps {
-            #[cfg(feature = "gpu")]
-            if let Some(g) = &mut self.gpu {
-                // The single-process run keys its random bits with the step count as u32.
-                let stepped = g.step_and_read_edges(&mut self.cur, self.steps as u32);
-                // A GPU failure on one rank stops every rank before the exchange.
-                self.comm.agree(stepped)?;
-                self.decomposition
-                    .exchange_halo(&self.comm, &mut self.cur, 1)?;
-                self.comm.agree(g.write_ghosts(&self.cur))?;
-                self.steps += 1;
-                continue;
-            }
-            self.step_block();
-            std::mem::swap(&mut self.cur, &mut self.next);
-            self.decomposition
-                .exchange_halo(&self.comm, &mut self.cur, 1)?;
-            self.steps += 1;
-        }
-        Ok(())
     }
 
     /// One step of the block's rows from `cur` into `next` (rows in parallel; the ghosts
@@ -297,10 +244,8 @@ impl DistributedLatticeGas {
             .collect()
     }
 
-    /// The whole lattice on rank 0 (`Some`), `None` on the other ranks: the state the
-    /// single-process run has after the same steps, for pictures and observables written
-    /// on rank 0. Collective.
-    pub fn gather(&self) -> Result<Option<Lattice>> {
+    /// The whole lattice on rank 0 (`Some`), `None` on the other ranks. Collective.
+    fn gather_root(&self) -> Result<Option<Lattice>> {
         let Some(cells) = self.decomposition.gather(&self.comm, &self.interior()?)? else {
             return Ok(None);
         };
@@ -317,32 +262,98 @@ impl DistributedLatticeGas {
             .sum();
         Ok(self.comm.all_gather(&[mine])?.iter().sum())
     }
+}
 
-    /// The checkpoint of the whole run on rank 0 (`Some`; `None` on the other ranks), in
-    /// the format of [`crate::LatticeGas`]'s `Restart::checkpoint`: it resumes bit for bit
-    /// as a single-process run on any backend, or with [`DistributedLatticeGas::resume`] on
-    /// any rank count. Collective.
-    pub fn checkpoint(&self) -> Result<Option<Vec<u8>>> {
-        match self.gather()? {
-            Some(lattice) => encode_checkpoint(&self.config, &lattice, self.steps).map(Some),
-            None => Ok(None),
+impl Simulation for DistributedLatticeGas {
+    type State = Lattice;
+
+    /// Advances `steps` steps, with one halo exchange after each. Collective.
+    ///
+    /// Errors: a step counter that would overflow, or a failed exchange.
+    fn step(&mut self, steps: u32) -> Result<()> {
+        simkit_backend::guard::end_step(self.steps, steps)?;
+        for _ in 0..steps {
+            #[cfg(feature = "gpu")]
+            if let Some(g) = &mut self.gpu {
+                // The single-process run keys its random bits with the step count as u32.
+                let stepped = g.step_and_read_edges(&mut self.cur, self.steps as u32);
+                // A GPU failure on one rank stops every rank before the exchange.
+                self.comm.agree(stepped)?;
+                self.decomposition
+                    .exchange_halo(&self.comm, &mut self.cur, 1)?;
+                self.comm.agree(g.write_ghosts(&self.cur))?;
+                self.steps += 1;
+                continue;
+            }
+            self.step_block();
+            std::mem::swap(&mut self.cur, &mut self.next);
+            self.decomposition
+                .exchange_halo(&self.comm, &mut self.cur, 1)?;
+            self.steps += 1;
         }
+        Ok(())
     }
 
-    /// Writes [`DistributedLatticeGas::checkpoint`] to `path` from rank 0, atomically
-    /// (parent directories are created); the other ranks write nothing. Collective: returns
-    /// on every rank once the file is complete. If rank 0 fails, it returns its error and
-    /// the other ranks an [`Error::Io`](simkit_backend::Error::Io) naming the path.
-    pub fn write_checkpoint(&self, path: impl AsRef<Path>) -> Result<()> {
-        let bytes = self.checkpoint()?;
-        self.comm.write_from_root(path.as_ref(), bytes.as_deref())
+    /// The whole lattice, gathered on rank 0 and sent to every rank: the state the
+    /// single-process run has after the same steps (bit for bit). Collective.
+    fn state(&mut self) -> Result<Lattice> {
+        let root = self.gather_root()?.map(Lattice::into_cells);
+        let cells = self.comm.broadcast_from_root(root)?;
+        let [w, h] = self.decomposition.global();
+        Ok(Lattice::from_raw(w, h, cells))
+    }
+
+    /// Steps taken so far (the same on every rank).
+    fn steps_done(&self) -> u64 {
+        self.steps
+    }
+
+    /// `"cpu lookup table (P ranks)"` or `"gpu bytes (<adapter>) (P ranks)"`: how each rank
+    /// steps its block.
+    fn backend_name(&self) -> String {
+        #[cfg(feature = "gpu")]
+        if let Some(g) = &self.gpu {
+            return format!("gpu bytes ({}) ({} ranks)", g.adapter(), self.comm.size());
+        }
+        format!("cpu lookup table ({} ranks)", self.comm.size())
+    }
+}
+
+impl Distributed for DistributedLatticeGas {
+    fn comm(&self) -> &Comm {
+        &self.comm
+    }
+
+    /// The checkpoint of the whole run in the format of [`crate::LatticeGas`]'s
+    /// `Restart::checkpoint`, on every rank: it resumes bit for bit as a single-process run
+    /// on any backend, or with [`Distributed::resume`] on any rank count. Collective (the
+    /// lattice is gathered and encoded on rank 0, the bytes sent to every rank).
+    fn checkpoint(&mut self) -> Result<Vec<u8>> {
+        let bytes = self
+            .gather_root()?
+            .map(|lattice| encode_checkpoint(&self.config, &lattice, self.steps))
+            .transpose();
+        let bytes = self.comm.agree(bytes)?;
+        self.comm.broadcast_from_root(bytes)
+    }
+
+    /// Resumes on the CPU from checkpoint bytes of [`crate::LatticeGas`]
+    /// (`Restart::checkpoint`) or of [`Distributed::checkpoint`], on any rank count: the
+    /// run continues bit for bit. Every rank passes the same bytes (checked;
+    /// [`Distributed::resume_file`] reads a file on rank 0 and sends it). Collective.
+    ///
+    /// Errors: those of `LatticeGas::resume` (corrupt bytes, another crate, version or
+    /// model, invalid settings) and of [`DistributedLatticeGas::new`], on every rank.
+    fn resume(bytes: &[u8], comm: Comm) -> Result<Self> {
+        Self::resume_with_backend(bytes, comm, Backend::Cpu)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{LutCpu, Obstacle, RuleSet};
+    use crate::cpu::lut::LutCpu;
+    use crate::{Obstacle, RuleSet};
     use simkit_backend::Simulation;
 
     /// The block of `rank` of `decomposition`, its ghosts filled from `lattice` as the halo

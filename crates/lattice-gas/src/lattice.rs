@@ -163,7 +163,7 @@ impl Lattice {
             .sum()
     }
 
-    /// Total momentum in the integer units of [`crate::rules::invariants`]: `(2 p_x, 2 p_y / sqrt(3))`.
+    /// Total momentum in the integer units of [`crate::laws::invariants`]: `(2 p_x, 2 p_y / sqrt(3))`.
     pub fn momentum_units(&self) -> (i64, i64) {
         self.cells.iter().fold((0, 0), |(x, y), &c| {
             let (_, px, py) = crate::rules::invariants(c & 0x3f);

@@ -8,25 +8,27 @@
 //! - [`Config`]: rules, seed, periodic axes, inflow/outflow columns, body force, and the
 //!   backend choices as plain data ([`CpuMethod`], [`GpuLayout`]).
 //! - [`LatticeGas`]: the simulation, `LatticeGas::new(lattice, &config, backend)`,
-//!   implementing [`simkit_backend::Simulation`] with `State = Lattice`. Its backends, also
-//!   usable directly, are bit-identical for the same seed and scene: [`LutCpu`] (one byte per
-//!   site, table lookup; 64 sites per `vpermi2b` where the CPU has AVX-512 VBMI),
-//!   [`MultiSpinCpu`] (64-site bit-planes, boolean collisions, AVX-512/AVX2 dispatch) and,
-//!   with the `gpu` feature, `GpuLattice` (WGSL, [`GpuLayout::BitPlanes`] or
-//!   [`GpuLayout::Bytes`]).
+//!   implementing [`simkit_backend::Simulation`] with `State = Lattice`. Its backends, chosen
+//!   by [`Config::cpu`] and [`Config::gpu_layout`], are bit-identical for the same seed and
+//!   scene: the lookup table (one byte per site; 64 sites per `vpermi2b` where the CPU has
+//!   AVX-512 VBMI, or the portable loop), multi-spin (64-site bit-planes, boolean
+//!   collisions, AVX-512/AVX2 dispatch) and, with the `gpu` feature, the GPU in
+//!   [`GpuLayout::BitPlanes`] or [`GpuLayout::Bytes`].
 //! - Checkpoints: [`LatticeGas`] implements [`simkit_backend::Restart`] (`checkpoint`,
 //!   `write_checkpoint`, `resume`, `resume_file`): the settings, the lattice and the step
 //!   counter that keys the random bits, so a resumed run continues bit for bit, on any backend.
 //! - [`DistributedLatticeGas`]: the lattice block-decomposed over the ranks of a
 //!   [`simkit_backend::comm::Comm`] (MPI with the `mpi` feature), bit-identical to one
-//!   process on any rank count; gathers the lattice and writes checkpoints on rank 0.
-//! - [`poiseuille`]: the viscosity from the profile of a body-forced channel.
-//! - [`viscosity`]: the shear-wave viscosity measurement and the FHP-I theory.
-//! - [`field`]: the lattice vectors and [`field::BlockField`], block sums of density and
-//!   momentum (filled from site bytes or straight from the multi-spin bit-planes).
-//! - [`observables`]: block-averaged density and velocity and time averages, returned as
-//!   data (files are written by the caller, e.g. with `simkit-output`).
-//! - [`random`]: the exact use of the counter-based random bits shared by all backends.
+//!   process on any rank count ([`Distributed`]: state and checkpoints on every rank).
+//! - [`PoiseuilleChannel`]: the viscosity from the profile of a body-forced channel;
+//!   [`ShearWave`]: the shear-wave viscosity measurement, [`fhp1_viscosity`] the FHP-I
+//!   theory.
+//! - [`BlockField`]: block sums of density and momentum (filled from site bytes or straight
+//!   from the multi-spin bit-planes), [`TimeAverage`]: their time average; returned as data
+//!   (files are written by the caller, e.g. with `simkit-output`).
+//! - [`laws`]: each rule of the model stated once with its WGSL twin: the lattice vectors
+//!   and site observables, the collision of six direction bits, the counter-based random
+//!   bits shared by all backends.
 //!
 //! ```
 //! use simkit_backend::{Backend, Simulation};
@@ -46,33 +48,34 @@
 // Links to the GPU items resolve when they are compiled (the `gpu` feature, on by default).
 #![cfg_attr(not(feature = "gpu"), allow(rustdoc::broken_intra_doc_links))]
 
-pub mod config;
-pub mod cpu;
+mod config;
+mod cpu;
 mod distributed;
 mod engine;
-pub mod field;
+mod field;
 #[cfg(feature = "gpu")]
-pub mod gpu;
+mod gpu;
 #[cfg(feature = "gpu")]
 mod gpu_block;
-pub mod lattice;
-pub mod observables;
-pub mod poiseuille;
-pub mod random;
-pub mod rules;
+mod lattice;
+pub mod laws;
+mod observables;
+mod poiseuille;
+mod random;
+mod rules;
 mod sim;
-pub mod viscosity;
+mod viscosity;
 
 pub use config::{Config, CpuMethod, GpuLayout};
-pub use cpu::lut::LutCpu;
-pub use cpu::multispin::MultiSpinCpu;
 pub use distributed::DistributedLatticeGas;
-#[cfg(feature = "gpu")]
-pub use gpu::GpuLattice;
+pub use field::BlockField;
 pub use lattice::{Lattice, Obstacle, ROW_SPACING};
+pub use observables::TimeAverage;
+pub use poiseuille::{PoiseuilleChannel, PoiseuilleResult};
 pub use rules::{CollisionTable, RuleSet};
 pub use sim::LatticeGas;
-pub use simkit_backend::{Backend, Error, Restart, Result, Simulation};
+pub use simkit_backend::{Backend, Distributed, Error, Restart, Result, Simulation};
+pub use viscosity::{ShearResult, ShearWave, fhp1_viscosity};
 
 /// Bit of an east-moving particle (direction 1).
 pub const EAST: u8 = 1;

@@ -4,7 +4,7 @@
 
 use simkit_backend::{Error, Result};
 
-pub use crate::field::{BlockField, CX, CY, site_density, site_momentum};
+use crate::field::BlockField;
 
 /// Accumulates block fields over time (sums of particles and momenta, so the averaged
 /// velocity is total momentum over total particles).

@@ -17,9 +17,10 @@
 
 use simkit_backend::{Error, Result, Simulation};
 
+use crate::cpu::multispin::MultiSpinCpu;
 use crate::field::CX;
 use crate::viscosity::fhp1_viscosity;
-use crate::{Config, EAST, Lattice, MultiSpinCpu, ROW_SPACING, WALL, WEST};
+use crate::{Config, EAST, Lattice, ROW_SPACING, WALL, WEST};
 
 /// A body-forced channel measurement.
 #[derive(Clone, Debug)]

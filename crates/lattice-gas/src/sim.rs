@@ -3,9 +3,11 @@
 use serde::{Deserialize, Serialize};
 use simkit_backend::{Backend, Restart, Result, Simulation, checkpoint};
 
+use crate::cpu::lut::LutCpu;
+use crate::cpu::multispin::MultiSpinCpu;
 use crate::engine::Engine;
 use crate::field::BlockField;
-use crate::{Config, CpuMethod, Lattice, LutCpu, MultiSpinCpu};
+use crate::{Config, CpuMethod, Lattice};
 
 /// An FHP lattice-gas simulation of a [`Lattice`] on a chosen backend. Every backend and
 /// every [`CpuMethod`] / [`crate::GpuLayout`] gives the same lattice bit for bit.
@@ -66,9 +68,12 @@ impl LatticeGas {
             Backend::Cpu if runs_multispin(config.cpu, lattice.width()) => {
                 Box::new(MultiSpinCpu::new(lattice, config)?)
             }
+            Backend::Cpu if config.cpu == CpuMethod::LutPortable => {
+                Box::new(LutCpu::new(lattice, config)?.force_scalar())
+            }
             Backend::Cpu => Box::new(LutCpu::new(lattice, config)?),
             #[cfg(feature = "gpu")]
-            Backend::Gpu(ctx) => Box::new(crate::GpuLattice::new(lattice, config, ctx)?),
+            Backend::Gpu(ctx) => Box::new(crate::gpu::GpuLattice::new(lattice, config, ctx)?),
         };
         Ok(Self {
             engine,
@@ -95,7 +100,7 @@ impl LatticeGas {
 fn runs_multispin(method: CpuMethod, width: usize) -> bool {
     match method {
         CpuMethod::Auto => !crate::cpu::lut::has_vbmi() && width.is_multiple_of(64),
-        CpuMethod::Lut => false,
+        CpuMethod::Lut | CpuMethod::LutPortable => false,
         CpuMethod::MultiSpin => true,
     }
 }

@@ -8,7 +8,8 @@
 
 use simkit_backend::{Error, Result, Simulation};
 
-use crate::{Config, Lattice, MultiSpinCpu, ROW_SPACING, RuleSet};
+use crate::cpu::multispin::MultiSpinCpu;
+use crate::{Config, Lattice, ROW_SPACING, RuleSet};
 
 /// The FHP-I kinematic shear viscosity `1/(12 d (1-d)^3) - 1/8` (Frisch et al. 1987).
 pub fn fhp1_viscosity(d: f64) -> f64 {

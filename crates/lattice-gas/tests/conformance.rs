@@ -5,8 +5,8 @@
 
 use simkit_backend::testing::backends;
 use simkit_backend::{Backend, Simulation};
-use simkit_lattice_gas::field::BlockField;
-use simkit_lattice_gas::random::chirality;
+use simkit_lattice_gas::BlockField;
+use simkit_lattice_gas::laws::chirality;
 use simkit_lattice_gas::{Config, CpuMethod, GpuLayout, Lattice, LatticeGas, Obstacle, RuleSet};
 
 /// One way to run a scene: a backend and the backend choices of [`Config`] it reads.

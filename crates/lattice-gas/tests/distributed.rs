@@ -6,7 +6,7 @@
 mod common;
 
 use simkit_backend::comm::Comm;
-use simkit_backend::{Backend, Restart, Simulation, checkpoint};
+use simkit_backend::{Backend, Distributed, Restart, Simulation, checkpoint};
 use simkit_lattice_gas::{Config, DistributedLatticeGas, Lattice, LatticeGas};
 
 #[test]
@@ -18,23 +18,25 @@ fn one_rank_matches_the_single_process_run_bit_for_bit() {
 #[test]
 fn bad_input_is_refused_with_the_single_process_errors() {
     let odd = Lattice::new(8, 5).unwrap();
-    let e = DistributedLatticeGas::new(&odd, &Config::default(), Comm::serial()).unwrap_err();
+    let e = DistributedLatticeGas::new(odd, &Config::default(), Comm::serial()).unwrap_err();
     assert!(e.to_string().contains("even number of rows"), "{e}");
     let l = Lattice::new(8, 6).unwrap();
     let open = Config {
         inflow: true,
         ..Config::default()
     };
-    let e = DistributedLatticeGas::new(&l, &open, Comm::serial()).unwrap_err();
+    let e = DistributedLatticeGas::new(l.clone(), &open, Comm::serial()).unwrap_err();
     assert!(e.to_string().contains("periodic_x"), "{e}");
     let e = DistributedLatticeGas::resume(b"not a checkpoint", Comm::serial()).unwrap_err();
     assert!(e.to_string().contains("checkpoint"), "{e}");
-    let mut run = DistributedLatticeGas::new(&l, &Config::default(), Comm::serial()).unwrap();
+    let mut run =
+        DistributedLatticeGas::new(l.clone(), &Config::default(), Comm::serial()).unwrap();
     assert_eq!(run.decomposition().dims(), [1, 1]);
     assert_eq!(run.block().len, [8, 6]);
     run.step(0).unwrap();
     assert_eq!(run.steps_done(), 0);
-    assert_eq!(run.gather().unwrap().unwrap(), l);
+    assert_eq!(run.state().unwrap(), l);
+    assert_eq!(run.backend_name(), "cpu lookup table (1 ranks)");
     assert_eq!(run.config(), &Config::default());
 }
 
@@ -50,7 +52,7 @@ fn a_checkpoint_file_resumes_on_one_process_and_on_the_distributed_run() {
     whole.step(20).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("sub").join("run.ckpt");
-    let mut dist = DistributedLatticeGas::new(&lattice, &config, Comm::serial()).unwrap();
+    let mut dist = DistributedLatticeGas::new(lattice, &config, Comm::serial()).unwrap();
     dist.step(12).unwrap();
     dist.write_checkpoint(&path).unwrap();
     let mut one = LatticeGas::resume_file(&path, Backend::Cpu).unwrap();
@@ -60,7 +62,13 @@ fn a_checkpoint_file_resumes_on_one_process_and_on_the_distributed_run() {
     let mut again = DistributedLatticeGas::resume(&bytes, Comm::serial()).unwrap();
     assert_eq!(again.steps_done(), 12);
     again.step(8).unwrap();
-    assert_eq!(again.gather().unwrap().unwrap(), whole.state().unwrap());
+    assert_eq!(again.state().unwrap(), whole.state().unwrap());
+    let mut from_file = DistributedLatticeGas::resume_file(&path, Comm::serial()).unwrap();
+    from_file.step(8).unwrap();
+    assert_eq!(from_file.checkpoint().unwrap(), again.checkpoint().unwrap());
+    let e =
+        DistributedLatticeGas::resume_file(dir.path().join("none"), Comm::serial()).unwrap_err();
+    assert!(e.to_string().contains("none"), "{e}");
     // A directory is not a file: rank 0's error comes back.
     let e = dist.write_checkpoint(dir.path()).unwrap_err();
     assert!(

@@ -4,10 +4,10 @@
 
 use simkit_backend::rng::RNG_WGSL;
 use simkit_backend::testing::{eval_wgsl, gpu_or_skip};
-use simkit_lattice_gas::random::{
+use simkit_lattice_gas::laws::{COLLIDE_WGSL, collide_bits};
+use simkit_lattice_gas::laws::{
     RANDOM_WGSL, chirality, chirality_word, force_hit, force_threshold, step_key,
 };
-use simkit_lattice_gas::rules::{COLLIDE_WGSL, collide_bits};
 use simkit_lattice_gas::{CollisionTable, RuleSet, WALL};
 
 /// Bit-parallel collision inputs `[s0..s5, r, wall]` of 32 sites each: the first eight words

@@ -4,34 +4,14 @@
 //! cases and a failure reproduces; 13,000 cases in all, sized to run in seconds.
 
 use proptest::prelude::*;
-use proptest::test_runner::RngSeed;
+use simkit_backend::testing::robust::{self, awkward_usize};
+
+/// The seed of every property in this file.
+const SEED: u64 = 0x5eed_1a77;
 use simkit_backend::{Backend, Error, Restart, Simulation};
-use simkit_lattice_gas::field::BlockField;
-use simkit_lattice_gas::viscosity::ShearWave;
-use simkit_lattice_gas::{
-    Config, CpuMethod, Lattice, LatticeGas, Obstacle, RuleSet, observables::TimeAverage,
-};
-
-fn config(cases: u32) -> ProptestConfig {
-    ProptestConfig {
-        cases,
-        rng_seed: RngSeed::Fixed(0x5eed_1a77),
-        failure_persistence: None,
-        ..ProptestConfig::default()
-    }
-}
-
-/// Sizes from the edges: 0, small, around the u32 site limit, and near `usize::MAX`.
-fn size() -> impl Strategy<Value = usize> {
-    prop_oneof![
-        0usize..70,
-        Just(1 << 16),
-        Just(1 << 32),
-        Just(usize::MAX / 2),
-        Just(usize::MAX),
-        any::<usize>(),
-    ]
-}
+use simkit_lattice_gas::BlockField;
+use simkit_lattice_gas::ShearWave;
+use simkit_lattice_gas::{Config, CpuMethod, Lattice, LatticeGas, Obstacle, RuleSet, TimeAverage};
 
 /// Floats from the edges: NaN, infinities, signed zero, probabilities, huge values.
 fn real() -> impl Strategy<Value = f64> {
@@ -59,12 +39,12 @@ fn is_clear(e: &Error) -> bool {
 }
 
 proptest! {
-    #![proptest_config(config(3000))]
+    #![proptest_config(robust::config(SEED, 3000))]
 
     /// `Lattice::new` and `from_cells` with any sizes and cell counts: Ok only for a
     /// consistent lattice, never an allocation of an impossible size.
     #[test]
-    fn lattices_of_any_size(w in size(), h in size(), n in 0usize..300, byte in any::<u8>()) {
+    fn lattices_of_any_size(w in awkward_usize(), h in awkward_usize(), n in 0usize..300, byte in any::<u8>()) {
         match Lattice::new(w, h) {
             Ok(l) => prop_assert_eq!(l.cells().len(), w * h),
             Err(e) => prop_assert!(is_clear(&e)),
@@ -85,16 +65,16 @@ proptest! {
 }
 
 proptest! {
-    #![proptest_config(config(4000))]
+    #![proptest_config(robust::config(SEED, 4000))]
 
     /// Accessors, fills and obstacles with any indices and values.
     #[test]
     fn lattice_edits_with_any_values(
         w in small_side(), h in small_side(),
-        i in size(), j in size(), value in any::<u8>(),
+        i in awkward_usize(), j in awkward_usize(), value in any::<u8>(),
         density in real(), seed in any::<u32>(),
         cx in real(), cy in real(), radius in real(),
-        x0 in size(), x1 in size(), y0 in size(), y1 in size(),
+        x0 in awkward_usize(), x1 in awkward_usize(), y0 in awkward_usize(), y1 in awkward_usize(),
         mask_len in 0usize..200,
     ) {
         let mut l = Lattice::new(w, h).unwrap();
@@ -125,7 +105,7 @@ proptest! {
 }
 
 proptest! {
-    #![proptest_config(config(2500))]
+    #![proptest_config(robust::config(SEED, 2500))]
 
     /// Any settings on small lattices: `new` accepts or refuses, every CPU method and the
     /// checkpoint accept the same lattices, stepping conserves what it must.
@@ -134,7 +114,7 @@ proptest! {
         w in small_side(), h in small_side(), density in 0.0f64..=1.0,
         seed in any::<u32>(), px in any::<bool>(), py in any::<bool>(),
         inflow in any::<bool>(), outflow in any::<bool>(), force in real(),
-        full in any::<bool>(), method in 0u8..3, steps in 0u32..6, block in size(),
+        full in any::<bool>(), method in 0u8..3, steps in 0u32..6, block in awkward_usize(),
     ) {
         let mut lattice = Lattice::new(w, h).unwrap();
         lattice.fill_random(density, seed).unwrap();
@@ -179,7 +159,7 @@ proptest! {
 }
 
 proptest! {
-    #![proptest_config(config(3000))]
+    #![proptest_config(robust::config(SEED, 3000))]
 
     /// Damaged checkpoints: cut anywhere, bytes overwritten anywhere, or arbitrary bytes;
     /// always a clear `Err` (the checksum catches the damage), never a panic.
@@ -210,11 +190,11 @@ proptest! {
 }
 
 proptest! {
-    #![proptest_config(config(500))]
+    #![proptest_config(robust::config(SEED, 500))]
 
     /// The shear-wave measurement refuses impossible settings before building anything.
     #[test]
-    fn shear_wave_settings(w in size(), h in size(), d in real(), u in real(), every in 0u32..3) {
+    fn shear_wave_settings(w in awkward_usize(), h in awkward_usize(), d in real(), u in real(), every in 0u32..3) {
         let wave = ShearWave {
             amplitude: u,
             sample_every: every,

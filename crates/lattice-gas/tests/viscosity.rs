@@ -1,9 +1,9 @@
 //! Shear viscosity of FHP-I against 1/(12 d (1-d)^3) - 1/8 (shear wave and Poiseuille
 //! channel), and the full table's viscosity.
 
+use simkit_lattice_gas::PoiseuilleChannel;
 use simkit_lattice_gas::RuleSet;
-use simkit_lattice_gas::poiseuille::PoiseuilleChannel;
-use simkit_lattice_gas::viscosity::{ShearWave, fhp1_viscosity};
+use simkit_lattice_gas::{ShearWave, fhp1_viscosity};
 
 #[test]
 fn fhp1_shear_viscosity_matches_theory() {

@@ -125,7 +125,7 @@ mod tests {
         let table = PairTable::uniform(1, Pretender(LennardJones::new(1.0, 1.0, 2.5))).unwrap();
         let system = scenes::fcc_lattice([4; 3], 0.8, 1.0, table, &[0], 1).unwrap();
         let config = Config::default().with_dt(0.005);
-        match Md::new(&system, &config, Backend::Cpu) {
+        match Md::new(system, &config, Backend::Cpu) {
             Err(Error::InvalidParameter { name, .. }) => {
                 assert_eq!(name, "PairLaw::BUILT_IN")
             }
@@ -134,6 +134,6 @@ mod tests {
         // The same table under the built-in law runs.
         let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5)).unwrap();
         let system = scenes::fcc_lattice([4; 3], 0.8, 1.0, table, &[0], 1).unwrap();
-        assert!(Md::new(&system, &config, Backend::Cpu).is_ok());
+        assert!(Md::new(system, &config, Backend::Cpu).is_ok());
     }
 }

@@ -6,10 +6,10 @@ use rayon::prelude::*;
 use simkit_backend::comm::{Comm, ParticleDomain};
 use simkit_backend::guard::{Guarded, Halt, run_guarded, verdict};
 use simkit_backend::particles::Dynamics;
-use simkit_backend::{Error, Precision, Result, Simulation, max_or_nan};
+use simkit_backend::{Distributed, Error, Precision, Result, Simulation, max_or_nan};
 use simkit_neighbor::{
-    ByDim, DistributedRun, Finding, GhostedList, RECORD, RankParticles, RankRun, RankView,
-    agree_inputs, by_dim, distributed_accessors,
+    ByDim, DistributedRun, Finding, GhostedList, RECORD, RankParticles, RankRun, RankView, by_dim,
+    distributed_accessors,
 };
 
 use crate::cpu::{AXES, Kernel, beyond, kick_slice, list_range, reflect};
@@ -74,13 +74,12 @@ const CAUSE: &str = "a time step too large for the stiffest pair (see time_step_
 ///
 /// ```
 /// use simkit_backend::comm::Comm;
-/// use simkit_backend::Simulation;
-/// use simkit_md::{Config, DistributedMd, LennardJones, PairTable, scenes};
+/// use simkit_md::{Config, Distributed, DistributedMd, LennardJones, PairTable, Simulation, scenes};
 /// # fn main() -> simkit_backend::Result<()> {
 /// let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5))?;
 /// let system = scenes::fcc_lattice([4; 3], 0.8442, 1.44, table, &[0], 1)?;
 /// // `Comm::mpi()?` under `mpirun -np P` (feature `mpi`); here one process.
-/// let mut md = DistributedMd::new(&system, &Config::default().with_dt(0.005), Comm::serial())?;
+/// let mut md = DistributedMd::new(system, &Config::default().with_dt(0.005), Comm::serial())?;
 /// let e0 = md.diagnostics()?.total; // on every rank
 /// md.step(100)?;
 /// assert!((md.diagnostics()?.total - e0).abs() < 1e-2 * e0.abs());
@@ -115,59 +114,32 @@ impl<L: PairLaw> DistributedMd<L> {
     /// ranks, a smaller skin or a larger box fix it); ranks whose systems or settings
     /// differ. An error on one rank is an error on every rank (the others name the rank
     /// that failed).
-    pub fn new(system: &System<L>, config: &Config, comm: Comm) -> Result<Self> {
+    pub fn new(system: System<L>, config: &Config, comm: Comm) -> Result<Self> {
         Self::build(system, config, comm, None)
     }
 
-    /// Rebuilds a run from the bytes of [`DistributedMd::checkpoint`] (any rank count) or
-    /// of [`crate::Md`]'s `Restart::checkpoint` on the CPU in `f64`, on any rank count.
-    /// Each rank takes the particles its region held at the last list build, the lists are
-    /// made from the list-build positions, and the run continues with the bits of the
-    /// uninterrupted distributed run. Collective; every rank passes the same bytes (e.g.
-    /// from [`Comm::broadcast_from_root`] of the file rank 0 read).
-    ///
-    /// Errors: another crate's or model's checkpoint (`f32`, GPU, another law), a
-    /// truncated, corrupt or inconsistent one (as `Md::resume`), those of
-    /// [`DistributedMd::new`]. An error on one rank is an error on every rank.
-    pub fn resume(bytes: &[u8], comm: Comm) -> Result<Self> {
-        let (system, config, engine) = comm.agree(decode_checkpoint::<L>(bytes).and_then(
-            |(written, system, config, e)| {
-                let want = model_name::<L>(false, Precision::F64, system.dim().axes());
-                if written == want {
-                    Ok((system, config, e))
-                } else {
-                    Err(Error::checkpoint(format!(
-                        "holds a {written} run; DistributedMd resumes {want} runs (CPU, \
-                         f64); resume it with Md on the backend that wrote it"
-                    )))
-                }
-            },
-        ))?;
-        Self::build(&system, &config, comm, Some(&engine))
-    }
-
     fn build(
-        system: &System<L>,
+        system: System<L>,
         config: &Config,
         comm: Comm,
         saved: Option<&Dynamics>,
     ) -> Result<Self> {
-        let dt = comm.agree(prepare(system, config))?;
+        let dt = comm.agree(prepare(&system, config))?;
         // Everything the ranks must agree on: the system and settings as a checkpoint
         // stores them (with the state, when resuming).
         let state = saved.cloned().unwrap_or_default();
-        let encoded = comm.agree(encode_checkpoint(system, config, "", state))?;
-        agree_inputs(&comm, &encoded, "DistributedMd inputs")?;
+        let encoded = comm.agree(encode_checkpoint(&system, config, "", state))?;
+        comm.agree_inputs(&encoded, "DistributedMd inputs")?;
         let engine = match system.dim() {
-            Dim::Two => ByDim::Two(comm.agree(Engine::new(system, config, dt, &comm))?),
-            Dim::Three => ByDim::Three(comm.agree(Engine::new(system, config, dt, &comm))?),
+            Dim::Two => ByDim::Two(comm.agree(Engine::new(&system, config, dt, &comm))?),
+            Dim::Three => ByDim::Three(comm.agree(Engine::new(&system, config, dt, &comm))?),
         };
         let mut run = DistributedRun::new(comm, engine);
         let (engine, comm) = run.parts();
-        by_dim!(engine, e => e.start(comm, system, saved)?);
+        by_dim!(engine, e => e.start(comm, &system, saved)?);
         Ok(Self {
             run,
-            system: system.clone(),
+            system,
             config: *config,
         })
     }
@@ -245,19 +217,6 @@ impl<L: PairLaw> DistributedMd<L> {
         let v = comm.broadcast_from_root(flat)?;
         Ok(v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
     }
-
-    /// The complete state in [`crate::Md`]'s checkpoint format (`Md<cpu f64, D>`: the
-    /// particles in system order with their list-build positions), on every rank: resumes
-    /// with [`DistributedMd::resume`] on any rank count, or with `Md`'s `Restart::resume`
-    /// on the CPU in one process. The bytes are the same on any rank count. Collective.
-    ///
-    /// Errors: a failed exchange.
-    pub fn checkpoint(&mut self) -> Result<Vec<u8>> {
-        let model = model_name::<L>(false, Precision::F64, self.system.dim().axes());
-        let (system, config) = (&self.system, &self.config);
-        self.run
-            .checkpoint(|d| encode_checkpoint(system, config, &model, d))
-    }
 }
 
 impl<L: PairLaw> Simulation for DistributedMd<L> {
@@ -291,6 +250,52 @@ impl<L: PairLaw> Simulation for DistributedMd<L> {
             "cpu f64 ({} ranks, {threads} thread{plural} each, full lists, {kernel})",
             self.run.comm().size()
         )
+    }
+}
+
+impl<L: PairLaw> Distributed for DistributedMd<L> {
+    fn comm(&self) -> &Comm {
+        self.run.comm()
+    }
+
+    /// The complete state in [`crate::Md`]'s checkpoint format (`Md<cpu f64, D>`: the
+    /// particles in system order with their list-build positions), on every rank: resumes
+    /// with [`Distributed::resume`] on any rank count, or with `Md`'s `Restart::resume`
+    /// on the CPU in one process. The bytes are the same on any rank count. Collective.
+    ///
+    /// Errors: a failed exchange.
+    fn checkpoint(&mut self) -> Result<Vec<u8>> {
+        let model = model_name::<L>(false, Precision::F64, self.system.dim().axes());
+        let (system, config) = (&self.system, &self.config);
+        self.run
+            .checkpoint(|d| encode_checkpoint(system, config, &model, d))
+    }
+
+    /// Rebuilds a run from the bytes of [`Distributed::checkpoint`] (any rank count) or
+    /// of [`crate::Md`]'s `Restart::checkpoint` on the CPU in `f64`, on any rank count.
+    /// Each rank takes the particles its region held at the last list build, the lists are
+    /// made from the list-build positions, and the run continues with the bits of the
+    /// uninterrupted distributed run. Collective; every rank passes the same bytes (checked;
+    /// [`Distributed::resume_file`] reads a file on rank 0 and sends it).
+    ///
+    /// Errors: another crate's or model's checkpoint (`f32`, GPU, another law), a
+    /// truncated, corrupt or inconsistent one (as `Md::resume`), those of
+    /// [`DistributedMd::new`]. An error on one rank is an error on every rank.
+    fn resume(bytes: &[u8], comm: Comm) -> Result<Self> {
+        let (system, config, engine) = comm.agree(decode_checkpoint::<L>(bytes).and_then(
+            |(written, system, config, e)| {
+                let want = model_name::<L>(false, Precision::F64, system.dim().axes());
+                if written == want {
+                    Ok((system, config, e))
+                } else {
+                    Err(Error::checkpoint(format!(
+                        "holds a {written} run; DistributedMd resumes {want} runs (CPU, \
+                         f64); resume it with Md on the backend that wrote it"
+                    )))
+                }
+            },
+        ))?;
+        Self::build(system, &config, comm, Some(&engine))
     }
 }
 

@@ -16,7 +16,7 @@
 //!   LAMMPS. A law of your own runs at the speed of a built-in one on every backend
 //!   (`examples/custom_law/`; test its WGSL with [`check_law_on_gpu`]).
 //! - [`System`]: box, species masses, pair table, particles (validated).
-//! - [`Md`]: the run, `Md::new(&system, &config, backend)`, implementing
+//! - [`Md`]: the run, `Md::new(system, &config, backend)`, implementing
 //!   [`simkit_backend::Simulation`] and [`simkit_backend::Restart`].
 //! - [`DistributedMd`]: the CPU run (`f64`) over the ranks of a
 //!   [`simkit_backend::comm::Comm`] (MPI with the `mpi` feature) by spatial decomposition,
@@ -55,7 +55,7 @@
 //! // 4 x 4 x 4 FCC cells of Lennard-Jones atoms (256), density 0.8442, T = 1.44.
 //! let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5))?;
 //! let system = scenes::fcc_lattice([4; 3], 0.8442, 1.44, table, &[0], 1)?;
-//! let mut md = Md::new(&system, &Config::default().with_dt(0.005), Backend::Cpu)?;
+//! let mut md = Md::new(system, &Config::default().with_dt(0.005), Backend::Cpu)?;
 //! let e0 = md.diagnostics()?.total;
 //! md.step(100)?;
 //! let d = md.diagnostics()?;
@@ -80,7 +80,7 @@
 //! let table = PairTable::uniform(1, Morse::new(1.0, 4.0, 1.1, 2.5))?;
 //! let system = scenes::fcc_lattice([4; 3], 0.8442, 0.5, table, &[0], 1)?;
 //! // dt from the curvature of the well, 2 alpha^2 D0.
-//! let mut md = Md::new(&system, &Config::default(), Backend::Cpu)?;
+//! let mut md = Md::new(system, &Config::default(), Backend::Cpu)?;
 //! let e0 = md.diagnostics()?.total;
 //! md.step(100)?;
 //! assert!((md.diagnostics()?.total - e0).abs() < 1e-3 * e0.abs());
@@ -124,11 +124,13 @@ pub use law::PairLaw;
 #[cfg(feature = "gpu")]
 pub use law_check::{LawCheck, check_law_on_gpu};
 pub use laws::{
-    BuckCoeff, Buckingham, LennardJones, LjCoeff, MAX_COEFFICIENT, Mie, MieCoeff, Morse,
-    MorseCoeff, Wca, Yukawa, YukawaCoeff,
+    BuckCoeff, Buckingham, LennardJones, LjCoeff, MAX_COEFFICIENT, MIN_CUTOFF, Mie, MieCoeff,
+    Morse, MorseCoeff, Wca, Yukawa, YukawaCoeff,
 };
 pub use sim::Md;
 pub use simkit_backend::particles::State;
-pub use simkit_backend::{Backend, Error, Precision, Real, Restart, Result, Simulation};
+pub use simkit_backend::{
+    Backend, Distributed, Error, Precision, Real, Restart, Result, Simulation,
+};
 pub use table::{MAX_SPECIES, PairTable};
 pub use thermostat::Langevin;

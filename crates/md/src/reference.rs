@@ -82,7 +82,7 @@ pub fn nist_lj_state_point(
         thermostat: Some(Langevin::new(NIST_TEMPERATURE, 1.0, seed)),
         ..Config::default().with_dt(0.005)
     };
-    let mut md = Md::new(&sys, &config, backend)?;
+    let mut md = Md::new(sys, &config, backend)?;
     md.step(equilibrate)?;
     let mut u = Vec::with_capacity(samples as usize);
     for _ in 0..samples {

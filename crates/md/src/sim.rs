@@ -126,7 +126,7 @@ pub(crate) fn decode_checkpoint<L: PairLaw>(bytes: &[u8]) -> Result<Decoded<L>> 
 /// // Two atoms 1.5 sigma apart attract each other.
 /// sys.add_particle(0, [2.0, 3.0, 3.0], [0.0; 3])?;
 /// sys.add_particle(0, [3.5, 3.0, 3.0], [0.0; 3])?;
-/// let mut md = Md::new(&sys, &Config::default(), Backend::Cpu)?;
+/// let mut md = Md::new(sys, &Config::default(), Backend::Cpu)?;
 /// let e0 = md.diagnostics()?.total;
 /// md.step(20)?;
 /// let v = md.state()?.velocities;
@@ -150,21 +150,21 @@ impl<L: PairLaw> Md<L> {
     /// failure (the GPU computes in `f32` whatever [`Config::precision`] says, and refuses
     /// a cell of the neighbour grid, at least `max r_c` wide, holding more particles than
     /// the adapter's loop limit allows: [`Error::Unsupported`]).
-    pub fn new(system: &System<L>, config: &Config, backend: Backend<'_>) -> Result<Self> {
+    pub fn new(system: System<L>, config: &Config, backend: Backend<'_>) -> Result<Self> {
         Self::build(system, config, backend, None)
     }
 
     fn build(
-        system: &System<L>,
+        system: System<L>,
         config: &Config,
         backend: Backend<'_>,
         saved: Option<&Dynamics>,
     ) -> Result<Self> {
-        let dt = config.resolve_dt(system)?;
-        let engine = crate::build::engine_for(system, config, dt, backend, saved)?;
+        let dt = config.resolve_dt(&system)?;
+        let engine = crate::build::engine_for(&system, config, dt, backend, saved)?;
         Ok(Self {
             engine,
-            system: system.clone(),
+            system,
             config: *config,
             dt,
         })
@@ -244,6 +244,6 @@ impl<L: PairLaw> Restart for Md<L> {
                 backend.name()
             )));
         }
-        Self::build(&system, &config, backend, Some(&engine))
+        Self::build(system, &config, backend, Some(&engine))
     }
 }

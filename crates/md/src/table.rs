@@ -3,7 +3,7 @@
 use serde::{Deserialize, Serialize};
 use simkit_backend::{Error, Real, Result};
 
-use crate::{LennardJones, PairLaw};
+use crate::{LennardJones, MAX_COEFFICIENT, PairLaw};
 
 /// Most species a [`PairTable`] holds (the table has `n^2` entries).
 pub const MAX_SPECIES: usize = 256;
@@ -126,7 +126,8 @@ impl<L: PairLaw> PairTable<L> {
 }
 
 /// The law's own checks, then what every backend needs of any law: a cutoff whose square is
-/// a normal `f64` and a finite energy at the cutoff (the shift).
+/// a normal `f64` and an energy at the cutoff (the shift, a coefficient of the `f32` kernels)
+/// within [`MAX_COEFFICIENT`].
 fn check_entry<L: PairLaw>(law: &L, si: usize, sj: usize) -> Result<()> {
     let is_default = std::any::TypeId::of::<L>() == std::any::TypeId::of::<LennardJones>();
     simkit_backend::checkpoint::check_law_name(L::NAME, LennardJones::NAME, is_default)?;
@@ -141,11 +142,14 @@ fn check_entry<L: PairLaw>(law: &L, si: usize, sj: usize) -> Result<()> {
         ));
     }
     let shift = law.energy(rc);
-    if !shift.is_finite() {
+    if !shift.is_finite() || shift.abs() > MAX_COEFFICIENT {
         return Err(Error::invalid(
             format!("{pair} energy at the cutoff"),
             shift,
-            "must be finite (it is the energy shift); move the cutoff out of the law's core",
+            format!(
+                "must be finite and at most {MAX_COEFFICIENT:e} in magnitude (it is the energy \
+                 shift); move the cutoff out of the law's core"
+            ),
         ));
     }
     Ok(())

@@ -41,7 +41,7 @@ fn glam_vectors_and_arrays_build_the_same_system() {
         .unwrap();
     assert_eq!(arrays, vectors);
 
-    let mut md = Md::new(&vectors, &Config::default(), Backend::Cpu).unwrap();
+    let mut md = Md::new(vectors, &Config::default(), Backend::Cpu).unwrap();
     md.step(20).unwrap();
     let s = md.state().unwrap();
     let p = s.positions_dvec3();

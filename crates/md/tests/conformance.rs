@@ -55,7 +55,7 @@ fn walls_2d() -> System {
 }
 
 fn compare<L: PairLaw>(name: &str, sys: &System<L>, config: &Config) -> Result<()> {
-    let mut reference = Md::new(sys, &cpu_f32(config), Backend::Cpu)?;
+    let mut reference = Md::new(sys.clone(), &cpu_f32(config), Backend::Cpu)?;
     let f_ref: Vec<f64> = reference.forces()?.into_iter().flatten().collect();
     let d_ref = reference.diagnostics()?;
     reference.step(40)?;
@@ -75,7 +75,7 @@ fn compare<L: PairLaw>(name: &str, sys: &System<L>, config: &Config) -> Result<(
             gpu_kernel,
             ..*config
         };
-        let mut md = Md::new(sys, &cpu_f32(&config), backend)?;
+        let mut md = Md::new(sys.clone(), &cpu_f32(&config), backend)?;
         let f: Vec<f64> = md.forces()?.into_iter().flatten().collect();
         let d = md.diagnostics()?;
         let ef = max_rel_diff(&f, &f_ref, &f_ref);

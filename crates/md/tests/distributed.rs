@@ -5,6 +5,7 @@
 
 mod decomposed;
 
+use simkit_backend::Distributed;
 use simkit_backend::comm::Comm;
 use simkit_backend::{Backend, Error, Precision, Restart, Simulation};
 use simkit_md::{Config, DistributedMd, Integrator, LennardJones, Md, PairTable, State, scenes};
@@ -34,7 +35,7 @@ fn agrees_with_md_to_rounding_after_100_steps() {
     // pairs in another order than Md (by system index instead of the half list's cell
     // order), so the two differ by rounding only.
     for (name, system, config, steps) in cases() {
-        let mut md = Md::new(&system, &config, Backend::Cpu).expect("md");
+        let mut md = Md::new(system, &config, Backend::Cpu).expect("md");
         md.step(steps).expect("step");
         let bytes = md.checkpoint().expect("checkpoint");
         let mut dist =
@@ -103,7 +104,7 @@ fn long_run_statistics_agree_with_md() {
     let config = Config::default().with_dt(0.005);
     let n = system.particle_count() as f64;
     let md_run = |system: &simkit_md::System| {
-        let mut sim = Md::new(system, &config, Backend::Cpu).expect("md");
+        let mut sim = Md::new(system.clone(), &config, Backend::Cpu).expect("md");
         mean_potential(
             |k| {
                 sim.step(k).expect("step");
@@ -114,7 +115,8 @@ fn long_run_statistics_agree_with_md() {
         )
     };
     let reference = md_run(&system);
-    let mut dist = DistributedMd::new(&system, &config, Comm::serial()).expect("distributed");
+    let mut dist =
+        DistributedMd::new(system.clone(), &config, Comm::serial()).expect("distributed");
     let distributed = mean_potential(
         |k| {
             dist.step(k).expect("step");
@@ -166,7 +168,7 @@ fn same_state(a: &State, b: &State, config: &Config, name: &str) {
 fn checkpoints_move_between_md_and_distributed_md() {
     for (name, system, config, _) in cases() {
         // DistributedMd -> Md: the same state, and Md goes on.
-        let mut dist = DistributedMd::new(&system, &config, Comm::serial()).expect("new");
+        let mut dist = DistributedMd::new(system.clone(), &config, Comm::serial()).expect("new");
         dist.step(60).expect("step");
         let bytes = dist.checkpoint().expect("checkpoint");
         let mut md = Md::<LennardJones>::resume(&bytes, Backend::Cpu).expect("Md resumes it");
@@ -179,7 +181,7 @@ fn checkpoints_move_between_md_and_distributed_md() {
         );
         md.step(10).expect("Md goes on");
         // Md -> DistributedMd: the same state, and both go on to rounding of each other.
-        let mut md = Md::new(&system, &config, Backend::Cpu).expect("md");
+        let mut md = Md::new(system, &config, Backend::Cpu).expect("md");
         md.step(60).expect("step");
         let bytes = md.checkpoint().expect("checkpoint");
         let mut dist =
@@ -198,7 +200,7 @@ fn checkpoints_move_between_md_and_distributed_md() {
     }
     // The file path: written atomically, read back the same.
     let (system, config) = decomposed::lj_liquid();
-    let mut dist = DistributedMd::new(&system, &config, Comm::serial()).expect("new");
+    let mut dist = DistributedMd::new(system, &config, Comm::serial()).expect("new");
     dist.step(30).expect("step");
     let dir = tempfile::tempdir().expect("dir");
     let path = dir.path().join("run.ckpt");
@@ -217,7 +219,7 @@ fn the_check_interval_and_step_splitting_do_not_change_results() {
             check_every,
             ..config
         };
-        let mut sim = DistributedMd::new(&system, &c, Comm::serial()).expect("new");
+        let mut sim = DistributedMd::new(system.clone(), &c, Comm::serial()).expect("new");
         for &k in calls {
             sim.step(k).expect("step");
         }
@@ -235,7 +237,7 @@ fn refuses_what_it_does_not_offer_and_bad_inputs() {
         precision: Precision::F32,
         ..config
     };
-    match DistributedMd::new(&system, &f32, Comm::serial()) {
+    match DistributedMd::new(system.clone(), &f32, Comm::serial()) {
         Err(Error::Unsupported(m)) => assert!(m.contains("Md for f32"), "{m}"),
         other => panic!("expected Unsupported, got {other:?}"),
     }
@@ -244,13 +246,14 @@ fn refuses_what_it_does_not_offer_and_bad_inputs() {
         dt: Some(1.0),
         ..config
     };
-    let e = DistributedMd::new(&system, &bad, Comm::serial()).expect_err("dt over the bound");
+    let e =
+        DistributedMd::new(system.clone(), &bad, Comm::serial()).expect_err("dt over the bound");
     assert!(matches!(e, Error::Unstable { .. }), "{e}");
     let bad = Config {
         skin: f64::NAN,
         ..config
     };
-    let e = DistributedMd::new(&system, &bad, Comm::serial()).expect_err("NaN skin");
+    let e = DistributedMd::new(system.clone(), &bad, Comm::serial()).expect_err("NaN skin");
     assert!(e.to_string().contains("skin"), "{e}");
     // Two atoms on top of each other: the initial check, as Md's.
     let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5)).expect("table");
@@ -265,10 +268,10 @@ fn refuses_what_it_does_not_offer_and_bad_inputs() {
     .expect("system");
     s.add_particle(0, [1.0, 1.0, 1.0], [0.0; 3]).expect("add");
     s.add_particle(0, [1.0, 1.0, 1.0], [0.0; 3]).expect("add");
-    let e = DistributedMd::new(&s, &config, Comm::serial()).expect_err("coincident atoms");
+    let e = DistributedMd::new(s, &config, Comm::serial()).expect_err("coincident atoms");
     assert!(e.to_string().contains("initial state"), "{e}");
     // An f32 or GPU Md checkpoint is another model; garbage is no checkpoint.
-    let mut md = Md::new(&system, &f32, Backend::Cpu).expect("md");
+    let mut md = Md::new(system, &f32, Backend::Cpu).expect("md");
     let bytes = md.checkpoint().expect("checkpoint");
     let e = DistributedMd::<LennardJones>::resume(&bytes, Comm::serial()).expect_err("f32 model");
     assert!(e.to_string().contains("f64"), "{e}");

@@ -123,8 +123,12 @@ fn cell_block_follows_the_per_particle_kernel() -> Result<()> {
     ];
     for backend in gpus(name) {
         for (label, sys, config) in &cases {
-            let mut a = Md::new(sys, &with(GpuKernel::PerParticle, *config), backend)?;
-            let mut b = Md::new(sys, &with(GpuKernel::cell_block(), *config), backend)?;
+            let mut a = Md::new(sys.clone(), &with(GpuKernel::PerParticle, *config), backend)?;
+            let mut b = Md::new(
+                sys.clone(),
+                &with(GpuKernel::cell_block(), *config),
+                backend,
+            )?;
             let fa: Vec<f64> = a.forces()?.into_iter().flatten().collect();
             let fb: Vec<f64> = b.forces()?.into_iter().flatten().collect();
             let ef = simkit_backend::testing::max_rel_diff(&fb, &fa, &fa);
@@ -156,7 +160,7 @@ fn cell_block_runs_are_reproducible() -> Result<()> {
     let config = with(GpuKernel::cell_block(), Config::default().with_dt(0.005));
     for backend in gpus("cell_block_runs_are_reproducible") {
         let run = || -> Result<State> {
-            let mut md = Md::new(&liquid(), &config, backend)?;
+            let mut md = Md::new(liquid(), &config, backend)?;
             md.step(70)?;
             md.step(30)?;
             md.state()
@@ -198,7 +202,7 @@ fn a_full_cell_is_an_error_not_a_lost_particle() -> Result<()> {
         )
     };
     for backend in gpus("a_full_cell_is_an_error_not_a_lost_particle") {
-        let mut md = Md::new(&sys, &config, backend)?;
+        let mut md = Md::new(sys.clone(), &config, backend)?;
         let e = md.step(60).expect_err("8 particles in a cell of 2 slots");
         eprintln!("{e}");
         let text = e.to_string();
@@ -208,7 +212,7 @@ fn a_full_cell_is_an_error_not_a_lost_particle() -> Result<()> {
         let back = md.steps_done();
         assert_eq!(back, 50);
         // The state is the one of a run stepped exactly there.
-        let mut again = Md::new(&sys, &config, backend)?;
+        let mut again = Md::new(sys.clone(), &config, backend)?;
         again.step(back as u32)?;
         assert_eq!(again.state()?, md.state()?);
         // Fewer slots than the fullest initial cell are refused at once.
@@ -217,7 +221,7 @@ fn a_full_cell_is_an_error_not_a_lost_particle() -> Result<()> {
             GpuKernel::CellBlock { slots: Some(1) },
             Config::default().with_dt(0.02),
         );
-        let e = Md::new(&two_in_one, &cfg, backend)
+        let e = Md::new(two_in_one.clone(), &cfg, backend)
             .err()
             .expect("1 slot, 2 particles");
         assert!(e.to_string().contains("fullest cell"), "{e}");
@@ -225,9 +229,9 @@ fn a_full_cell_is_an_error_not_a_lost_particle() -> Result<()> {
             GpuKernel::CellBlock { slots: Some(0) },
             Config::default().with_dt(0.02),
         );
-        assert!(Md::new(&two_in_one, &cfg, backend).is_err());
+        assert!(Md::new(two_in_one, &cfg, backend).is_err());
         // The per-particle kernel has no capacity.
-        let mut pp = Md::new(&sys, &with(GpuKernel::PerParticle, config), backend)?;
+        let mut pp = Md::new(sys.clone(), &with(GpuKernel::PerParticle, config), backend)?;
         pp.step(60)?;
     }
     Ok(())
@@ -249,7 +253,7 @@ fn a_particle_jumping_over_a_cell_is_a_blow_up() -> Result<()> {
         ..with(GpuKernel::cell_block(), Config::default().with_dt(0.02))
     };
     for backend in gpus("a_particle_jumping_over_a_cell_is_a_blow_up") {
-        let mut md = Md::new(&sys, &config, backend)?;
+        let mut md = Md::new(sys.clone(), &config, backend)?;
         let e = md
             .step(20)
             .expect_err("6 length units per step, cells 2.5 wide");
@@ -306,7 +310,7 @@ fn cell_block_restart_is_bit_exact() {
         for (label, system, config) in cases {
             let steps = if label.contains("odd") { 37 } else { 60 };
             check_restart(name, label, backend, steps, |b| {
-                Md::new(&system(), &config, b)
+                Md::new(system(), &config, b)
             });
         }
     }
@@ -325,7 +329,7 @@ fn a_cell_block_blow_up_is_rolled_back() -> Result<()> {
         ..with(GpuKernel::cell_block(), Config::default().with_dt(0.03))
     };
     for backend in gpus("a_cell_block_blow_up_is_rolled_back") {
-        let mut md = Md::new(&sys, &config, backend)?;
+        let mut md = Md::new(sys.clone(), &config, backend)?;
         let Err(Error::BlowUp {
             step,
             rolled_back_to,
@@ -339,7 +343,7 @@ fn a_cell_block_blow_up_is_rolled_back() -> Result<()> {
         assert!(rolled_back_to > 10 && rolled_back_to % 10 == 0);
         assert!(step > rolled_back_to && step <= rolled_back_to + 10);
         assert_eq!(md.steps_done(), rolled_back_to);
-        let mut again = Md::new(&sys, &config, backend)?;
+        let mut again = Md::new(sys.clone(), &config, backend)?;
         again.step(rolled_back_to as u32 - 7)?;
         again.step(7)?;
         assert_eq!(again.state()?, md.state()?);

@@ -22,7 +22,7 @@ fn unstable() -> Config {
 #[test]
 fn a_step_over_the_bound_is_refused_unless_allowed() -> Result<()> {
     let sys = liquid()?;
-    let e = Md::new(&sys, &Config::default().with_dt(0.08), Backend::Cpu)
+    let e = Md::new(sys.clone(), &Config::default().with_dt(0.08), Backend::Cpu)
         .err()
         .unwrap();
     match e {
@@ -33,7 +33,7 @@ fn a_step_over_the_bound_is_refused_unless_allowed() -> Result<()> {
         }
         other => panic!("{other}"),
     }
-    Md::new(&sys, &unstable(), Backend::Cpu)?;
+    Md::new(sys, &unstable(), Backend::Cpu)?;
     Ok(())
 }
 
@@ -41,7 +41,7 @@ fn a_step_over_the_bound_is_refused_unless_allowed() -> Result<()> {
 fn a_blow_up_is_reported_and_rolled_back_to_the_last_good_check() -> Result<()> {
     let sys = liquid()?;
     for backend in backends("a_blow_up_is_reported_and_rolled_back_to_the_last_good_check") {
-        let mut md = Md::new(&sys, &unstable(), backend)?;
+        let mut md = Md::new(sys.clone(), &unstable(), backend)?;
         let e = md.step(2000).expect_err("dt = 0.03 must blow up");
         let Error::BlowUp {
             step,
@@ -70,7 +70,7 @@ fn a_blow_up_is_reported_and_rolled_back_to_the_last_good_check() -> Result<()> 
                 .all(|x| x.is_finite())
         );
         // The same run stepped exactly to that step has the same bits.
-        let mut again = Md::new(&sys, &unstable(), backend)?;
+        let mut again = Md::new(sys.clone(), &unstable(), backend)?;
         again.step(rolled_back_to as u32)?;
         assert_eq!(again.state()?, s);
         let d = md.diagnostics()?;
@@ -90,7 +90,7 @@ fn the_check_does_not_perturb_a_stable_run() -> Result<()> {
                 check_every,
                 ..Config::default().with_dt(0.005)
             };
-            let mut md = Md::new(&sys, &config, backend)?;
+            let mut md = Md::new(sys.clone(), &config, backend)?;
             md.step(137)?;
             md.step(63)?;
             md.state()
@@ -108,7 +108,7 @@ fn particles_on_top_of_each_other_are_refused() -> Result<()> {
     let mut sys = System::new(Dim::Three, [0.0; 3], [10.0; 3], [true; 3], vec![1.0], table)?;
     sys.add_particle(0, [1.0, 1.0, 1.0], [0.0; 3])?;
     sys.add_particle(0, [1.0, 1.0, 1.0], [0.0; 3])?;
-    let e = Md::new(&sys, &Config::default(), Backend::Cpu)
+    let e = Md::new(sys, &Config::default(), Backend::Cpu)
         .err()
         .unwrap();
     assert!(e.to_string().contains("initial state"), "{e}");
@@ -132,7 +132,7 @@ fn a_particle_thrown_through_a_closed_box_is_a_blow_up() -> Result<()> {
         check_every: 5,
         ..Config::default().with_dt(0.01)
     };
-    let mut md = Md::new(&sys, &config, Backend::Cpu)?;
+    let mut md = Md::new(sys, &config, Backend::Cpu)?;
     let e = md.step(20).err().unwrap();
     assert!(
         matches!(
@@ -156,7 +156,9 @@ fn both_backends_refuse_the_same_initial_states() -> Result<()> {
     sys.add_particle(0, [1.0, 1.0, 1.0], [0.0; 3])?;
     sys.add_particle(0, [1.0, 1.0, 1.0], [0.0; 3])?;
     for backend in backends("both_backends_refuse_the_same_initial_states") {
-        let e = Md::new(&sys, &Config::default(), backend).err().unwrap();
+        let e = Md::new(sys.clone(), &Config::default(), backend)
+            .err()
+            .unwrap();
         assert!(e.to_string().contains("initial state"), "{e}");
     }
     Ok(())
@@ -173,15 +175,15 @@ fn a_thermostatted_blow_up_rolls_back_the_random_stream_too() -> Result<()> {
         ..unstable()
     };
     for backend in backends("a_thermostatted_blow_up_rolls_back_the_random_stream_too") {
-        let mut md = Md::new(&sys, &config, backend)?;
+        let mut md = Md::new(sys.clone(), &config, backend)?;
         let Err(Error::BlowUp { rolled_back_to, .. }) = md.step(3000) else {
             panic!("dt = 0.03 must blow up with the thermostat too")
         };
         assert!(rolled_back_to > 10);
         // Continue 2 steps from the rolled-back state (the blow-up itself comes later).
-        let mut fresh = Md::new(&sys, &config, backend)?;
+        let mut fresh = Md::new(sys.clone(), &config, backend)?;
         fresh.step(rolled_back_to as u32 - 10)?;
-        let mut again = Md::new(&sys, &config, backend)?;
+        let mut again = Md::new(sys.clone(), &config, backend)?;
         again.step(rolled_back_to as u32)?;
         assert_eq!(again.state()?, md.state()?, "{}", md.backend_name());
         md.step(2)?;
@@ -215,7 +217,7 @@ fn an_overflowing_kinetic_energy_is_a_blow_up() -> Result<()> {
         check_every: 1,
         ..Config::default()
     };
-    let mut md = Md::new(&sys, &config, Backend::Cpu)?;
+    let mut md = Md::new(sys, &config, Backend::Cpu)?;
     let e = md
         .step(10)
         .expect_err("the kinetic energy overflows at step 5");

@@ -101,7 +101,7 @@ fn compare_with<L: PairLaw>(
         table,
     )?;
     sys.set_particles(&r.types, &r.pos, &r.vel)?;
-    let mut md = Md::new(&sys, config, Backend::Cpu)?;
+    let mut md = Md::new(sys.clone(), config, Backend::Cpu)?;
     let f = md.forces()?;
     let scale = r
         .force
@@ -168,7 +168,7 @@ fn single_precision_forces_match_lammps_to_f32_rounding() -> Result<()> {
         precision: simkit_backend::Precision::F32,
         ..Config::default()
     };
-    let mut md = Md::new(&sys, &config, Backend::Cpu)?;
+    let mut md = Md::new(sys, &config, Backend::Cpu)?;
     let f: Vec<f64> = md.forces()?.into_iter().flatten().collect();
     let want: Vec<f64> = r.force.iter().flatten().copied().collect();
     let err = simkit_backend::testing::max_rel_diff(&f, &want, &want);

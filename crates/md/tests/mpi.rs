@@ -25,7 +25,7 @@ fn cases(comm: &Comm) -> Result<usize, String> {
         skin: if comm.rank() == last { -1.0 } else { 0.3 },
         ..Config::default()
     };
-    match DistributedMd::new(&system, &config, comm.clone()) {
+    match DistributedMd::new(system, &config, comm.clone()) {
         Err(e) if comm.rank() == last && e.to_string().contains("skin") => Ok(n + 1),
         Err(e) if e.to_string().contains(&format!("inputs of rank {last}")) => Ok(n + 1),
         other => Err(format!(

@@ -49,7 +49,7 @@ fn energy_error<L: PairLaw>(sys: &System<L>, integrator: Integrator, dt: f64) ->
         integrator,
         ..Config::default().with_dt(dt)
     };
-    let mut md = Md::new(sys, &config, Backend::Cpu)?;
+    let mut md = Md::new(sys.clone(), &config, Backend::Cpu)?;
     let e0 = md.diagnostics()?.total;
     let per_sample = (0.04 / dt).round() as u32;
     let mut worst = 0.0f64;
@@ -102,7 +102,7 @@ fn the_two_integrators_follow_the_same_trajectory() -> Result<()> {
             integrator,
             ..Config::default().with_dt(0.002)
         };
-        let mut md = Md::new(&sys, &config, Backend::Cpu)?;
+        let mut md = Md::new(sys.clone(), &config, Backend::Cpu)?;
         md.step(300)?;
         md.state()
     };
@@ -132,7 +132,7 @@ fn a_particle_reflects_off_a_closed_wall_with_its_speed() -> Result<()> {
         table,
     )?;
     sys.add_particle(0, [9.0, 5.0, 5.0], [2.0, 0.5, 0.0])?;
-    let mut md = Md::new(&sys, &Config::default().with_dt(0.01), Backend::Cpu)?;
+    let mut md = Md::new(sys, &Config::default().with_dt(0.01), Backend::Cpu)?;
     md.step(100)?; // 2 units of travel along x: 1 to the wall at x = 10, 1 back
     let s = md.state()?;
     assert!(
@@ -158,7 +158,7 @@ fn periodic_wrap_and_skin_change_the_trajectory_by_rounding_only() -> Result<()>
             skin,
             ..Config::default().with_dt(0.005)
         };
-        let mut md = Md::new(&sys, &config, Backend::Cpu)?;
+        let mut md = Md::new(sys.clone(), &config, Backend::Cpu)?;
         md.step(200)?;
         md.state()
     };
@@ -204,7 +204,7 @@ fn cpu_results_do_not_depend_on_the_thread_count() -> Result<()> {
                 .build()
                 .map_err(|e| simkit_backend::Error::Unsupported(e.to_string()))?;
             pool.install(|| {
-                let mut md = Md::new(&sys, &config, Backend::Cpu)?;
+                let mut md = Md::new(sys.clone(), &config, Backend::Cpu)?;
                 md.step(60)?;
                 Ok((md.state()?, md.forces()?, md.diagnostics()?.total))
             })
@@ -251,7 +251,7 @@ fn two_dimensional_runs_conserve_energy_and_momentum() -> Result<()> {
         shift: true,
         ..Config::default().with_dt(0.002)
     };
-    let mut md = Md::new(&sys, &config, Backend::Cpu)?;
+    let mut md = Md::new(sys, &config, Backend::Cpu)?;
     let d0 = md.diagnostics()?;
     let p0: [f64; 2] =
         std::array::from_fn(|d| md.state().unwrap().velocities.iter().map(|v| v[d]).sum());
@@ -284,7 +284,7 @@ fn the_shift_moves_the_energy_by_phi_at_the_cutoff_per_pair() -> Result<()> {
             shift,
             ..Config::default()
         };
-        Md::new(&sys, &config, Backend::Cpu)?
+        Md::new(sys.clone(), &config, Backend::Cpu)?
             .diagnostics()
             .map(|d| d.potential)
     };
@@ -298,7 +298,7 @@ fn the_shift_moves_the_energy_by_phi_at_the_cutoff_per_pair() -> Result<()> {
 #[test]
 fn species_temperatures_and_default_dt() -> Result<()> {
     let sys = scenes::three_phase_mix([6; 3], 0.4, 1.0, 5)?;
-    let md = Md::new(&sys, &Config::default(), Backend::Cpu)?;
+    let md = Md::new(sys.clone(), &Config::default(), Backend::Cpu)?;
     // The stiffest pair is gas-gas (sigma 0.5, purely repulsive, reduced mass 1/2).
     let g = simkit_md::time_step_guide(&sys).unwrap();
     assert_eq!(g.pair, (0, 0));
@@ -333,7 +333,7 @@ fn the_lj_melt_scene_is_lammps_in_lj() -> Result<()> {
         0.8442,
         epsilon = 1e-12
     );
-    let mut md = Md::new(&sys, &Config::default().with_dt(0.005), Backend::Cpu)?;
+    let mut md = Md::new(sys, &Config::default().with_dt(0.005), Backend::Cpu)?;
     let d = md.diagnostics()?;
     // T = 2 K / (3N - 3) = 1.44 exactly as drawn. Step 0 of LAMMPS's bench/in.lj (29 Sep
     // 2021, `thermo_modify format float %.10g`, `run 0`): E_pair = -6.773368053,

@@ -13,7 +13,7 @@ fn liquid() -> Result<System> {
 }
 
 fn run(sys: &System, config: &Config, steps: u32) -> Result<(State, f64)> {
-    let mut md = Md::new(sys, config, Backend::Cpu)?;
+    let mut md = Md::new(sys.clone(), config, Backend::Cpu)?;
     md.step(steps)?;
     Ok((md.state()?, md.diagnostics()?.total))
 }
@@ -70,8 +70,8 @@ fn the_listing_order_changes_results_only_by_rounding() -> Result<()> {
         assert_eq!(b.species, mixed.species());
         assert_eq!(back.species, sys.species());
         // The forces come back in the system's order too.
-        let f = unshuffle(&idx, &Md::new(&mixed, &config, Backend::Cpu)?.forces()?);
-        let g = Md::new(&sys, &config, Backend::Cpu)?.forces()?;
+        let f = unshuffle(&idx, &Md::new(mixed, &config, Backend::Cpu)?.forces()?);
+        let g = Md::new(sys, &config, Backend::Cpu)?.forces()?;
         let df = f
             .iter()
             .flatten()
@@ -102,7 +102,7 @@ fn a_blow_up_rolls_back_bit_for_bit() -> Result<()> {
         check_every: 10,
         ..Config::default().with_dt(0.03)
     };
-    let mut md = Md::new(&sys, &config, Backend::Cpu)?;
+    let mut md = Md::new(sys.clone(), &config, Backend::Cpu)?;
     let Err(Error::BlowUp {
         rolled_back_to,
         what,
@@ -112,7 +112,7 @@ fn a_blow_up_rolls_back_bit_for_bit() -> Result<()> {
         panic!("dt = 0.03 must blow up")
     };
     assert!(what.contains("particle"), "{what}");
-    let mut again = Md::new(&sys, &config, Backend::Cpu)?;
+    let mut again = Md::new(sys, &config, Backend::Cpu)?;
     again.step(rolled_back_to as u32)?;
     assert_eq!(again.state()?, md.state()?);
     // The rolled-back run goes on as the fresh one, to the same blow-up if there is one

@@ -4,13 +4,13 @@
 //! reproducible: each runner uses a fixed ChaCha seed (`SEED`) and no failure persistence,
 //! so a failure shows the same case on every run.
 
+use simkit_backend::Distributed;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use proptest::prelude::*;
-use proptest::test_runner::{
-    Config as RunnerConfig, RngAlgorithm, TestCaseError, TestRng, TestRunner,
-};
+use proptest::test_runner::TestCaseError;
 use simkit_backend::comm::Comm;
+use simkit_backend::testing::robust::{self, awkward_f64, clear};
 use simkit_backend::{Backend, Error, Precision, Restart, Simulation};
 use simkit_md::{
     Config, Dim, DistributedMd, GpuKernel, Integrator, Langevin, LennardJones, Md, PairTable,
@@ -19,41 +19,9 @@ use simkit_md::{
 
 const SEED: [u8; 32] = *b"simkit-md robustness seed 2026!!";
 
-fn run<S: Strategy>(cases: u32, strategy: S, test: impl Fn(S::Value) -> Result<(), TestCaseError>) {
-    let config = RunnerConfig {
-        cases,
-        failure_persistence: None,
-        ..RunnerConfig::default()
-    };
-    let mut runner =
-        TestRunner::new_with_rng(config, TestRng::from_seed(RngAlgorithm::ChaCha, &SEED));
-    if let Err(e) = runner.run(&strategy, test) {
-        panic!("{e}");
-    }
-}
-
-/// Any f64, with the awkward ones often.
-fn num() -> impl Strategy<Value = f64> {
-    prop_oneof![
-        Just(f64::NAN),
-        Just(f64::INFINITY),
-        Just(f64::NEG_INFINITY),
-        Just(0.0),
-        Just(-0.0),
-        Just(1e300),
-        Just(-1e300),
-        Just(1e-300),
-        Just(f64::MIN_POSITIVE),
-        Just(1e35),
-        -10.0..10.0f64,
-        0.0..2.0f64,
-        any::<f64>(),
-    ]
-}
-
 /// Mostly sensible positive values, sometimes anything.
 fn pos_num(lo: f64, hi: f64) -> impl Strategy<Value = f64> {
-    prop_oneof![3 => lo..hi, 1 => num()]
+    prop_oneof![3 => lo..hi, 1 => awkward_f64()]
 }
 
 fn params() -> impl Strategy<Value = LennardJones> {
@@ -65,12 +33,6 @@ fn params() -> impl Strategy<Value = LennardJones> {
         pos_num(0.5, 3.0),
     )
         .prop_map(|(eps, sigma, a, b, r_c)| LennardJones::weighted(eps, sigma, a, b, r_c))
-}
-
-/// An error must say something (the name and the fix).
-fn clear(e: &Error) -> Result<(), TestCaseError> {
-    prop_assert!(e.to_string().len() > 20, "unclear error: {e}");
-    Ok(())
 }
 
 fn finite_state(md: &mut Md) -> Result<(), TestCaseError> {
@@ -88,7 +50,8 @@ fn finite_state(md: &mut Md) -> Result<(), TestCaseError> {
 
 #[test]
 fn pair_tables_accept_valid_entries_and_refuse_the_rest() {
-    run(
+    robust::run(
+        &SEED,
         3000,
         (0usize..5, 0usize..5, 0usize..5, params(), params()),
         |(n, i, j, p, q)| {
@@ -126,7 +89,8 @@ fn vec3() -> impl Strategy<Value = [f64; 3]> {
 
 #[test]
 fn systems_refuse_bad_boxes_masses_and_particles() {
-    run(
+    robust::run(
+        &SEED,
         3000,
         (
             dim(),
@@ -205,7 +169,8 @@ fn system(
 fn runs_step_to_a_finite_state_or_a_clear_error() {
     let stepped = AtomicUsize::new(0);
     let blown = AtomicUsize::new(0);
-    run(
+    robust::run(
+        &SEED,
         2500,
         (
             dim(),
@@ -261,7 +226,7 @@ fn runs_step_to_a_finite_state_or_a_clear_error() {
                 allow_unstable_dt: allow,
                 thermostat: thermostat.map(|(t, g, seed)| Langevin::new(t, g, seed)),
             };
-            let mut md = match Md::new(&sys, &config, Backend::Cpu) {
+            let mut md = match Md::new(sys, &config, Backend::Cpu) {
                 Ok(m) => m,
                 Err(e) => return clear(&e),
             };
@@ -300,7 +265,8 @@ fn runs_step_to_a_finite_state_or_a_clear_error() {
 #[test]
 fn distributed_runs_step_to_a_finite_state_or_a_clear_error() {
     let stepped = AtomicUsize::new(0);
-    run(
+    robust::run(
+        &SEED,
         1500,
         (
             dim(),
@@ -352,9 +318,9 @@ fn distributed_runs_step_to_a_finite_state_or_a_clear_error() {
                 allow_unstable_dt: allow,
                 thermostat: thermostat.map(|(t, g, seed)| Langevin::new(t, g, seed)),
             };
-            let made = DistributedMd::new(&sys, &config, Comm::serial());
+            let made = DistributedMd::new(sys.clone(), &config, Comm::serial());
             if precision == Precision::F64 {
-                let md = Md::new(&sys, &config, Backend::Cpu);
+                let md = Md::new(sys, &config, Backend::Cpu);
                 prop_assert_eq!(
                     md.is_ok(),
                     made.is_ok(),
@@ -417,7 +383,8 @@ fn gpu_runs_step_to_a_finite_state_or_a_clear_error() {
         return;
     };
     // A small set: every case builds GPU kernels.
-    run(
+    robust::run(
+        &SEED,
         60,
         (
             params(),
@@ -461,7 +428,7 @@ fn gpu_runs_step_to_a_finite_state_or_a_clear_error() {
                 check_every: 7,
                 ..Config::default()
             };
-            let mut md = match Md::new(&sys, &config, Backend::Gpu(ctx)) {
+            let mut md = match Md::new(sys, &config, Backend::Gpu(ctx)) {
                 Ok(m) => m,
                 Err(e) => return clear(&e),
             };
@@ -488,11 +455,12 @@ fn garbled_and_truncated_checkpoints_are_refused() {
         1,
     )
     .unwrap();
-    let mut md = Md::new(&sys, &Config::default(), Backend::Cpu).unwrap();
+    let mut md = Md::new(sys, &Config::default(), Backend::Cpu).unwrap();
     md.step(5).unwrap();
     let bytes = md.checkpoint().unwrap();
     let n = bytes.len();
-    run(
+    robust::run(
+        &SEED,
         2000,
         (0..n, 0..n, any::<u8>(), any::<bool>()),
         |(cut, at, x, truncate)| {
@@ -534,7 +502,8 @@ fn cells() -> impl Strategy<Value = usize> {
 
 #[test]
 fn lattices_refuse_bad_sizes_before_allocating() {
-    run(
+    robust::run(
+        &SEED,
         1000,
         (
             [cells(), cells(), cells()],

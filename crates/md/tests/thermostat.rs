@@ -49,7 +49,7 @@ fn kinetic_temperature_relaxes_to_the_target_per_species_and_per_axis() -> Resul
         thermostat: Some(Langevin::new(2.0, 1.0, 2024)),
         ..Config::default().with_dt(0.005)
     };
-    let mut md = Md::new(&sys, &config, Backend::Cpu)?;
+    let mut md = Md::new(sys, &config, Backend::Cpu)?;
     md.step(1000)?;
     // samples[species][axis]
     let mut samples = vec![vec![Vec::new(); 3]; 2];
@@ -112,7 +112,7 @@ fn configurational_temperature_matches_the_target() -> Result<()> {
         thermostat: Some(Langevin::new(1.0, 1.0, 77)),
         ..Config::default().with_dt(0.004)
     };
-    let mut md = Md::new(&sys, &config, Backend::Cpu)?;
+    let mut md = Md::new(sys, &config, Backend::Cpu)?;
     md.step(1000)?;
     let (mut num, mut den) = (Vec::new(), Vec::new());
     for _ in 0..300 {
@@ -170,7 +170,7 @@ fn frozen_particles_do_not_move_bit_for_bit() -> Result<()> {
                 thermostat,
                 ..Config::default().with_dt(0.005)
             };
-            let mut md = Md::new(&sys, &config, backend)?;
+            let mut md = Md::new(sys.clone(), &config, backend)?;
             let x0 = md.state()?.positions;
             md.step(150)?;
             let s = md.state()?;
@@ -233,7 +233,7 @@ fn mobile_momentum_changes_only_through_forces_from_frozen_particles() -> Result
         let mut sys = free.clone();
         sys.set_frozen(1, true)?;
         let dt = 0.005;
-        let mut md = Md::new(&sys, &Config::default().with_dt(dt), Backend::Cpu)?;
+        let mut md = Md::new(sys.clone(), &Config::default().with_dt(dt), Backend::Cpu)?;
         let species = sys.species().to_vec();
         let mut p = mobile_momentum(&mut md, 1)?;
         let mut f = mobile_force(&mut md, &species, 1)?;
@@ -247,7 +247,7 @@ fn mobile_momentum_changes_only_through_forces_from_frozen_particles() -> Result
             let s = md.state()?;
             let mut twin = free.clone();
             twin.set_particles(&s.species, &s.positions, &s.velocities)?;
-            let mut twin_md = Md::new(&twin, &Config::default().with_dt(dt), Backend::Cpu)?;
+            let mut twin_md = Md::new(twin, &Config::default().with_dt(dt), Backend::Cpu)?;
             let on_frozen: [f64; 3] = {
                 let mut g = [0.0; 3];
                 for (h, &k) in twin_md.forces()?.iter().zip(&species) {
@@ -302,7 +302,7 @@ fn bad_thermostat_settings_and_species_are_refused() -> Result<()> {
                 thermostat: Some(l),
                 ..Config::default()
             };
-            let e = Md::new(&sys, &config, Backend::Cpu).err().unwrap();
+            let e = Md::new(sys.clone(), &config, Backend::Cpu).err().unwrap();
             assert!(e.to_string().contains("thermostat"), "{e}");
         }
         assert!(sys.set_species_langevin(0, Some([bad, 1.0])).is_err());
@@ -319,7 +319,7 @@ fn bad_thermostat_settings_and_species_are_refused() -> Result<()> {
         thermostat: Some(Langevin::new(0.0, 1.0, 0)),
         ..Config::default()
     };
-    let mut md = Md::new(&sys, &config, Backend::Cpu)?;
+    let mut md = Md::new(sys, &config, Backend::Cpu)?;
     let x0 = md.state()?.positions;
     md.step(10)?;
     assert_eq!(md.state()?.positions, x0);

@@ -89,7 +89,7 @@ pub use grid::{CELL_MARGIN, CellGrid, MAX_CELLS, OutOfBox, wrap_periodic};
 pub use linked::{EMPTY, LinkedCells};
 pub use neighbors::Neighbors;
 pub use rank::{Finding, Parts, RECORD, RankParticles, Record};
-pub use run::{ByDim, DistributedRun, RankRun, RankView, agree_inputs};
+pub use run::{ByDim, DistributedRun, RankRun, RankView};
 pub use search::{NeighborLists, NeighborSearch};
 pub use sorted::SortedCells;
 pub use stencil::{HALF_SHELL_2D, HALF_SHELL_3D};

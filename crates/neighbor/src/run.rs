@@ -1,9 +1,7 @@
 //! [`DistributedRun`]: the model-independent half of a distributed particle run (the
 //! communicator, the engine of the system's dimension, the gathers of the state and of
-//! the checkpoint record, the input agreement), shared by `dem`'s and `md`'s distributed
+//! the checkpoint record), shared by `dem`'s and `md`'s distributed
 //! types.
-
-use std::hash::{Hash, Hasher};
 
 use simkit_backend::Result;
 use simkit_backend::comm::Comm;
@@ -150,15 +148,6 @@ impl<A: RankRun, B: RankRun> DistributedRun<A, B> {
         self.comm.broadcast_from_root(bytes)
     }
 
-    /// Writes `bytes` (the same on every rank) to `path` from rank 0, atomically.
-    /// Collective.
-    ///
-    /// Errors: a failed write (on every rank).
-    pub fn write_from_root(&self, path: &std::path::Path, bytes: &[u8]) -> Result<()> {
-        let mine = self.comm.is_root().then_some(bytes);
-        self.comm.write_from_root(path, mine)
-    }
-
     /// The standard `Debug` fields of a distributed type named `name`.
     pub fn debug(&self, f: &mut std::fmt::Formatter<'_>, name: &str) -> std::fmt::Result {
         let v = self.view();
@@ -171,31 +160,12 @@ impl<A: RankRun, B: RankRun> DistributedRun<A, B> {
     }
 }
 
-/// Checks that every rank passed the same inputs: `encoded` (the inputs as a checkpoint
-/// stores them, with the state when resuming) hashed and compared across ranks. Collective.
-///
-/// Errors: ranks whose inputs differ, named with `what`.
-pub fn agree_inputs(comm: &Comm, encoded: &[u8], what: &str) -> Result<()> {
-    let mut h = std::collections::hash_map::DefaultHasher::new();
-    encoded.hash(&mut h);
-    comm.check_same(
-        h.finish(),
-        what,
-        "every rank must pass the same inputs and configuration (or checkpoint)",
-    )
-}
-
 /// The accessors every distributed particle type offers, for an `impl` block of a type
-/// with a field `run: DistributedRun<_, _>` and a method `checkpoint(&mut self) ->
-/// Result<Vec<u8>>`.
+/// with a field `run: DistributedRun<_, _>` (the communicator and the checkpoint are the
+/// type's `simkit_backend::Distributed` implementation).
 #[macro_export]
 macro_rules! distributed_accessors {
     () => {
-        /// The communicator.
-        pub fn comm(&self) -> &simkit_backend::comm::Comm {
-            self.run.comm()
-        }
-
         /// The time step in use.
         pub fn dt(&self) -> f64 {
             self.run.dt()
@@ -236,17 +206,6 @@ macro_rules! distributed_accessors {
         /// was made (the start counts one, a resume too).
         pub fn list_builds(&self) -> u64 {
             self.run.view().builds
-        }
-
-        /// Writes the checkpoint to `path` from rank 0, atomically. Collective.
-        ///
-        /// Errors: a failed exchange or write (on every rank).
-        pub fn write_checkpoint(
-            &mut self,
-            path: impl AsRef<std::path::Path>,
-        ) -> simkit_backend::Result<()> {
-            let bytes = self.checkpoint()?;
-            self.run.write_from_root(path.as_ref(), &bytes)
         }
     };
 }

@@ -15,7 +15,7 @@
 use std::collections::BTreeMap;
 
 use proptest::prelude::*;
-use proptest::test_runner::{RngAlgorithm, RngSeed};
+use simkit_backend::testing::robust::{self, awkward_f64, mostly};
 use simkit_backend::{Backend, Error, Real};
 use simkit_neighbor::{
     BlockedHalfList, BruteForce, CellGrid, Config, LinkedCells, ListKind, MAX_CELLS, NeighborLists,
@@ -28,56 +28,6 @@ const SEED: u64 = 0x5eed_0f0e_19b0;
 /// Grids with more cells are checked as grids but not searched (a traversal visits every
 /// cell; the generated boxes have at most 15^3 cells unless a wild value makes them huge).
 const MAX_SEARCH_CELLS: usize = 4096;
-
-/// `cases` cases from the fixed seed, no failure persistence (the seed reproduces).
-fn config(cases: u32) -> ProptestConfig {
-    ProptestConfig {
-        cases,
-        rng_algorithm: RngAlgorithm::ChaCha,
-        rng_seed: RngSeed::Fixed(SEED),
-        failure_persistence: None,
-        ..ProptestConfig::default()
-    }
-}
-
-/// Special values (NaN, infinities, zeros, extremes, subnormals, values around the limits of
-/// a square) and ordinary ones.
-fn wild_f64() -> impl Strategy<Value = f64> {
-    prop_oneof![
-        3 => prop::sample::select(vec![
-            f64::NAN,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            0.0,
-            -0.0,
-            -1.0,
-            1.0,
-            f64::MAX,
-            f64::MIN,
-            f64::MIN_POSITIVE,
-            -f64::MIN_POSITIVE,
-            5e-324,
-            1e-300,
-            -1e-300,
-            1e-160,
-            1e-154,
-            1e154,
-            2e154,
-            1e300,
-            -1e300,
-            1e16,
-            -1e16,
-            f64::EPSILON,
-        ]),
-        2 => -20.0..20.0f64,
-        1 => any::<f64>(),
-    ]
-}
-
-/// Mostly `usual`, sometimes a wild value.
-fn mostly(usual: std::ops::Range<f64>) -> impl Strategy<Value = f64> {
-    prop_oneof![8 => usual, 1 => wild_f64()]
-}
 
 /// Indices and counts: small ones, and the values around the limits of `u32` and `usize`.
 fn wild_usize() -> impl Strategy<Value = usize> {
@@ -138,7 +88,7 @@ fn tame_coord() -> impl Strategy<Value = Coord> {
 }
 
 fn any_coord() -> impl Strategy<Value = Coord> {
-    prop_oneof![3 => tame_coord(), 1 => wild_f64().prop_map(Coord::Raw)]
+    prop_oneof![3 => tame_coord(), 1 => awkward_f64().prop_map(Coord::Raw)]
 }
 
 /// Particles: a quarter of the cases may hold wild coordinates (and closed-axis excursions).
@@ -537,7 +487,7 @@ fn grid_inputs() -> impl Strategy<Value = GridInput> {
 }
 
 proptest! {
-    #![proptest_config(config(5000))]
+    #![proptest_config(robust::config(SEED, 5000))]
 
     #[test]
     fn grids_and_searches_2d(((o, l, per, cutoff, clamp), p, (skin, kind, kernel), (probes, moves)) in grid_inputs()) {
@@ -559,7 +509,7 @@ proptest! {
 }
 
 proptest! {
-    #![proptest_config(config(5000))]
+    #![proptest_config(robust::config(SEED, 5000))]
 
     /// `NeighborLists::from_pairs` with any count and pairs, and hand-built lists whose
     /// public fields are anything.
@@ -799,7 +749,7 @@ fn blocked_inputs() -> impl Strategy<Value = BlockedInput> {
 }
 
 proptest! {
-    #![proptest_config(config(3000))]
+    #![proptest_config(robust::config(SEED, 3000))]
 
     #[test]
     fn blocked_half_list_f64((b, n, p, parallel, probes) in blocked_inputs()) {

@@ -19,8 +19,8 @@ use std::path::{Path, PathBuf};
 
 use image::{AnimationDecoder, Rgb, RgbImage};
 use proptest::prelude::*;
-use proptest::test_runner::{RngAlgorithm, RngSeed};
 use simkit_backend::Error;
+use simkit_backend::testing::robust::{self, awkward_f64, mostly};
 use simkit_output::colormap::{Colormap, NAN_COLOR, luminance};
 use simkit_output::csv::{CsvWriter, write_csv};
 use simkit_output::gif::{GifWriter, MAX_DELAY_MS, write_gif};
@@ -33,49 +33,6 @@ use simkit_output::{numfmt, png};
 
 /// The seed of every property in this file.
 const SEED: u64 = 0x5eed_0070_7075;
-
-/// `cases` cases from the fixed seed, no failure persistence (the seed reproduces).
-fn config(cases: u32) -> ProptestConfig {
-    ProptestConfig {
-        cases,
-        rng_algorithm: RngAlgorithm::ChaCha,
-        rng_seed: RngSeed::Fixed(SEED),
-        failure_persistence: None,
-        ..ProptestConfig::default()
-    }
-}
-
-/// Special values (NaN, infinities, zeros, extremes, subnormals) and ordinary ones.
-fn wild_f64() -> impl Strategy<Value = f64> {
-    prop_oneof![
-        3 => prop::sample::select(vec![
-            f64::NAN,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            0.0,
-            -0.0,
-            -1.0,
-            1.0,
-            f64::MAX,
-            f64::MIN,
-            f64::MIN_POSITIVE,
-            5e-324,
-            -5e-324,
-            1e-300,
-            1e300,
-            -1e300,
-            1e16,
-            0.1,
-        ]),
-        2 => -20.0..20.0f64,
-        1 => any::<f64>(),
-    ]
-}
-
-/// Mostly ordinary values in `usual`, sometimes wild ones.
-fn mostly(usual: std::ops::Range<f64>) -> impl Strategy<Value = f64> {
-    prop_oneof![6 => usual, 1 => wild_f64()]
-}
 
 /// Grid sizes: small ones, and the values around the limits of `u32` and `usize`.
 fn size() -> impl Strategy<Value = usize> {
@@ -133,7 +90,7 @@ fn heatmap_options() -> impl Strategy<Value = HeatmapOptions> {
         prop::sample::select(vec![Colormap::Viridis, Colormap::Diverging, Colormap::Gray]),
         prop::option::weighted(
             0.3,
-            prop_oneof![(-5.0..0.0f64, 0.0..5.0f64), (wild_f64(), wild_f64())],
+            prop_oneof![(-5.0..0.0f64, 0.0..5.0f64), (awkward_f64(), awkward_f64())],
         ),
         any::<bool>(),
         any::<bool>(),
@@ -141,7 +98,7 @@ fn heatmap_options() -> impl Strategy<Value = HeatmapOptions> {
         any::<bool>(),
         prop::option::weighted(0.4, text()),
         prop::option::weighted(0.3, text()),
-        prop::option::weighted(0.2, (wild_f64(), wild_f64())),
+        prop::option::weighted(0.2, (awkward_f64(), awkward_f64())),
     )
         .prop_map(|(cmap, range, sym, top, up, bar, title, quantity, x)| {
             let mut o = HeatmapOptions::new()
@@ -196,7 +153,7 @@ fn check_field(
 }
 
 proptest! {
-    #![proptest_config(config(2000))]
+    #![proptest_config(robust::config(SEED, 2000))]
 
     /// Heat maps of any size, data and options.
     #[test]
@@ -298,7 +255,7 @@ fn series() -> impl Strategy<Value = Series> {
 }
 
 proptest! {
-    #![proptest_config(config(1500))]
+    #![proptest_config(robust::config(SEED, 1500))]
 
     /// Plots of any size, scales, ranges, labels and series.
     #[test]
@@ -311,8 +268,8 @@ proptest! {
             (Scale::Log10, Scale::Log10),
         ]),
         (xr, yr) in (
-            prop::option::weighted(0.2, (wild_f64(), wild_f64())),
-            prop::option::weighted(0.2, (wild_f64(), wild_f64())),
+            prop::option::weighted(0.2, (awkward_f64(), awkward_f64())),
+            prop::option::weighted(0.2, (awkward_f64(), awkward_f64())),
         ),
         (w, h) in prop_oneof![
             6 => (100..200u32, 80..120u32),
@@ -375,7 +332,7 @@ fn check_vtk(xml: &str, kind: &str, arrays: usize) {
 }
 
 proptest! {
-    #![proptest_config(config(2000))]
+    #![proptest_config(robust::config(SEED, 2000))]
 
     /// `.vti` grids and `.vtp` particles with any sizes, coordinates, array names and data.
     #[test]
@@ -545,7 +502,7 @@ fn check_xyz(text: &str, positions: &[f64], species: &[String], columns: &[Vec<f
 }
 
 proptest! {
-    #![proptest_config(config(2000))]
+    #![proptest_config(robust::config(SEED, 2000))]
 
     /// Extended XYZ frames with any positions, species, cell, time, info and columns.
     #[test]
@@ -555,10 +512,10 @@ proptest! {
         names in prop::collection::vec(symbol(), 0..6),
         uniform in prop::option::weighted(0.3, symbol()),
         lattice in prop::option::weighted(0.3, prop::array::uniform3(prop::array::uniform3(mostly(0.0..5.0)))),
-        boxed in prop::option::weighted(0.3, (wild_f64(), wild_f64())),
+        boxed in prop::option::weighted(0.3, (awkward_f64(), awkward_f64())),
         pbc in prop::option::of(any::<[bool; 3]>()),
-        time in prop::option::of(wild_f64()),
-        info in prop::collection::vec((text(), wild_f64()), 0..4),
+        time in prop::option::of(awkward_f64()),
+        info in prop::collection::vec((text(), awkward_f64()), 0..4),
         cols in prop::collection::vec((text(), values(0..20usize), prop_oneof![3 => 1..4usize, 1 => size()], any::<bool>()), 0..3),
     ) {
         let frame = XyzFrame::new(&positions, dim);
@@ -659,14 +616,14 @@ proptest! {
 }
 
 proptest! {
-    #![proptest_config(config(3000))]
+    #![proptest_config(robust::config(SEED, 3000))]
 
     /// Colour maps and number formats with any values: never a panic or a hang.
     #[test]
     fn colors_and_numbers(
-        t in wild_f64(),
-        (v, lo, hi) in (wild_f64(), wild_f64(), wild_f64()),
-        step in wild_f64(),
+        t in awkward_f64(),
+        (v, lo, hi) in (awkward_f64(), awkward_f64(), awkward_f64()),
+        step in awkward_f64(),
     ) {
         for cmap in [Colormap::Viridis, Colormap::Diverging, Colormap::Gray] {
             let c = cmap.map(t);
@@ -871,7 +828,7 @@ fn leftovers(dir: &Path) -> Vec<String> {
 }
 
 proptest! {
-    #![proptest_config(config(400))]
+    #![proptest_config(robust::config(SEED, 400))]
 
     /// Every writer, valid data or not, to a good or an impossible path: `Ok` leaves the new
     /// file in place, `Err` leaves the previous file untouched; no temporary file either

@@ -5,7 +5,7 @@ use std::hash::{Hash, Hasher};
 use std::ops::Range;
 
 use simkit_backend::comm::Comm;
-use simkit_backend::{Precision, Result, Simulation};
+use simkit_backend::{Distributed, Precision, Result, Simulation};
 
 use crate::config::Config;
 use crate::cpu::{CpuEngine, Ranks, Share};
@@ -139,25 +139,6 @@ impl DistributedCoulomb {
         Self::build(run, comm, None, None)
     }
 
-    /// Rebuilds a run from checkpoint bytes of [`DistributedCoulomb::checkpoint`] or of
-    /// [`crate::PpCoulomb`]'s `Restart::checkpoint` on the CPU, on any rank count: the data
-    /// are replicated, so the checkpoint does not depend on the rank count that wrote it,
-    /// and the resumed run continues with the bits of the uninterrupted one. Collective;
-    /// every rank passes the same bytes (e.g. read from the file rank 0 wrote).
-    ///
-    /// Errors: those of `PpCoulomb::resume` (another crate's or model's checkpoint, a
-    /// truncated, corrupt or inconsistent one); ranks that pass different checkpoints. An
-    /// error on one rank is an error on every rank.
-    pub fn resume(bytes: &[u8], comm: Comm) -> Result<Self> {
-        let saved = comm.agree(Run::resume(bytes))?;
-        Self::build(
-            saved.run,
-            comm,
-            saved.accelerations.as_deref(),
-            Some(saved.energy_ref),
-        )
-    }
-
     fn build(
         run: Run,
         comm: Comm,
@@ -184,11 +165,6 @@ impl DistributedCoulomb {
             || with_engine!(engine, e => e.energy_now(&share)),
         )?;
         Ok(sim)
-    }
-
-    /// The communicator.
-    pub fn comm(&self) -> &Comm {
-        &self.comm
     }
 
     /// The particles this rank computes and integrates: block `rank` of `size` contiguous
@@ -258,13 +234,19 @@ impl DistributedCoulomb {
         share.gather(&mut [&mut rows], n)?;
         Ok(with_potential(&state, &acc, rows.iter().sum()))
     }
+}
+
+impl Distributed for DistributedCoulomb {
+    fn comm(&self) -> &Comm {
+        &self.comm
+    }
 
     /// The complete state as the checkpoint bytes of [`crate::PpCoulomb`] (model
-    /// `PpCoulomb<f64>` or `PpCoulomb<f32>`), the same on every rank: let rank 0 write them
-    /// (`simkit_backend::checkpoint::write_file`). They resume with
-    /// [`DistributedCoulomb::resume`] on any rank count, or with `PpCoulomb::resume` on
+    /// `PpCoulomb<f64>` or `PpCoulomb<f32>`), the same on every rank
+    /// ([`Distributed::write_checkpoint`] writes them from rank 0). They resume with
+    /// [`Distributed::resume`] on any rank count, or with `PpCoulomb::resume` on
     /// one process. Collective (the kept accelerations are gathered).
-    pub fn checkpoint(&mut self) -> Result<Vec<u8>> {
+    fn checkpoint(&mut self) -> Result<Vec<u8>> {
         let now = self.state()?;
         let share = Ranks(&self.comm);
         let accelerations = if self.run.particles.is_empty() {
@@ -273,6 +255,26 @@ impl DistributedCoulomb {
             with_engine!(&mut self.engine, e => e.kept_accelerations_with(&share))?
         };
         self.run.checkpoint(now, accelerations)
+    }
+
+    /// Rebuilds a run from checkpoint bytes of [`Distributed::checkpoint`] or of
+    /// [`crate::PpCoulomb`]'s `Restart::checkpoint` on the CPU, on any rank count: the data
+    /// are replicated, so the checkpoint does not depend on the rank count that wrote it,
+    /// and the resumed run continues with the bits of the uninterrupted one. Collective;
+    /// every rank passes the same bytes (checked; [`Distributed::resume_file`] reads a
+    /// file on rank 0 and sends it).
+    ///
+    /// Errors: those of `PpCoulomb::resume` (another crate's or model's checkpoint, a
+    /// truncated, corrupt or inconsistent one); ranks that pass different checkpoints. An
+    /// error on one rank is an error on every rank.
+    fn resume(bytes: &[u8], comm: Comm) -> Result<Self> {
+        let saved = comm.agree(Run::resume(bytes))?;
+        Self::build(
+            saved.run,
+            comm,
+            saved.accelerations.as_deref(),
+            Some(saved.energy_ref),
+        )
     }
 }
 

@@ -106,4 +106,4 @@ pub use distributed::DistributedCoulomb;
 pub use gpu::gpu_max_particles;
 pub use particles::{MAX_PARTICLES, Particles, Region, Species, Velocities};
 pub use sim::PpCoulomb;
-pub use simkit_backend::{Backend, Error, Precision, Restart, Result, Simulation};
+pub use simkit_backend::{Backend, Distributed, Error, Precision, Restart, Result, Simulation};

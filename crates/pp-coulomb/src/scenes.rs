@@ -1,7 +1,7 @@
 //! Ready-made initial conditions: the source's plasma box and a cold uniform sphere for the
 //! Coulomb explosion, plus the expansion measurement used to validate the latter.
 
-use simkit_backend::{Result, require_positive};
+use simkit_backend::{Error, Result, require_positive};
 
 use crate::config::ForceLaw;
 use crate::particles::{Particles, Region, Species, Velocities};
@@ -86,6 +86,10 @@ fn norm(a: [f64; 3]) -> f64 {
     (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
 }
 
+/// The most steps [`run_explosion`] takes (10^7: hours of a large run, and a bound that
+/// turns a step far too small for `t_max` into an error instead of a loop without end).
+pub const MAX_EXPLOSION_STEPS: u64 = 10_000_000;
+
 /// One sample of an explosion run.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ExplosionSample {
@@ -100,7 +104,9 @@ pub struct ExplosionSample {
 /// time. `on_step` sees every state (for frames); the samples start with `(0, 1)`.
 ///
 /// Errors: `omega` or `courant` not finite and > 0, `xi_max` not finite, `t_max` not finite
-/// and > 0 (the loop must end), or an error of the simulation (e.g. a blow-up).
+/// and > 0 (the loop must end), a run that would take more than [`MAX_EXPLOSION_STEPS`]
+/// steps (at `xi = 1`, `t_max omega / courant` steps; checked before the first and again as
+/// the run goes, since `xi` may shrink), or an error of the simulation (e.g. a blow-up).
 pub fn run_explosion(
     sim: &mut crate::PpCoulomb,
     expansion: &Expansion,
@@ -115,12 +121,27 @@ pub fn run_explosion(
     require_positive("courant", courant)?;
     simkit_backend::require_finite("xi_max", xi_max)?;
     require_positive("t_max", t_max)?;
+    let too_long = |steps: f64| {
+        Error::invalid(
+            "explosion run length t_max omega / courant",
+            format!("{steps:e} steps"),
+            format!("at most {MAX_EXPLOSION_STEPS} steps: raise courant or lower t_max or omega"),
+        )
+    };
+    let planned = t_max * omega / courant;
+    // Finite or +inf: the inputs are finite and positive.
+    if planned > MAX_EXPLOSION_STEPS as f64 {
+        return Err(too_long(planned));
+    }
     let mut samples = vec![ExplosionSample {
         time: sim.time(),
         xi: 1.0,
     }];
     let mut xi = 1.0_f64;
     while xi < xi_max && sim.time() < t_max {
+        if samples.len() as u64 > MAX_EXPLOSION_STEPS {
+            return Err(too_long(samples.len() as f64));
+        }
         sim.set_dt(courant * xi.powf(1.5) / omega)?;
         sim.step(1)?;
         let state = sim.state()?;

@@ -6,6 +6,7 @@
 
 mod replicated;
 
+use simkit_backend::Distributed;
 use simkit_backend::comm::Comm;
 use simkit_backend::{Backend, Error, Restart, Simulation};
 use simkit_pp_coulomb::{Config, DistributedCoulomb, ForceLaw, Particles, PpCoulomb};

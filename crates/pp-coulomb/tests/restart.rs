@@ -137,13 +137,16 @@ fn mixed_restart_is_bit_exact() {
     );
     let back = PpCoulomb::resume(&bytes, Backend::Cpu).unwrap();
     assert_eq!(back.config(), sim.config());
-    let e = checkpoint_error(&relabel(&bytes, "PpCoulomb<f32>"));
+    let e = checkpoint_error(&simkit_backend::testing::relabel(&bytes, "PpCoulomb<f32>"));
     assert!(
         e.contains("PpCoulomb<f32>") && e.contains("PpCoulomb<mixed>"),
         "{e}"
     );
     let mut f32_run = PpCoulomb::new(plasma(), &c.with_mixed(false), Backend::Cpu).unwrap();
-    let e = checkpoint_error(&relabel(&f32_run.checkpoint().unwrap(), "PpCoulomb<mixed>"));
+    let e = checkpoint_error(&simkit_backend::testing::relabel(
+        &f32_run.checkpoint().unwrap(),
+        "PpCoulomb<mixed>",
+    ));
     assert!(
         e.contains("PpCoulomb<f32>") && e.contains("PpCoulomb<mixed>"),
         "{e}"
@@ -212,7 +215,7 @@ fn bad_checkpoints_are_clear_errors() {
     // The f64 run's state relabelled as f32: the header and the payload disagree.
     let header = checkpoint::header(&good).unwrap();
     assert_eq!(header.model, "PpCoulomb<f64>");
-    let relabelled = relabel(&good, "PpCoulomb<f32>");
+    let relabelled = simkit_backend::testing::relabel(&good, "PpCoulomb<f32>");
     assert_eq!(
         checkpoint::header(&relabelled).unwrap().model,
         "PpCoulomb<f32>"
@@ -222,44 +225,4 @@ fn bad_checkpoints_are_clear_errors() {
         e.contains("PpCoulomb<f32>") && e.contains("PpCoulomb<f64>"),
         "{e}"
     );
-}
-
-/// CRC-32 (IEEE, reflected, as the checkpoint format uses), bit by bit.
-fn crc32(bytes: &[u8]) -> u32 {
-    let mut crc = !0u32;
-    for &b in bytes {
-        crc ^= u32::from(b);
-        for _ in 0..8 {
-            crc = if crc & 1 != 0 {
-                (crc >> 1) ^ 0xEDB8_8320
-            } else {
-                crc >> 1
-            };
-        }
-    }
-    !crc
-}
-
-/// `bytes` with its model string replaced by `model` and the checksum recomputed (a
-/// well-formed file whose header and payload disagree).
-fn relabel(bytes: &[u8], model: &str) -> Vec<u8> {
-    let mut at = 12; // magic and format version
-    let field = |at: &mut usize| {
-        let n = usize::from(u16::from_le_bytes([bytes[*at], bytes[*at + 1]]));
-        let range = *at..*at + 2 + n;
-        *at += 2 + n;
-        range
-    };
-    let package = field(&mut at);
-    let version = field(&mut at);
-    let _model = field(&mut at);
-    let mut out = bytes[..12].to_vec();
-    out.extend_from_slice(&bytes[package]);
-    out.extend_from_slice(&bytes[version]);
-    out.extend_from_slice(&(model.len() as u16).to_le_bytes());
-    out.extend_from_slice(model.as_bytes());
-    out.extend_from_slice(&bytes[at..bytes.len() - 4]);
-    let crc = crc32(&out);
-    out.extend_from_slice(&crc.to_le_bytes());
-    out
 }

@@ -8,7 +8,7 @@
 //! persistence is off, so a failure shows the same minimal case on every run.
 
 use proptest::prelude::*;
-use proptest::test_runner::{Config as RunnerConfig, RngAlgorithm, TestRng, TestRunner};
+use simkit_backend::testing::robust::{self, awkward_f64};
 use simkit_backend::{Backend, Error, Restart, Simulation, checkpoint};
 use simkit_pp_coulomb::scenes::{Expansion, ExplosionSample, cold_sphere, crossing_time};
 use simkit_pp_coulomb::units::{PhysicalInputs, normalise};
@@ -18,36 +18,6 @@ use simkit_pp_coulomb::{
 };
 
 const SEED: [u8; 32] = *b"simkit-pp-coulomb-robustness-01!";
-
-fn runner(cases: u32) -> TestRunner {
-    let config = RunnerConfig {
-        cases,
-        failure_persistence: None,
-        ..RunnerConfig::default()
-    };
-    TestRunner::new_with_rng(config, TestRng::from_seed(RngAlgorithm::ChaCha, &SEED))
-}
-
-/// Floats that break code: NaN, infinities, zeros, extremes, subnormals, plus ordinary ones.
-fn float() -> impl Strategy<Value = f64> {
-    prop_oneof![
-        Just(f64::NAN),
-        Just(f64::INFINITY),
-        Just(f64::NEG_INFINITY),
-        Just(0.0),
-        Just(-0.0),
-        Just(f64::MAX),
-        Just(-f64::MAX),
-        Just(f64::MIN_POSITIVE),
-        Just(5e-324),
-        Just(1e300),
-        Just(-1e300),
-        Just(1e-300),
-        -10.0..10.0f64,
-        0.01..5.0f64,
-        any::<f64>(),
-    ]
-}
 
 /// Counts: empty, small, and sizes past every limit.
 fn count() -> impl Strategy<Value = usize> {
@@ -61,42 +31,42 @@ fn count() -> impl Strategy<Value = usize> {
 }
 
 fn vec3() -> impl Strategy<Value = [f64; 3]> {
-    [float(), float(), float()]
+    [awkward_f64(), awkward_f64(), awkward_f64()]
 }
 
 fn region() -> impl Strategy<Value = Region> {
     prop_oneof![
-        (vec3(), float()).prop_map(|(min, length)| Region::Cube { min, length }),
-        (vec3(), float()).prop_map(|(center, radius)| Region::Sphere { center, radius }),
+        (vec3(), awkward_f64()).prop_map(|(min, length)| Region::Cube { min, length }),
+        (vec3(), awkward_f64()).prop_map(|(center, radius)| Region::Sphere { center, radius }),
     ]
 }
 
 fn velocities() -> impl Strategy<Value = Velocities> {
     prop_oneof![
         Just(Velocities::Cold),
-        float().prop_map(|thermal_speed| Velocities::Maxwellian { thermal_speed }),
-        float().prop_map(|half_width| Velocities::Uniform { half_width }),
+        awkward_f64().prop_map(|thermal_speed| Velocities::Maxwellian { thermal_speed }),
+        awkward_f64().prop_map(|half_width| Velocities::Uniform { half_width }),
     ]
 }
 
 fn law() -> impl Strategy<Value = ForceLaw> {
     prop_oneof![
         Just(ForceLaw::Exact),
-        float().prop_map(|radius| ForceLaw::Exclusion { radius }),
-        float().prop_map(|epsilon| ForceLaw::Plummer { epsilon }),
+        awkward_f64().prop_map(|radius| ForceLaw::Exclusion { radius }),
+        awkward_f64().prop_map(|epsilon| ForceLaw::Plummer { epsilon }),
     ]
 }
 
 fn config() -> impl Strategy<Value = Config> {
     (
-        float(),
+        awkward_f64(),
         law(),
         any::<bool>(),
         any::<bool>(),
         any::<bool>(),
         any::<bool>(),
         prop_oneof![Just(0u32), 1u32..20, Just(u32::MAX)],
-        prop_oneof![Just(None), float().prop_map(Some)],
+        prop_oneof![Just(None), awkward_f64().prop_map(Some)],
     )
         .prop_map(|(dt, law, leapfrog, f32, mixed, rsqrt, every, tol)| {
             Config::new(dt, law)
@@ -149,8 +119,8 @@ fn raw_particles() -> impl Strategy<Value = Particles> {
             (
                 prop::collection::vec(vec3(), np),
                 prop::collection::vec(vec3(), nv),
-                prop::collection::vec(float(), nq),
-                prop::collection::vec(float(), nm),
+                prop::collection::vec(awkward_f64(), nq),
+                prop::collection::vec(awkward_f64(), nm),
                 prop::collection::vec(0u32..3, ns),
             )
         })
@@ -212,9 +182,10 @@ fn particles_ok_or_clear(r: simkit_backend::Result<()>, p: &Particles) {
 #[test]
 fn particles_constructors_and_setters() {
     let op = prop_oneof![
-        (float(), float()).prop_map(|(q, m)| (0u8, q, m, [0.0; 3], [0.0; 3], 0usize, 0u32)),
+        (awkward_f64(), awkward_f64())
+            .prop_map(|(q, m)| (0u8, q, m, [0.0; 3], [0.0; 3], 0usize, 0u32)),
         (0u32..4, vec3(), vec3()).prop_map(|(s, x, v)| (1u8, 0.0, 0.0, x, v, 0, s)),
-        (0u32..4, count(), float(), float())
+        (0u32..4, count(), awkward_f64(), awkward_f64())
             .prop_map(|(s, n, a, b)| (2u8, a, b, [a; 3], [b; 3], n, s)),
     ];
     let ops = (
@@ -223,7 +194,7 @@ fn particles_constructors_and_setters() {
         velocities(),
         any::<u64>(),
     );
-    runner(4000)
+    robust::runner(&SEED, 4000)
         .run(&ops, |(ops, region, vel, seed)| {
             let mut p = Particles::new();
             for (kind, a, b, x, v, n, s) in ops {
@@ -250,7 +221,7 @@ fn new_and_step_with_arbitrary_inputs() {
         prop_oneof![1 => raw_particles(), 3 => sane_particles()],
         prop_oneof![1 => config(), 3 => sane_config()],
         prop::collection::vec(prop_oneof![0u32..30, Just(u32::MAX)], 0..3),
-        prop_oneof![Just(None), float().prop_map(Some)],
+        prop_oneof![Just(None), awkward_f64().prop_map(Some)],
     );
     // Outcomes: [refused by new, built, steps Ok, blow-ups, refused step counts].
     let seen = std::cell::Cell::new([0u32; 5]);
@@ -259,7 +230,7 @@ fn new_and_step_with_arbitrary_inputs() {
         s[k] += 1;
         seen.set(s);
     };
-    runner(2500)
+    robust::runner(&SEED, 2500)
         .run(&input, |(p, config, calls, new_dt)| {
             let mut sim = match PpCoulomb::new(p, &config, Backend::Cpu) {
                 Ok(sim) => {
@@ -319,7 +290,14 @@ fn new_and_step_with_arbitrary_inputs() {
 #[test]
 fn units_and_scenes_with_arbitrary_inputs() {
     let inputs = (
-        [float(), float(), float(), float(), float(), float()],
+        [
+            awkward_f64(),
+            awkward_f64(),
+            awkward_f64(),
+            awkward_f64(),
+            awkward_f64(),
+            awkward_f64(),
+        ],
         prop_oneof![
             Just(0usize),
             1usize..50,
@@ -328,7 +306,7 @@ fn units_and_scenes_with_arbitrary_inputs() {
         ],
         any::<u64>(),
     );
-    runner(2000)
+    robust::runner(&SEED, 2000)
         .run(
             &inputs,
             |([dt, density, box_length, te, q, m], particles, seed)| {
@@ -385,12 +363,12 @@ fn explosion_helpers_with_arbitrary_inputs() {
             Just(usize::MAX),
             Just(MAX_PARTICLES + 1)
         ],
-        float(),
+        awkward_f64(),
         prop::collection::vec(vec3(), 0..20),
-        prop::collection::vec((float(), float()), 0..5),
-        [float(), float(), float(), float()],
+        prop::collection::vec((awkward_f64(), awkward_f64()), 0..5),
+        [awkward_f64(), awkward_f64(), awkward_f64(), awkward_f64()],
     );
-    runner(1500)
+    robust::runner(&SEED, 1500)
         .run(
             &inputs,
             |(n, radius, positions, samples, [omega, courant, xi_max, t_max])| {
@@ -404,8 +382,10 @@ fn explosion_helpers_with_arbitrary_inputs() {
                         let _ = e.factor(&positions);
                         let config = Config::new(0.05, ForceLaw::Exact);
                         let mut sim = PpCoulomb::new(p, &config, Backend::Cpu).unwrap();
-                        // Bounded runs only: the loop runs until xi_max or t_max.
+                        // Bounded runs only: the loop runs until xi_max or t_max, here
+                        // at most about 10^4 steps (t_max omega / courant at xi = 1).
                         let (xi_max, t_max) = (xi_max.min(1.5), t_max.min(0.5));
+                        let t_max = t_max.min(1e4 * courant / omega);
                         match scenes::run_explosion(
                             &mut sim,
                             &e,
@@ -432,26 +412,25 @@ fn explosion_helpers_with_arbitrary_inputs() {
         .unwrap();
 }
 
-/// CRC-32 (IEEE), to forge well-formed checkpoints with garbage payloads.
-fn crc32(bytes: &[u8]) -> u32 {
-    let mut crc = !0u32;
-    for &b in bytes {
-        crc ^= u32::from(b);
-        for _ in 0..8 {
-            crc = if crc & 1 != 0 {
-                (crc >> 1) ^ 0xEDB8_8320
-            } else {
-                crc >> 1
-            };
-        }
-    }
-    !crc
-}
-
 /// Resuming garbage: random bytes, truncations and bit flips of a real checkpoint, and real
 /// checkpoints whose payload bytes were changed with the checksum recomputed (so the payload
 /// decoder and the validation of the decoded state see them): a clear error, or a run whose
 /// state is finite and steps.
+/// A step far too small for `t_max` (here 5e153 steps) is refused before the first step,
+/// not run as a loop without end (found by the shared awkward inputs: omega = 1e154).
+#[test]
+fn an_explosion_run_of_too_many_steps_is_refused() {
+    let p = cold_sphere(20, 1.0, 3).unwrap();
+    let e = Expansion::new(&p.position, 1.0);
+    let config = Config::new(0.05, ForceLaw::Exact);
+    let mut sim = PpCoulomb::new(p, &config, Backend::Cpu).unwrap();
+    let err = scenes::run_explosion(&mut sim, &e, 1e154, 1.0, 1.5, 0.5, |_, _| Ok(()))
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("steps") && err.contains("courant"), "{err}");
+    assert_eq!(sim.steps_done(), 0);
+}
+
 #[test]
 fn resume_of_garbage_is_a_clear_error() {
     let mut p = Particles::new();
@@ -495,15 +474,13 @@ fn resume_of_garbage_is_a_clear_error() {
                 for (at, byte) in edits {
                     b[header_len + at] = byte;
                 }
-                let end = b.len() - 4;
-                let crc = crc32(&b[..end]);
-                b[end..].copy_from_slice(&crc.to_le_bytes());
+                simkit_backend::testing::reseal(&mut b);
                 b
             }
         }),
     ];
     let resumed = std::cell::Cell::new(0u32);
-    runner(2000)
+    robust::runner(&SEED, 2000)
         .run(&garbage, |bytes| {
             match PpCoulomb::resume(&bytes, Backend::Cpu) {
                 Ok(mut sim) => {
@@ -535,7 +512,7 @@ fn gpu_accepts_and_refuses_like_the_cpu() {
         return;
     };
     let input = (sane_particles(), config(), 0u32..25);
-    let mut runner = runner(40);
+    let mut runner = robust::runner(&SEED, 40);
     for _ in 0..40 {
         let (p, config, steps) = input.new_tree(&mut runner).unwrap().current();
         let f64_missing = config.precision == Precision::F64 && !ctx.has_f64();

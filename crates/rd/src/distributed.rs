@@ -1,11 +1,9 @@
 //! [`DistributedRd`]: one grid cut into blocks over the ranks of a [`Comm`], each rank
 //! advancing its block on the CPU, bit-identical to the single-process CPU run.
 
-use std::path::Path;
-
 use simkit_backend::comm::{Block, CartDecomposition, Comm};
 use simkit_backend::guard::{Guarded, Halt, first_non_finite, run_guarded};
-use simkit_backend::{Real, Result};
+use simkit_backend::{Distributed, Real, Result, Simulation};
 
 use crate::boundary::{Boundaries, Boundary, fill_ghosts, ghost_value};
 use crate::config::Config;
@@ -27,7 +25,7 @@ use crate::stepper::{
 /// the ghosts: from the neighbouring blocks by a halo exchange in the shift pattern (x, then
 /// y; 4 messages), and on the edges of the domain by the same boundary rule
 /// (`ghost_value`). Each cell therefore sees exactly the inputs, and runs exactly the
-/// arithmetic, of the single-process run, so [`DistributedRd::gather`] returns a grid
+/// arithmetic, of the single-process run, so [`Simulation::state`] returns a grid
 /// bit-identical to [`crate::Rd`] on [`simkit_backend::Backend::Cpu`] for every rank count,
 /// grid size and boundary kind. Temporal blocking ([`Config::steps_per_sweep`]) is not used
 /// here (it would need halos `k` cells deep every `k` steps); it never changes results.
@@ -37,30 +35,34 @@ use crate::stepper::{
 /// the same [`Error::BlowUp`](simkit_backend::Error::BlowUp) (naming the same first bad cell, in global coordinates) as
 /// the single-process run.
 ///
-/// Checkpoints are those of [`crate::Rd`]: [`DistributedRd::checkpoint`] gathers the grid on
-/// rank 0 and encodes it as `Rd` does, and [`DistributedRd::resume`] takes such bytes on any
-/// number of ranks, so a run moves between one process and any rank count, bit for bit.
+/// It implements [`Distributed`]: checkpoints are those of [`crate::Rd`]
+/// ([`Distributed::checkpoint`] gathers the grid on rank 0 and encodes it as `Rd` does), and
+/// [`Distributed::resume`] takes such bytes on any number of ranks, so a run moves between
+/// one process and any rank count, bit for bit.
 ///
 /// Every method that takes `&mut self` or returns a `Result` is collective: all ranks call
 /// it, in the same order. Each rank builds the run from the whole initial grid (simple,
-/// but every rank holds one copy of it while the run is built).
+/// but every rank holds the grid, and its encoding for the check that the ranks agree,
+/// while the run is built); [`Simulation::state`] and [`Distributed::checkpoint`] return
+/// the whole run on every rank.
 ///
 /// ```
 /// use simkit_backend::comm::Comm;
-/// use simkit_backend::{Backend, Simulation};
-/// use simkit_rd::{Config, DistributedRd, GrayScott, Rd, Stepping, scenes::gray_scott_square};
+/// use simkit_rd::{Backend, Config, Distributed, DistributedRd, GrayScott, Rd, Restart, Simulation};
+/// use simkit_rd::{Stepping, scenes::gray_scott_square};
 /// # fn main() -> simkit_backend::Result<()> {
 /// let grid = gray_scott_square::<f64>(24, 1.0, 6, 1)?;
 /// let model = GrayScott::new(1.0, 0.5, 0.04, 0.06)?;
 /// let config = Config::new(Stepping::euler(0.2));
 /// // `Comm::mpi()?` under `mpirun -np P` (feature `mpi`); here one process.
-/// let mut dist = DistributedRd::new(&grid, model.clone(), &config, Comm::serial())?;
+/// let mut dist = DistributedRd::new(grid.clone(), model.clone(), &config, Comm::serial())?;
 /// dist.step(30)?;
 /// let mut one = Rd::new(grid, model, &config, Backend::Cpu)?;
 /// one.step(30)?;
-/// if let Some(gathered) = dist.gather()? {
-///     assert_eq!(gathered, one.state()?); // on rank 0
-/// }
+/// assert_eq!(dist.state()?, one.state()?); // on every rank
+/// // The checkpoint is Rd's: it resumes in one process too.
+/// let bytes = dist.checkpoint()?;
+/// assert_eq!(Rd::<f64, GrayScott>::resume(&bytes, Backend::Cpu)?.state()?, one.state()?);
 /// # Ok(())
 /// # }
 /// ```
@@ -122,23 +124,60 @@ type BadCell = [f64; 5];
 
 impl<T: Real, M: Model> DistributedRd<T, M> {
     /// Validates `config`, checks the model against `grid` and `dt` against the stability
-    /// bound (as [`crate::Rd::new`] does, with the same errors on every rank), cuts the grid
-    /// into `comm.size()` blocks and keeps this rank's. Collective; every rank passes the
-    /// same grid, model and config.
+    /// bound (as [`crate::Rd::new`] does, with the same errors on every rank), checks that
+    /// every rank passed the same grid, model and config, cuts the grid into `comm.size()`
+    /// blocks and keeps this rank's. Collective.
     ///
-    /// Errors: those of [`crate::Rd::new`] on the CPU, or a grid too small for
-    /// `comm.size()` blocks of at least one cell.
-    pub fn new(grid: &Grid<T>, model: M, config: &Config, comm: Comm) -> Result<Self> {
-        config.validate()?;
-        check_model(&model, grid)?;
-        check_dt(&model, grid, &config.stepping)?;
+    /// Errors: those of [`crate::Rd::new`] on the CPU, ranks whose inputs differ, or a
+    /// grid too small for `comm.size()` blocks of at least one cell; on every rank.
+    pub fn new(grid: Grid<T>, model: M, config: &Config, comm: Comm) -> Result<Self> {
+        Self::build(
+            RunState {
+                grid,
+                model,
+                config: *config,
+                steps: 0,
+                epoch_time: 0.0,
+                epoch_step: 0,
+            },
+            comm,
+        )
+    }
+
+    /// The run of `s` (a new one, or one resumed from a checkpoint) on this rank.
+    fn build(s: RunState<T, M>, comm: Comm) -> Result<Self> {
+        let RunState {
+            grid,
+            model,
+            config,
+            ..
+        } = &s;
+        comm.agree(
+            config
+                .validate()
+                .and_then(|()| check_model(model, grid))
+                .and_then(|()| check_dt(model, grid, &config.stepping)),
+        )?;
+        // Everything the ranks must agree on, as a checkpoint stores it.
+        let encoded = comm.agree(encode_checkpoint(&s))?;
+        comm.agree_inputs(&encoded, "DistributedRd inputs")?;
+        drop(encoded);
+        let RunState {
+            grid,
+            model,
+            config,
+            steps,
+            epoch_time,
+            epoch_step,
+        } = s;
         let (gnx, gny) = (grid.nx(), grid.ny());
         let bc = grid.boundaries().clone();
         let periodic = [
             bc.west == Boundary::Periodic,
             bc.south == Boundary::Periodic,
         ];
-        let decomposition = CartDecomposition::new([gnx, gny], comm.size(), periodic)?;
+        let decomposition =
+            comm.agree(CartDecomposition::new([gnx, gny], comm.size(), periodic))?;
         let block = decomposition.block(comm.rank());
         let gplane = (gnx + 2) * (gny + 2);
         let mut all = grid.padded();
@@ -163,9 +202,9 @@ impl<T: Real, M: Model> DistributedRd<T, M> {
             decomposition,
             block,
             model,
-            config: *config,
-            epoch_time: 0.0,
-            epoch_step: 0,
+            config,
+            epoch_time,
+            epoch_step,
             h: grid.h(),
             boundaries: bc,
             tmp: cur.clone(),
@@ -173,56 +212,8 @@ impl<T: Real, M: Model> DistributedRd<T, M> {
             good_steps: 0,
             cur,
             coef,
-            steps: 0,
+            steps,
         })
-    }
-
-    /// Resumes from checkpoint bytes of [`crate::Rd`] (`Restart::checkpoint`) or of
-    /// [`DistributedRd::checkpoint`], on any number of ranks: the run goes on bit for bit
-    /// (steps, simulated time and fields). Every rank passes the same bytes (read the file on
-    /// every rank, or on rank 0 and [`Comm::broadcast_from_root`]). Collective.
-    ///
-    /// Errors: those of `Rd::resume` (corrupt bytes, another crate, version, model or
-    /// precision) and of [`DistributedRd::new`].
-    pub fn resume(bytes: &[u8], comm: Comm) -> Result<Self> {
-        let s = decode_checkpoint::<T, M>(bytes)?;
-        let mut run = Self::new(&s.grid, s.model, &s.config, comm)?;
-        run.steps = s.steps;
-        run.epoch_time = s.epoch_time;
-        run.epoch_step = s.epoch_step;
-        Ok(run)
-    }
-
-    /// The checkpoint bytes of the run on rank 0 (`Some`; `None` on the other ranks), in
-    /// the format of [`crate::Rd`]'s checkpoints: resume them with `Rd::resume` in one
-    /// process or with [`DistributedRd::resume`] on any number of ranks. Collective (the
-    /// grid is gathered on rank 0).
-    pub fn checkpoint(&self) -> Result<Option<Vec<u8>>> {
-        let Some(grid) = self.gather()? else {
-            return Ok(None);
-        };
-        encode_checkpoint(&RunState {
-            grid,
-            model: self.model.clone(),
-            config: self.config,
-            steps: self.steps,
-            epoch_time: self.epoch_time,
-            epoch_step: self.epoch_step,
-        })
-        .map(Some)
-    }
-
-    /// Writes [`DistributedRd::checkpoint`] to `path` from rank 0, atomically (parent
-    /// directories created); collective: every rank returns once the file is complete, with
-    /// rank 0's error if it failed (the other ranks get an [`Error::Io`](simkit_backend::Error::Io) naming the path).
-    pub fn write_checkpoint(&self, path: impl AsRef<Path>) -> Result<()> {
-        let bytes = self.checkpoint()?;
-        self.comm.write_from_root(path.as_ref(), bytes.as_deref())
-    }
-
-    /// The communicator.
-    pub fn comm(&self) -> &Comm {
-        &self.comm
     }
 
     /// How the grid is cut over the ranks.
@@ -245,25 +236,8 @@ impl<T: Real, M: Model> DistributedRd<T, M> {
         self.config.stepping
     }
 
-    /// Steps taken so far.
-    pub fn steps_done(&self) -> u64 {
-        self.steps
-    }
-
-    /// Advances `steps` steps with the checks of [`crate::Rd`] (same steps checked, same
-    /// errors, same rollback), decided together by all ranks. Collective.
-    pub fn step(&mut self, steps: u32) -> Result<()> {
-        simkit_backend::guard::end_step(self.steps, steps)?;
-        if self.model.field_dependent_diffusivity() {
-            let d = self.max_diffusivity()?;
-            check_dt_with(self.model.name(), d, self.h, &self.config.stepping)?;
-        }
-        let every = self.config.check_every;
-        run_guarded(&mut Checked(self), steps, every)
-    }
-
     /// The whole grid on rank 0 (`Some`), `None` on the other ranks. Collective.
-    pub fn gather(&self) -> Result<Option<Grid<T>>> {
+    fn gather_root(&self) -> Result<Option<Grid<T>>> {
         let [nx, ny] = self.block.len;
         let w = nx + 2;
         let plane = w * (ny + 2);
@@ -415,6 +389,82 @@ impl<T: Real, M: Model> DistributedRd<T, M> {
             let (x, y) = (x.clamp(1, gnx) - 1, y.clamp(1, gny) - 1);
             format!("species {s} in the ghost cell next to cell ({x}, {y}) = {v}")
         }))
+    }
+}
+
+impl<T: Real, M: Model> Simulation for DistributedRd<T, M> {
+    type State = Grid<T>;
+
+    /// Advances `steps` steps with the checks of [`crate::Rd`] (same steps checked, same
+    /// errors, same rollback), decided together by all ranks. Collective.
+    fn step(&mut self, steps: u32) -> Result<()> {
+        simkit_backend::guard::end_step(self.steps, steps)?;
+        if self.model.field_dependent_diffusivity() {
+            let d = self.max_diffusivity()?;
+            check_dt_with(self.model.name(), d, self.h, &self.config.stepping)?;
+        }
+        let every = self.config.check_every;
+        run_guarded(&mut Checked(self), steps, every)
+    }
+
+    /// The whole grid, gathered on rank 0 and sent to every rank: bit-identical to
+    /// [`crate::Rd`]'s state on the CPU after the same steps. Collective.
+    fn state(&mut self) -> Result<Grid<T>> {
+        let root = self.gather_root()?;
+        let [gnx, gny] = self.decomposition.global();
+        let flat = root.map(|g| g.fields().concat());
+        let all = self.comm.broadcast_from_root(flat)?;
+        let fields = all.chunks(gnx * gny).map(<[T]>::to_vec).collect();
+        Grid::new(gnx, gny, self.h, self.boundaries.clone(), fields)
+    }
+
+    fn steps_done(&self) -> u64 {
+        self.steps
+    }
+
+    /// `"cpu (P ranks)"`.
+    fn backend_name(&self) -> String {
+        format!("cpu ({} ranks, {})", self.comm.size(), self.comm.name())
+    }
+}
+
+impl<T: Real, M: Model> Distributed for DistributedRd<T, M> {
+    fn comm(&self) -> &Comm {
+        &self.comm
+    }
+
+    /// The checkpoint of the run in the format of [`crate::Rd`]'s checkpoints, on every
+    /// rank: resume it with `Rd::resume` in one process or with [`Distributed::resume`] on
+    /// any number of ranks. Collective (the grid is gathered on rank 0, encoded there and
+    /// sent to every rank).
+    fn checkpoint(&mut self) -> Result<Vec<u8>> {
+        let root = self.gather_root()?;
+        let bytes = root
+            .map(|grid| {
+                encode_checkpoint(&RunState {
+                    grid,
+                    model: self.model.clone(),
+                    config: self.config,
+                    steps: self.steps,
+                    epoch_time: self.epoch_time,
+                    epoch_step: self.epoch_step,
+                })
+            })
+            .transpose();
+        let bytes = self.comm.agree(bytes)?;
+        self.comm.broadcast_from_root(bytes)
+    }
+
+    /// Resumes from checkpoint bytes of [`crate::Rd`] (`Restart::checkpoint`) or of
+    /// [`Distributed::checkpoint`], on any number of ranks: the run goes on bit for bit
+    /// (steps, simulated time and fields). Every rank passes the same bytes (checked;
+    /// [`Distributed::resume_file`] reads a file on rank 0 and sends it). Collective.
+    ///
+    /// Errors: those of `Rd::resume` (corrupt bytes, another crate, version, model or
+    /// precision) and of [`DistributedRd::new`], on every rank.
+    fn resume(bytes: &[u8], comm: Comm) -> Result<Self> {
+        let s = comm.agree(decode_checkpoint::<T, M>(bytes))?;
+        Self::build(s, comm)
     }
 }
 

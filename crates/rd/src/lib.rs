@@ -100,5 +100,5 @@ pub use grid::Grid;
 pub use model::{Model, RowIn, Stencil};
 pub use models::{Colony, Diffusion, GrayScott};
 pub use sim::Rd;
-pub use simkit_backend::{Backend, Error, Real, Restart, Result, Simulation};
+pub use simkit_backend::{Backend, Distributed, Error, Real, Restart, Result, Simulation};
 pub use stepper::{Guard, Integrator, Stepping, stable_dt};

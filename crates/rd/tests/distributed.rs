@@ -5,7 +5,7 @@
 mod common;
 
 use simkit_backend::comm::Comm;
-use simkit_rd::{Boundaries, Config, Diffusion, DistributedRd, Grid, Stepping};
+use simkit_rd::{Boundaries, Config, Diffusion, DistributedRd, Grid, Simulation, Stepping};
 
 #[test]
 fn one_rank_matches_the_cpu_backend_bit_for_bit() {
@@ -18,15 +18,16 @@ fn bad_input_is_refused_with_the_single_process_errors() {
     let g = Grid::new(4, 3, 1.0, Boundaries::no_flux(), vec![vec![0.0f64; 12]]).unwrap();
     let d = Diffusion::new(&[1.0]).unwrap();
     let unstable = Config::new(Stepping::euler(0.3));
-    let e = DistributedRd::new(&g, d.clone(), &unstable, Comm::serial()).unwrap_err();
+    let e = DistributedRd::new(g.clone(), d.clone(), &unstable, Comm::serial()).unwrap_err();
     assert!(e.to_string().contains("dt"), "{e}");
     let two = Diffusion::new(&[1.0, 1.0]).unwrap();
     let ok = Config::new(Stepping::euler(0.2));
-    assert!(DistributedRd::new(&g, two, &ok, Comm::serial()).is_err());
-    let mut run = DistributedRd::new(&g, d, &ok, Comm::serial()).unwrap();
+    assert!(DistributedRd::new(g.clone(), two, &ok, Comm::serial()).is_err());
+    let mut run = DistributedRd::new(g.clone(), d, &ok, Comm::serial()).unwrap();
     assert_eq!(run.decomposition().dims(), [1, 1]);
     assert_eq!(run.block().len, [4, 3]);
     run.step(0).unwrap();
     assert_eq!(run.steps_done(), 0);
-    assert_eq!(run.gather().unwrap().unwrap(), g);
+    assert_eq!(run.state().unwrap(), g);
+    assert_eq!(run.backend_name(), "cpu (1 ranks, serial)");
 }

@@ -7,7 +7,7 @@
 //! in release mode (tiny grids, few steps, the CPU backend; one small GPU set).
 
 use proptest::prelude::*;
-use proptest::test_runner::{Config as PtConfig, RngAlgorithm, TestRng, TestRunner};
+use simkit_backend::testing::robust::{self, awkward_f64};
 use simkit_backend::{Backend, Error, Restart, Simulation, checkpoint};
 use simkit_rd::{
     Boundaries, Boundary, Colony, Config, Diffusion, GpuKernel, GpuOptions, GrayScott, Grid, Guard,
@@ -16,38 +16,9 @@ use simkit_rd::{
 
 const SEED: [u8; 32] = *b"simkit-rd robustness, fixed seed";
 
-fn runner(cases: u32) -> TestRunner {
-    TestRunner::new_with_rng(
-        PtConfig {
-            cases,
-            failure_persistence: None,
-            ..PtConfig::default()
-        },
-        TestRng::from_seed(RngAlgorithm::ChaCha, &SEED),
-    )
-}
-
-/// Floats that break things: NaN, infinities, zeros, negatives, tiny, huge, and ordinary.
-fn wild() -> impl Strategy<Value = f64> {
-    prop_oneof![
-        Just(f64::NAN),
-        Just(f64::INFINITY),
-        Just(f64::NEG_INFINITY),
-        Just(0.0),
-        Just(-0.0),
-        Just(-1.0),
-        Just(f64::MIN_POSITIVE),
-        Just(1e-300),
-        Just(1e300),
-        Just(f64::MAX),
-        -10.0..10.0f64,
-        0.0..2.0f64,
-    ]
-}
-
 /// Mostly a valid value from `valid`, sometimes a wild one.
 fn mostly(valid: impl Strategy<Value = f64> + 'static) -> BoxedStrategy<f64> {
-    prop_oneof![4 => valid, 1 => wild()].boxed()
+    prop_oneof![4 => valid, 1 => awkward_f64()].boxed()
 }
 
 /// Mostly a valid count from `valid`, sometimes an edge case.
@@ -82,7 +53,7 @@ fn boundaries() -> impl Strategy<Value = Boundaries> {
     let edge = prop_oneof![
         Just(Boundary::NoFlux),
         Just(Boundary::Periodic),
-        prop::collection::vec(wild(), 0..4).prop_map(Boundary::Dirichlet),
+        prop::collection::vec(awkward_f64(), 0..4).prop_map(Boundary::Dirichlet),
     ];
     (edge.clone(), edge.clone(), edge.clone(), edge).prop_map(|(west, east, south, north)| {
         Boundaries {
@@ -112,19 +83,19 @@ fn all_finite<T: Real>(g: &Grid<T>) -> bool {
 /// and huge values, mismatched field lengths, bad edges, out-of-range cells and species.
 #[test]
 fn grid_constructors_and_accessors() {
-    runner(3000)
+    robust::runner(&SEED, 3000)
         .run(
             &(
                 size(),
                 size(),
-                wild(),
+                awkward_f64(),
                 prop_oneof![
                     Just(0usize),
                     1..4usize,
                     Just(1usize << 40),
                     Just(usize::MAX)
                 ],
-                wild(),
+                awkward_f64(),
                 boundaries(),
                 0..3usize,
                 (0..8usize, 0..8usize, 0..4usize),
@@ -168,12 +139,17 @@ fn grid_constructors_and_accessors() {
 /// counts and coefficient fields of the wrong size.
 #[test]
 fn model_constructors() {
-    runner(2500)
+    robust::runner(&SEED, 2500)
         .run(
             &(
-                prop::collection::vec(wild(), 0..6),
-                (wild(), wild(), wild(), wild()),
-                (wild(), size(), size(), prop::collection::vec(wild(), 0..40)),
+                prop::collection::vec(awkward_f64(), 0..6),
+                (awkward_f64(), awkward_f64(), awkward_f64(), awkward_f64()),
+                (
+                    awkward_f64(),
+                    size(),
+                    size(),
+                    prop::collection::vec(awkward_f64(), 0..40),
+                ),
             ),
             |(ds, (du, dv, f, k), (gamma, nx, ny, d))| {
                 match Diffusion::new(&ds) {
@@ -291,7 +267,7 @@ fn case() -> impl Strategy<Value = Case> {
             1..6usize,
             mostly(prop_oneof![Just(1.0), Just(0.5)]),
         ),
-        prop::collection::vec(prop_oneof![9 => 0.0..1.5f64, 1 => wild()], 72),
+        prop::collection::vec(prop_oneof![9 => 0.0..1.5f64, 1 => awkward_f64()], 72),
         any_model(),
         config(),
         prop::collection::vec(prop_oneof![0..40u32, Just(250u32)], 1..4),
@@ -422,7 +398,7 @@ fn run_case<T: Real>(c: &Case, backend: Backend<'_>) -> Result<bool, TestCaseErr
 #[test]
 fn runs_on_tiny_grids() {
     let built = std::cell::Cell::new(0);
-    runner(2500)
+    robust::runner(&SEED, 2500)
         .run(&case(), |c| {
             let n = usize::from(run_case::<f64>(&c, Backend::Cpu)?)
                 + usize::from(run_case::<f32>(&c, Backend::Cpu)?);
@@ -447,7 +423,7 @@ fn gpu_runs_on_tiny_grids() {
         return;
     };
     let backend = Backend::Gpu(&ctx);
-    runner(60)
+    robust::runner(&SEED, 60)
         .run(&case(), |mut c| {
             // Keep the GPU set small and inside the device's tile limits.
             c.config.gpu.tile = (
@@ -492,7 +468,7 @@ fn checkpoint_decode_of_garbage() {
     // The real payload passes through the hand-made framing unchanged.
     assert_eq!(with_payload(&good[head_len + 8..good.len() - 4]), good);
     let real_payload = good[head_len + 8..good.len() - 4].to_vec();
-    runner(2500)
+    robust::runner(&SEED, 2500)
         .run(
             &(
                 0..5u8,

@@ -356,6 +356,20 @@ impl Comm {
         }
     }
 
+    /// `Ok` when every rank passed the same inputs: `encoded` (the inputs as a checkpoint
+    /// stores them, with the state when resuming) hashed and compared across ranks; else
+    /// the error of [`Comm::check_same`] naming `what`, on every rank. Collective.
+    pub fn agree_inputs(&self, encoded: &[u8], what: &str) -> Result<()> {
+        use std::hash::{Hash, Hasher};
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        encoded.hash(&mut h);
+        self.check_same(
+            h.finish(),
+            what,
+            "every rank must pass the same inputs and configuration (or checkpoint)",
+        )
+    }
+
     /// Rank 0's `data` on every rank (`MPI_Bcast` of the length, then of the values): rank 0
     /// passes `Some`, the others anything (their `data` is ignored). E.g. rank 0 reads a
     /// checkpoint file and every rank resumes from the bytes.

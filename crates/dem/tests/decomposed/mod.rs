@@ -3,6 +3,7 @@
 //! of the one-process run (state, diagnostics and checkpoint bytes), checkpoints move
 //! between rank counts, and a blow-up stops every rank with the same error.
 
+use simkit_backend::Distributed;
 use simkit_backend::comm::Comm;
 use simkit_backend::{Error, Simulation};
 use simkit_dem::scenes::{BedParams, granular_box, vibrating_bed};
@@ -109,8 +110,8 @@ pub fn check_all(comm: &Comm) -> Result<usize, String> {
     let mut checks = 0;
     for (name, scene, config, steps) in cases() {
         let serial = Comm::serial();
-        let mut one = DistributedDem::new(&scene, &config, serial.clone()).map_err(err)?;
-        let mut many = DistributedDem::new(&scene, &config, comm.clone()).map_err(err)?;
+        let mut one = DistributedDem::new(scene.clone(), &config, serial.clone()).map_err(err)?;
+        let mut many = DistributedDem::new(scene.clone(), &config, comm.clone()).map_err(err)?;
         let half = steps / 2;
         one.step(half).map_err(err)?;
         many.step(half).map_err(err)?;
@@ -190,7 +191,7 @@ pub fn blow_up(comm: &Comm) -> Result<usize, String> {
         ..Config::default()
     };
     let run = |c: Comm| -> Result<(String, u64, Vec<u64>), String> {
-        let mut sim = DistributedDem::new(&scene, &config, c).map_err(err)?;
+        let mut sim = DistributedDem::new(scene.clone(), &config, c).map_err(err)?;
         let e = match sim.step(2000) {
             Err(e @ Error::BlowUp { .. }) => e.to_string(),
             other => return Err(format!("expected a blow-up, got {other:?}")),

@@ -51,17 +51,17 @@ impl LutCpu {
         self.rule.vbmi
     }
 
-    /// Sets how many steps one pass over the lattice advances (temporal blocking; at least
-    /// 1). The lattice after any number of steps is the same bits for every setting; only the
-    /// speed differs. The default ([`LutCpu::DEFAULT_STEPS_PER_PASS`]) suits lattices larger
-    /// than the caches, where the update is bound by memory traffic.
-    pub fn with_steps_per_pass(mut self, steps: u32) -> Self {
+    /// Sets how many steps one pass over the lattice advances (at least 1), for the test
+    /// that every setting gives the same bits.
+    #[cfg(test)]
+    fn with_steps_per_pass(mut self, steps: u32) -> Self {
         self.steps_per_pass = steps.max(1);
         self
     }
 
-    /// Steps advanced per pass over the lattice when [`LutCpu::with_steps_per_pass`] is not
-    /// called.
+    /// Steps advanced per pass over the lattice (temporal blocking; the lattice after any
+    /// number of steps has the same bits for every setting, only the speed differs). Four
+    /// suits lattices larger than the caches, where the update is bound by memory traffic.
     pub const DEFAULT_STEPS_PER_PASS: u32 = 4;
 
     /// Advances `levels` steps in one pass over the lattice (temporal blocking). The rows are

@@ -2,7 +2,7 @@
 //! and [`multispin`] (64-site bit-planes, boolean collisions). Both are bit-identical to each
 //! other and to the GPU backend.
 
-pub mod lut;
+pub(crate) mod lut;
 #[cfg(target_arch = "x86_64")]
 mod lut_vbmi;
-pub mod multispin;
+pub(crate) mod multispin;

@@ -4,7 +4,7 @@
 //! bit with the single-process run.
 
 use simkit_backend::comm::Comm;
-use simkit_backend::{Backend, Restart, Simulation};
+use simkit_backend::{Backend, Distributed, Restart, Simulation};
 use simkit_lattice_gas::{
     Config, CpuMethod, DistributedLatticeGas, Lattice, LatticeGas, Obstacle, RuleSet,
 };
@@ -71,17 +71,14 @@ fn case_on(
     let mut dist = named(
         &label,
         "building the distributed run",
-        DistributedLatticeGas::with_backend(lattice, config, comm.clone(), backend),
+        DistributedLatticeGas::with_backend(lattice.clone(), config, comm.clone(), backend),
     )?;
     // In two calls: the step counter carries over between them.
     named(&label, "step", dist.step(steps / 2))?;
     named(&label, "step", dist.step(steps - steps / 2))?;
     let count = named(&label, "particle count", dist.particle_count())?;
-    let gathered = named(&label, "gather", dist.gather())?;
+    let gathered = named(&label, "state", dist.state())?;
     let dims = dist.decomposition().dims();
-    let Some(gathered) = gathered else {
-        return Ok(dims);
-    };
     let mut one = named(
         &label,
         "building the serial run",
@@ -124,19 +121,10 @@ fn checkpoint_case(comm: &Comm, lattice: &Lattice, config: &Config) -> Result<()
     let mut dist = DistributedLatticeGas::resume(&saved, comm.clone()).map_err(e("resume"))?;
     dist.step(10).map_err(e("distributed step"))?;
     let saved = dist.checkpoint().map_err(e("distributed checkpoint"))?;
-    if saved.is_some() != comm.is_root() {
-        return Err(format!("{label}: the checkpoint must be on rank 0 only"));
-    }
-    // And once more onto the distributed run, from rank 0's bytes.
-    let again = comm
-        .broadcast_from_root(saved.clone())
-        .map_err(|e| format!("{label}: broadcast: {e}"))?;
-    let mut dist = DistributedLatticeGas::resume(&again, comm.clone()).map_err(e("resume"))?;
+    // And once more onto the distributed run, from the bytes every rank holds.
+    let mut dist = DistributedLatticeGas::resume(&saved, comm.clone()).map_err(e("resume"))?;
     dist.step(5).map_err(e("distributed step"))?;
-    let gathered = dist.gather().map_err(e("gather"))?;
-    let (Some(saved), Some(gathered)) = (saved, gathered) else {
-        return Ok(());
-    };
+    let gathered = dist.state().map_err(e("state"))?;
     let mut last = LatticeGas::resume(&saved, Backend::Cpu).map_err(e("serial resume"))?;
     last.step(10).map_err(e("serial step"))?;
     let want = whole.state().map_err(e("state"))?;
@@ -384,11 +372,10 @@ pub fn check_gpu(comm: &Comm) -> Result<usize, String> {
         .map_err(|e| format!("resume on the GPUs: {e}"))?;
     dist.step(9).map_err(|e| e.to_string())?;
     first.step(9).map_err(|e| e.to_string())?;
-    if let Some(got) = dist.gather().map_err(|e| e.to_string())? {
-        let want = first.state().map_err(|e| e.to_string())?;
-        if let Some(d) = first_difference(&want, &got) {
-            return Err(format!("resumed on the GPUs: after 16 steps {d}"));
-        }
+    let got = dist.state().map_err(|e| e.to_string())?;
+    let want = first.state().map_err(|e| e.to_string())?;
+    if let Some(d) = first_difference(&want, &got) {
+        return Err(format!("resumed on the GPUs: after 16 steps {d}"));
     }
     if !dist.backend_name().starts_with("gpu") {
         return Err(format!("stepped on {}", dist.backend_name()));

@@ -21,6 +21,11 @@ use simkit_backend::{Error, Result};
 /// in `f32` with room to spare.
 pub const MAX_COEFFICIENT: f64 = 1e30;
 
+/// The smallest cutoff a law accepts, in the law's length unit: inside a shorter cutoff the
+/// inverse powers of `r` that the `f32` kernels form (`r^-12` is 6e37 at `0.7e-3`) overflow
+/// `f32`, so a pair would give a NaN or infinite force at a distance the law admits.
+pub const MIN_CUTOFF: f64 = 1e-3;
+
 /// `v` finite and `>= 0`; `note` follows the requirement in the message.
 pub(crate) fn non_negative(pair: &str, name: &str, v: f64, note: &str) -> Result<()> {
     if v.is_finite() && v >= 0.0 {
@@ -64,11 +69,14 @@ pub(crate) fn bounded(pair: &str, name: &str, what: &str, v: f64) -> Result<()> 
 /// A cutoff `r_c` finite and `> 0` whose square is a normal `f64`.
 pub(crate) fn check_cutoff(pair: &str, r_c: f64) -> Result<()> {
     positive(pair, "r_c", r_c)?;
-    if !(r_c * r_c).is_normal() {
+    if !(r_c * r_c).is_normal() || r_c < MIN_CUTOFF {
         return Err(Error::invalid(
             format!("{pair} r_c"),
             r_c,
-            "r_c^2 must be a normal f64; rescale the length unit",
+            format!(
+                "r_c^2 must be a normal f64 and r_c at least {MIN_CUTOFF:e}; rescale the length \
+                 unit (the laws take reduced units, sigma of order 1)"
+            ),
         ));
     }
     Ok(())

@@ -3,6 +3,7 @@
 //! of the one-process run (state, diagnostics, forces and checkpoint bytes), checkpoints
 //! move between rank counts, and a blow-up stops every rank with the same error.
 
+use simkit_backend::Distributed;
 use simkit_backend::comm::Comm;
 use simkit_backend::rng::rng_uniform;
 use simkit_backend::{Error, Simulation};
@@ -228,8 +229,8 @@ pub fn check_all(comm: &Comm) -> Result<usize, String> {
     let mut checks = 0;
     for (name, system, config, steps) in cases() {
         let serial = Comm::serial();
-        let mut one = DistributedMd::new(&system, &config, serial.clone()).map_err(err)?;
-        let mut many = DistributedMd::new(&system, &config, comm.clone()).map_err(err)?;
+        let mut one = DistributedMd::new(system.clone(), &config, serial.clone()).map_err(err)?;
+        let mut many = DistributedMd::new(system.clone(), &config, comm.clone()).map_err(err)?;
         let half = steps / 2;
         one.step(half).map_err(err)?;
         many.step(half).map_err(err)?;
@@ -333,7 +334,7 @@ pub fn blow_up(comm: &Comm) -> Result<usize, String> {
         ..Config::default()
     };
     let run = |c: Comm| -> Result<(String, u64, Vec<u64>), String> {
-        let mut sim = DistributedMd::new(&system, &config, c).map_err(err)?;
+        let mut sim = DistributedMd::new(system.clone(), &config, c).map_err(err)?;
         let e = match sim.step(2000) {
             Err(e @ Error::BlowUp { .. }) => e.to_string(),
             other => return Err(format!("expected a blow-up, got {other:?}")),

@@ -3,6 +3,7 @@
 //! CPU, bit for bit, in f64, f32 and the mixed mode, with 203 particles (203 = 12 x 16 + 11: no rank count 2-4 and no SIMD
 //! width divides it).
 
+use simkit_backend::Distributed;
 use simkit_backend::comm::Comm;
 use simkit_backend::{Backend, Restart, Simulation};
 use simkit_pp_coulomb::{

@@ -3,6 +3,7 @@
 //! [`DistributedRd`] over the given communicator and, on rank 0, is compared bit for bit
 //! with the single-process CPU run.
 
+use simkit_backend::Distributed;
 use simkit_backend::comm::Comm;
 use simkit_backend::{Backend, Restart, Simulation};
 use simkit_rd::{
@@ -32,7 +33,7 @@ fn case<T: Real, M: Model>(
     steps: u32,
 ) -> Result<Result<(), String>, String> {
     let label = format!("{label} on {} rank(s)", comm.size());
-    let mut dist = DistributedRd::new(grid, model.clone(), config, comm.clone())
+    let mut dist = DistributedRd::new(grid.clone(), model.clone(), config, comm.clone())
         .map_err(|e| format!("{label}: building the distributed run: {e}"))?;
     let dist_result = dist.step(steps).map_err(|e| e.to_string());
     // Every rank must return the same result.
@@ -45,10 +46,7 @@ fn case<T: Real, M: Model>(
             "{label}: the ranks returned different results ({text} here)"
         ));
     }
-    let gathered = dist.gather().map_err(|e| format!("{label}: gather: {e}"))?;
-    let Some(gathered) = gathered else {
-        return Ok(dist_result);
-    };
+    let gathered = dist.state().map_err(|e| format!("{label}: state: {e}"))?;
     let mut one = Rd::new(grid.clone(), model, config, Backend::Cpu)
         .map_err(|e| format!("{label}: building the serial run: {e}"))?;
     let one_result = one.step(steps).map_err(|e| e.to_string());
@@ -203,7 +201,7 @@ pub fn check_all(comm: &Comm) -> Result<usize, String> {
 }
 
 /// A checkpoint moves between rank counts: one process (10 steps) -> `comm.size()` ranks
-/// (8 steps) -> `comm.size()` ranks again from rank 0's bytes (5 steps) and one process
+/// (8 steps) -> `comm.size()` ranks again from its checkpoint (5 steps) and one process
 /// (13 steps), each continuing bit for bit, simulated time included, with the
 /// uninterrupted single-process run.
 fn checkpoint_case(comm: &Comm, grid: &Grid<f64>, model: &GrayScott) -> Result<(), String> {
@@ -224,19 +222,10 @@ fn checkpoint_case(comm: &Comm, grid: &Grid<f64>, model: &GrayScott) -> Result<(
         DistributedRd::<f64, GrayScott>::resume(&saved, comm.clone()).map_err(e("resume"))?;
     dist.step(8).map_err(e("distributed step"))?;
     let saved = dist.checkpoint().map_err(e("distributed checkpoint"))?;
-    if saved.is_some() != comm.is_root() {
-        return Err(format!("{label}: the checkpoint must be on rank 0 only"));
-    }
-    let again = comm
-        .broadcast_from_root(saved.clone())
-        .map_err(e("broadcast"))?;
     let mut dist =
-        DistributedRd::<f64, GrayScott>::resume(&again, comm.clone()).map_err(e("resume"))?;
+        DistributedRd::<f64, GrayScott>::resume(&saved, comm.clone()).map_err(e("resume"))?;
     dist.step(5).map_err(e("distributed step"))?;
-    let gathered = dist.gather().map_err(e("gather"))?;
-    let (Some(saved), Some(gathered)) = (saved, gathered) else {
-        return Ok(());
-    };
+    let gathered = dist.state().map_err(e("state"))?;
     let mut want = serial(23)?;
     if bits(&gathered) != bits(&want.state().map_err(e("state"))?) || dist.steps_done() != 23 {
         return Err(format!(
