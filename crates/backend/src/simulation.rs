@@ -114,6 +114,18 @@ impl Backend<'_> {
         }
     }
 
+    /// Whether this backend computes in `f64`: the CPU always, a GPU when its adapter has
+    /// `SHADER_F64` ([`GpuContext::has_f64`]).
+    pub fn has_f64(&self) -> bool {
+        match self {
+            Backend::Cpu => true,
+            #[cfg(feature = "gpu")]
+            Backend::Gpu(ctx) => ctx.has_f64(),
+            #[cfg(not(feature = "gpu"))]
+            Backend::NoGpu(never, _) => match *never {},
+        }
+    }
+
     /// `"cpu"` or `"gpu (<adapter name>)"`.
     pub fn name(&self) -> String {
         match self {

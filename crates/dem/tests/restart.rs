@@ -2,6 +2,9 @@
 //! process), and clear `Error::Checkpoint`s for files of another package or model, and for
 //! truncated or corrupted files.
 
+/// The conformance suite every simulation crate runs (`conformance_tests!`).
+mod suite;
+
 use approx::assert_abs_diff_eq;
 use simkit_backend::testing::{backends, check_restart};
 use simkit_backend::{Backend, Error, Restart, Simulation, checkpoint};

@@ -2,6 +2,9 @@
 //! process and N more steps, bit for bit, on every CPU method and GPU layout; a checkpoint
 //! resumes exactly on another backend; bad files give clear errors.
 
+/// The conformance suite every simulation crate runs (`conformance_tests!`).
+mod suite;
+
 use simkit_backend::testing::{backends, check_restart};
 use simkit_backend::{Backend, Error, Restart, Simulation, checkpoint};
 use simkit_lattice_gas::{Config, CpuMethod, GpuLayout, Lattice, LatticeGas, Obstacle, RuleSet};

@@ -1,5 +1,8 @@
 //! Checkpoint and restart, bit for bit (in a new process), and refused checkpoints.
 
+/// The conformance suite every simulation crate runs (`conformance_tests!`).
+mod suite;
+
 use simkit_backend::testing::{backends, check_restart};
 use simkit_backend::{Backend, Error, Precision, Restart, Result, Simulation, checkpoint};
 use simkit_md::{Config, Dim, Integrator, Langevin, LennardJones, Md, PairTable, System, scenes};

@@ -21,15 +21,6 @@ fn accelerations(p: &Particles, law: ForceLaw, prec: Precision, b: Backend<'_>) 
         .unwrap()
 }
 
-/// Whether `backend` runs f64 (a GPU needs `SHADER_F64`).
-fn has_f64(backend: Backend<'_>) -> bool {
-    match backend {
-        #[cfg(feature = "gpu")]
-        Backend::Gpu(ctx) => ctx.has_f64(),
-        _ => true,
-    }
-}
-
 /// Forces on every backend against the CPU: f32 at N = 4096 (L2 relative) against the CPU
 /// f32 forces; per law, f64 and f32 (worst particle over rms) against the CPU f64 forces. The
 /// backends sum the same pairs in a different order, so results differ by rounding only.
@@ -62,7 +53,7 @@ fn accelerations_match_cpu_on_every_backend() {
         for (law, b32) in LAWS.into_iter().zip(F32_BOUNDS) {
             let p = plasma(300, 3);
             let c = accelerations(&p, law, Precision::F64, Backend::Cpu);
-            if has_f64(backend) {
+            if backend.has_f64() {
                 let g = accelerations(&p, law, Precision::F64, backend);
                 let e = max_error_over_rms(&g, &c);
                 println!("{backend:?} {law:?} f64 vs cpu f64 {e:.2e}");
@@ -91,7 +82,7 @@ fn gpu_and_cpu_trajectories_agree() {
     let test = "gpu_and_cpu_trajectories_agree";
     for backend in backends(test) {
         let mut precisions = vec![Precision::F32];
-        if has_f64(backend) {
+        if backend.has_f64() {
             precisions.push(Precision::F64);
         } else {
             eprintln!(

@@ -25,21 +25,12 @@ fn opposite_charges(n: usize, seed: u64) -> Particles {
     p
 }
 
-/// Whether `backend` runs f64.
-fn has_f64(backend: Backend<'_>) -> bool {
-    match backend {
-        #[cfg(feature = "gpu")]
-        Backend::Gpu(ctx) => ctx.has_f64(),
-        _ => true,
-    }
-}
-
 /// The precisions to run on `backend`: f64 and f32 on the CPU, f32 on a GPU (and f64 where
 /// it has SHADER_F64).
 fn precisions(backend: Backend<'_>) -> Vec<Precision> {
     match backend {
         Backend::Cpu => vec![Precision::F64, Precision::F32],
-        _ if has_f64(backend) => vec![Precision::F32, Precision::F64],
+        _ if backend.has_f64() => vec![Precision::F32, Precision::F64],
         _ => {
             println!("{backend:?}: no SHADER_F64, f32 only");
             vec![Precision::F32]

@@ -2,6 +2,9 @@
 //! (`simkit_backend::testing::check_restart`), the clock and step counter restored, and clear
 //! errors for checkpoints of another model, truncated or corrupted ones.
 
+/// The conformance suite every simulation crate runs (`conformance_tests!`).
+mod suite;
+
 use approx::assert_abs_diff_eq;
 use simkit_backend::checkpoint;
 use simkit_backend::testing::{backends, check_restart};
@@ -25,15 +28,6 @@ fn plasma() -> Particles {
     p
 }
 
-/// Whether `backend` runs f64.
-fn has_f64(backend: Backend<'_>) -> bool {
-    match backend {
-        #[cfg(feature = "gpu")]
-        Backend::Gpu(ctx) => ctx.has_f64(),
-        _ => true,
-    }
-}
-
 /// A run of 2 x 35 steps against 35 steps, checkpoint, resume in a new process and 35 more
 /// steps, byte for byte, for: the exact law (energy guard on, a cold sphere) with leapfrog,
 /// Plummer with symplectic Euler, and the exclusion law with leapfrog after a `set_dt` (the
@@ -45,7 +39,7 @@ fn restart_is_bit_exact() {
     let name = "restart_is_bit_exact";
     for backend in backends(name) {
         let mut precisions = vec![Precision::F32];
-        if has_f64(backend) {
+        if backend.has_f64() {
             precisions.push(Precision::F64);
         } else {
             println!("{backend:?}: no SHADER_F64 on this adapter, f64 restart not tested");

@@ -3,6 +3,9 @@
 //! precision, truncated or corrupted ones are refused with `Error::Checkpoint`, and a
 //! checkpoint whose contents are invalid is validated like `Rd::new`'s input.
 
+/// The conformance suite every simulation crate runs (`conformance_tests!`).
+mod suite;
+
 use simkit_backend::testing::{backends, check_restart};
 use simkit_backend::{Backend, Error, Restart, Result, Simulation, checkpoint};
 use simkit_rd::scenes::{colony_scene, gray_scott_square};
@@ -46,14 +49,7 @@ fn restart_is_bit_exact() {
         check_restart(test, "colony f32 heun", backend, 30, |b| {
             colony::<f32>(b, Stepping::heun(0.005))
         });
-        #[cfg(feature = "gpu")]
-        let f64_here = match backend {
-            Backend::Gpu(ctx) => ctx.has_f64(),
-            Backend::Cpu => true,
-        };
-        #[cfg(not(feature = "gpu"))]
-        let f64_here = true;
-        if f64_here {
+        if backend.has_f64() {
             check_restart(test, "gray-scott f64", backend, 60, gray_scott::<f64>);
             check_restart(test, "colony f64 euler", backend, 50, |b| {
                 colony::<f64>(b, Stepping::euler(0.005))

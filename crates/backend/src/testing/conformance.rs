@@ -162,8 +162,8 @@ pub fn check_damaged_checkpoints<S: Restart>(test: &str, steps: u32, make: Make<
 }
 
 /// Generates the shared conformance tests of a simulation crate in a module
-/// `conformance_suite` of the test file it is invoked in (at the file's root, so that the
-/// restart check finds its test by name in a child process):
+/// `conformance_suite` of the module it is invoked in (any module of a test binary: the
+/// restart check finds its test by its module path in a child process):
 ///
 /// - `backends_agree`: [`check_backends_agree`] over every backend;
 /// - `split_steps_equal_one_call`: [`check_split_steps`] on every backend;
@@ -228,8 +228,15 @@ macro_rules! conformance_tests {
             #[test]
             fn restart_is_bit_exact() {
                 for b in testing::backends("restart_is_bit_exact") {
+                    // The test's path in its binary (the module path less the crate),
+                    // by which the child process finds it.
+                    let here = module_path!();
+                    let test = format!(
+                        "{}::restart_is_bit_exact",
+                        here.split_once("::").map_or(here, |(_, rest)| rest)
+                    );
                     testing::check_restart::<$sim>(
-                        "conformance_suite::restart_is_bit_exact",
+                        &test,
                         "conformance",
                         b,
                         u32::div_ceil($steps, 2),

@@ -1,26 +1,20 @@
 //! The conformance suite every simkit simulation crate runs (`conformance_tests!` of
-//! `simkit-backend`): the backends agree bit for bit, split calls equal one call, restart bit
-//! for bit, damaged checkpoints refused; on a body-forced channel with an obstacle. (No
-//! blow-up check: the state is bits, and every step keeps it valid.)
+//! `simkit-backend`, compiled into `tests/restart.rs`): the backends agree bit for bit,
+//! split calls equal one call, restart bit for bit, damaged checkpoints refused; on a
+//! body-forced channel with an obstacle (the scene of the restart tests). No blow-up
+//! check: the state is bits, and every step keeps it valid.
 
 use simkit_backend::{Backend, Result};
-use simkit_lattice_gas::{Config, Lattice, LatticeGas, Obstacle, RuleSet};
+use simkit_lattice_gas::{Config, Lattice, LatticeGas, RuleSet};
 
+/// The obstacle scene of the restart tests, body-forced, with the full collision rules.
 fn channel(backend: Backend<'_>) -> Result<LatticeGas> {
-    let mut lattice = Lattice::new(96, 40)?;
-    lattice.fill_random(0.25, 11)?;
-    lattice.add_wall_rows();
-    lattice.add_obstacle(&Obstacle::Disc {
-        cx: 30.0,
-        cy: 18.0,
-        radius: 5.0,
-    })?;
     let config = Config {
         rules: RuleSet::Full,
         body_force: 0.02,
         ..Config::default()
     };
-    LatticeGas::new(lattice, &config, backend)
+    super::scene(&config, backend)
 }
 
 /// Every backend gives the same lattice bit for bit.

@@ -1,7 +1,8 @@
 //! The conformance suite every simkit simulation crate runs (`conformance_tests!` of
-//! `simkit-backend`): the backends agree, split calls equal one call, restart bit for bit,
-//! rollback after a blow-up, damaged checkpoints refused; on the Lennard-Jones liquid of
-//! 108 atoms (the CPU in `f32`, as the GPU computes).
+//! `simkit-backend`, compiled into `tests/restart.rs`): the backends agree, split calls
+//! equal one call, restart bit for bit, rollback after a blow-up, damaged checkpoints
+//! refused; on the Lennard-Jones liquid of 108 atoms (the CPU in `f32`, as the GPU
+//! computes).
 
 use simkit_backend::testing::{max_abs_diff, within};
 use simkit_backend::{Backend, Precision, Result};
