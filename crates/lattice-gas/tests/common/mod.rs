@@ -121,8 +121,25 @@ fn checkpoint_case(comm: &Comm, lattice: &Lattice, config: &Config) -> Result<()
     let mut dist = DistributedLatticeGas::resume(&saved, comm.clone()).map_err(e("resume"))?;
     dist.step(10).map_err(e("distributed step"))?;
     let saved = dist.checkpoint().map_err(e("distributed checkpoint"))?;
-    // And once more onto the distributed run, from the bytes every rank holds.
-    let mut dist = DistributedLatticeGas::resume(&saved, comm.clone()).map_err(e("resume"))?;
+    // And once more onto the distributed run, through a file that rank 0 writes and reads
+    // (its path chosen on rank 0 and sent to the others).
+    let dir = comm.is_root().then(|| {
+        let d = std::env::temp_dir().join(format!("simkit-lg-{}", std::process::id()));
+        d.display().to_string().into_bytes()
+    });
+    let dir = comm.broadcast_from_root(dir).map_err(e("broadcast"))?;
+    let dir = std::path::PathBuf::from(String::from_utf8(dir).map_err(|_| "path".to_string())?);
+    let path = dir.join("run.ckpt");
+    dist.write_checkpoint(&path)
+        .map_err(e("write_checkpoint"))?;
+    // A missing file is an error on every rank (no rank left waiting).
+    if DistributedLatticeGas::resume_file(dir.join("missing.ckpt"), comm.clone()).is_ok() {
+        return Err(format!("{label}: a missing checkpoint file was accepted"));
+    }
+    let mut dist = DistributedLatticeGas::resume_file(&path, comm.clone()).map_err(e("resume"))?;
+    if comm.is_root() {
+        let _ = std::fs::remove_dir_all(&dir);
+    }
     dist.step(5).map_err(e("distributed step"))?;
     let gathered = dist.state().map_err(e("state"))?;
     let mut last = LatticeGas::resume(&saved, Backend::Cpu).map_err(e("serial resume"))?;
