@@ -244,13 +244,16 @@ impl DistributedLatticeGas {
             .collect()
     }
 
-    /// The whole lattice on rank 0 (`Some`), `None` on the other ranks. Collective.
-    fn gather_root(&self) -> Result<Option<Lattice>> {
-        let Some(cells) = self.decomposition.gather(&self.comm, &self.interior()?)? else {
-            return Ok(None);
-        };
+    /// The sites of the whole lattice on rank 0 (`Some`), `None` on the other ranks.
+    /// Collective.
+    fn gather_cells(&self) -> Result<Option<Vec<u8>>> {
+        self.decomposition.gather(&self.comm, &self.interior()?)
+    }
+
+    /// The lattice of the sites [`DistributedLatticeGas::gather_cells`] gathered.
+    fn lattice_of(&self, cells: Vec<u8>) -> Lattice {
         let [w, h] = self.decomposition.global();
-        Ok(Some(Lattice::from_raw(w, h, cells)))
+        Lattice::from_raw(w, h, cells)
     }
 
     /// Total number of particles over all ranks, on every rank (no gather). Collective.
@@ -297,10 +300,8 @@ impl Simulation for DistributedLatticeGas {
     /// The whole lattice, gathered on rank 0 and sent to every rank: the state the
     /// single-process run has after the same steps (bit for bit). Collective.
     fn state(&mut self) -> Result<Lattice> {
-        let root = self.gather_root()?.map(Lattice::into_cells);
-        let cells = self.comm.broadcast_from_root(root)?;
-        let [w, h] = self.decomposition.global();
-        Ok(Lattice::from_raw(w, h, cells))
+        let cells = self.comm.share_from_root(self.gather_cells())?;
+        Ok(self.lattice_of(cells))
     }
 
     /// Steps taken so far (the same on every rank).
@@ -329,12 +330,9 @@ impl Distributed for DistributedLatticeGas {
     /// on any backend, or with [`Distributed::resume`] on any rank count. Collective (the
     /// lattice is gathered and encoded on rank 0, the bytes sent to every rank).
     fn checkpoint(&mut self) -> Result<Vec<u8>> {
-        let bytes = self
-            .gather_root()?
-            .map(|lattice| encode_checkpoint(&self.config, &lattice, self.steps))
-            .transpose();
-        let bytes = self.comm.agree(bytes)?;
-        self.comm.broadcast_from_root(bytes)
+        let encode = |cells| encode_checkpoint(&self.config, &self.lattice_of(cells), self.steps);
+        let bytes = self.gather_cells().and_then(|c| c.map(encode).transpose());
+        self.comm.share_from_root(bytes)
     }
 
     /// Resumes on the CPU from checkpoint bytes of [`crate::LatticeGas`]

@@ -126,9 +126,9 @@ impl<A: RankRun, B: RankRun> DistributedRun<A, B> {
     ///
     /// Errors: a failed exchange.
     pub fn state(&self, species: &[u32]) -> Result<State> {
-        let rows = by_dim!(&self.engine, e => e.gather_motion(&self.comm))?;
-        let flat = rows.map(|rows| rows.into_iter().flatten().collect::<Vec<f64>>());
-        let v = self.comm.broadcast_from_root(flat)?;
+        let rows = by_dim!(&self.engine, e => e.gather_motion(&self.comm));
+        let flat = rows.map(|rows| rows.map(|r| r.into_iter().flatten().collect::<Vec<f64>>()));
+        let v = self.comm.share_from_root(flat)?;
         let rows = v.chunks_exact(6);
         Ok(State {
             time: self.time(),
@@ -143,9 +143,9 @@ impl<A: RankRun, B: RankRun> DistributedRun<A, B> {
     ///
     /// Errors: a failed exchange or encoding (on every rank).
     pub fn checkpoint(&self, encode: impl FnOnce(Dynamics) -> Result<Vec<u8>>) -> Result<Vec<u8>> {
-        let saved = by_dim!(&self.engine, e => e.gather_dynamics(&self.comm))?;
-        let bytes = self.comm.agree(saved.map(encode).transpose())?;
-        self.comm.broadcast_from_root(bytes)
+        let saved = by_dim!(&self.engine, e => e.gather_dynamics(&self.comm));
+        let bytes = saved.and_then(|s| s.map(encode).transpose());
+        self.comm.share_from_root(bytes)
     }
 
     /// The standard `Debug` fields of a distributed type named `name`.

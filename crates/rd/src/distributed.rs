@@ -236,8 +236,9 @@ impl<T: Real, M: Model> DistributedRd<T, M> {
         self.config.stepping
     }
 
-    /// The whole grid on rank 0 (`Some`), `None` on the other ranks. Collective.
-    fn gather_root(&self) -> Result<Option<Grid<T>>> {
+    /// The values of the whole grid, species after species, on rank 0 (`Some`), `None` on
+    /// the other ranks. Collective.
+    fn gather_fields(&self) -> Result<Option<Vec<T>>> {
         let [nx, ny] = self.block.len;
         let w = nx + 2;
         let plane = w * (ny + 2);
@@ -247,12 +248,14 @@ impl<T: Real, M: Model> DistributedRd<T, M> {
                 local.extend_from_slice(&p[j * w + 1..j * w + 1 + nx]);
             }
         }
-        let Some(all) = self.decomposition.gather(&self.comm, &local)? else {
-            return Ok(None);
-        };
+        self.decomposition.gather(&self.comm, &local)
+    }
+
+    /// The grid of the values [`DistributedRd::gather_fields`] gathered.
+    fn grid_of(&self, all: &[T]) -> Result<Grid<T>> {
         let [gnx, gny] = self.decomposition.global();
         let fields = all.chunks(gnx * gny).map(<[T]>::to_vec).collect();
-        Grid::new(gnx, gny, self.h, self.boundaries.clone(), fields).map(Some)
+        Grid::new(gnx, gny, self.h, self.boundaries.clone(), fields)
     }
 
     /// The model's largest effective diffusivity over the whole grid (NaN if any rank's is).
@@ -410,12 +413,8 @@ impl<T: Real, M: Model> Simulation for DistributedRd<T, M> {
     /// The whole grid, gathered on rank 0 and sent to every rank: bit-identical to
     /// [`crate::Rd`]'s state on the CPU after the same steps. Collective.
     fn state(&mut self) -> Result<Grid<T>> {
-        let root = self.gather_root()?;
-        let [gnx, gny] = self.decomposition.global();
-        let flat = root.map(|g| g.fields().concat());
-        let all = self.comm.broadcast_from_root(flat)?;
-        let fields = all.chunks(gnx * gny).map(<[T]>::to_vec).collect();
-        Grid::new(gnx, gny, self.h, self.boundaries.clone(), fields)
+        let all = self.comm.share_from_root(self.gather_fields())?;
+        self.grid_of(&all)
     }
 
     fn steps_done(&self) -> u64 {
@@ -438,21 +437,18 @@ impl<T: Real, M: Model> Distributed for DistributedRd<T, M> {
     /// any number of ranks. Collective (the grid is gathered on rank 0, encoded there and
     /// sent to every rank).
     fn checkpoint(&mut self) -> Result<Vec<u8>> {
-        let root = self.gather_root()?;
-        let bytes = root
-            .map(|grid| {
-                encode_checkpoint(&RunState {
-                    grid,
-                    model: self.model.clone(),
-                    config: self.config,
-                    steps: self.steps,
-                    epoch_time: self.epoch_time,
-                    epoch_step: self.epoch_step,
-                })
+        let encode = |all: Vec<T>| {
+            encode_checkpoint(&RunState {
+                grid: self.grid_of(&all)?,
+                model: self.model.clone(),
+                config: self.config,
+                steps: self.steps,
+                epoch_time: self.epoch_time,
+                epoch_step: self.epoch_step,
             })
-            .transpose();
-        let bytes = self.comm.agree(bytes)?;
-        self.comm.broadcast_from_root(bytes)
+        };
+        let bytes = self.gather_fields().and_then(|a| a.map(encode).transpose());
+        self.comm.share_from_root(bytes)
     }
 
     /// Resumes from checkpoint bytes of [`crate::Rd`] (`Restart::checkpoint`) or of

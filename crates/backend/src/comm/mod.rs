@@ -419,6 +419,16 @@ impl Comm {
         }
     }
 
+    /// Rank 0's data on every rank, where rank 0 (or any rank) may have failed to produce
+    /// it: `root` is `Ok(Some(data))` on rank 0 and `Ok(None)` elsewhere, or an error on
+    /// any rank, which every rank then returns ([`Comm::agree`]) before anything is sent, so
+    /// no rank waits in the broadcast. E.g. a state gathered and encoded on rank 0.
+    /// Collective.
+    pub fn share_from_root<T: Pod>(&self, root: Result<Option<Vec<T>>>) -> Result<Vec<T>> {
+        let root = self.agree(root)?;
+        self.broadcast_from_root(root)
+    }
+
     /// Writes `bytes` (rank 0's; the other ranks pass `None`) to `path` from rank 0, atomically
     /// ([`crate::checkpoint::write_file`]: parent directories are created). Collective: every
     /// rank returns once the file is complete; if rank 0 fails it returns its error and the
