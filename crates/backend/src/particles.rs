@@ -15,6 +15,9 @@ pub struct State {
     pub positions: Vec<[f64; 3]>,
     /// Velocities at `time`.
     pub velocities: Vec<[f64; 3]>,
+    /// Angular velocities at `time` (`[0, 0, w_z]` in 2D); empty when the particles do not
+    /// spin.
+    pub angular_velocities: Vec<[f64; 3]>,
     /// Species of every particle.
     pub species: Vec<u32>,
 }
@@ -59,6 +62,18 @@ pub struct Dynamics {
     /// Positions at the last neighbour-list build (the list, hence the order of the force
     /// sums, is rebuilt from them on resume).
     pub reference: Vec<f64>,
+    /// Rotating particles: angular velocities, angular accelerations and predicted angular
+    /// velocities, 3 values per slot each, in that order (9 per slot); empty otherwise.
+    #[serde(default)]
+    pub spin: Vec<f64>,
+    /// Per-contact history of a contact law that keeps one: the contacts as `(particle,
+    /// partner)` pairs, the partner being a particle index or, from `n` on, wall
+    /// `partner - n`.
+    #[serde(default)]
+    pub contacts: Vec<[u32; 2]>,
+    /// The history values of `contacts`, the law's count per contact.
+    #[serde(default)]
+    pub history: Vec<f64>,
 }
 
 impl Dynamics {

@@ -9,7 +9,7 @@ use simkit_backend::{Backend, Error, Precision, Result};
 use crate::cpu::CpuEngine;
 use crate::engine::Engine;
 use crate::prepared::Prepared;
-use crate::{ContactLaw, Material};
+use crate::{ContactLaw, HertzMindlin, Material};
 
 /// The engine of a prepared scene on `backend`: the built-in law's, compiled in this crate
 /// (see [`ContactLaw::BUILT_IN`]), or `L`'s compiled where it is used.
@@ -34,8 +34,8 @@ pub(crate) fn engine_for<L: ContactLaw>(
     }
 }
 
-/// The engine (as `Box<dyn Engine<Material>>`) of a prepared scene of the built-in law,
-/// compiled here once.
+/// The engine (as `Box<dyn Engine<L>>`) of a prepared scene of a built-in law `L`
+/// ([`Material`] or [`HertzMindlin`]), compiled here once.
 #[inline(never)]
 fn built_in(
     prep: Box<dyn Any>,
@@ -44,7 +44,11 @@ fn built_in(
     backend: Backend<'_>,
     saved: Option<&Dynamics>,
 ) -> Result<Box<dyn Any>> {
-    match prep.downcast::<Prepared<Material>>() {
+    let prep = match prep.downcast::<Prepared<Material>>() {
+        Ok(prep) => return Ok(Box::new(build_engine(*prep, precision, backend, saved)?)),
+        Err(prep) => prep,
+    };
+    match prep.downcast::<Prepared<HertzMindlin>>() {
         Ok(prep) => Ok(Box::new(build_engine(*prep, precision, backend, saved)?)),
         Err(_) => Err(not_built_in(name)),
     }
@@ -83,7 +87,7 @@ mod tests {
     use serde::{Deserialize, Serialize};
     use simkit_backend::{Backend, Error, Real, Result};
 
-    use crate::{Config, Contact, ContactLaw, Dem, Dim, Material, Particle, Scene};
+    use crate::{Config, Contact, ContactForce, ContactLaw, Dem, Dim, Material, Particle, Scene};
 
     /// The linear law under another type that claims to be built in.
     #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -111,20 +115,21 @@ mod tests {
         fn has_friction(&self) -> bool {
             self.0.has_friction()
         }
-        fn contact_time(&self) -> f64 {
-            self.0.contact_time()
+        fn contact_time(&self, m_ij: f64, r_eff: f64) -> f64 {
+            self.0.contact_time(m_ij, r_eff)
         }
-        fn safe_dt(&self) -> f64 {
-            self.0.safe_dt()
+        fn safe_dt(&self, m_ij: f64, r_eff: f64) -> f64 {
+            self.0.safe_dt(m_ij, r_eff)
         }
         fn force<T: Real, const D: usize, const FRICTION: bool>(
             c: &Self::Coeff<T>,
             contact: &Contact<T, D>,
-        ) -> [T; D] {
-            Material::force::<T, D, FRICTION>(c, contact)
+            history: &mut [T],
+        ) -> ContactForce<T, D> {
+            Material::force::<T, D, FRICTION>(c, contact, history)
         }
-        fn elastic_energy<T: Real>(c: &Self::Coeff<T>, m_ij: T, delta: T) -> T {
-            Material::elastic_energy(c, m_ij, delta)
+        fn elastic_energy<T: Real>(c: &Self::Coeff<T>, m_ij: T, r_eff: T, delta: T) -> T {
+            Material::elastic_energy(c, m_ij, r_eff, delta)
         }
     }
 

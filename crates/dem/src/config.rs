@@ -151,10 +151,12 @@ impl Config {
     /// Checks the settings ([`Config::validate`]) and returns the time step the solver
     /// will use for `scene`: `dt`, or `t_c / 30` of the shortest contact time in the scene.
     ///
-    /// Errors: those of [`Config::validate`]; [`Error::Unstable`] when the step exceeds
+    /// Errors: those of [`Config::validate`]; a scene without particles (the contact time
+    /// depends on their masses and radii); [`Error::Unstable`] when the step exceeds
     /// [`safe_dt`] without [`allow_unstable_dt`](Self::allow_unstable_dt).
     pub fn resolve_dt<L: ContactLaw>(&self, scene: &Scene<L>) -> Result<f64> {
         self.validate()?;
+        scene.check_ready()?;
         let dt = match self.dt {
             Some(dt) => dt,
             None => scene.min_contact_time() / DEFAULT_STEPS_PER_CONTACT,
@@ -175,13 +177,11 @@ impl Config {
 }
 
 /// The safe time-step bound of a scene: the minimum of [`ContactLaw::safe_dt`] over every
-/// species pair and wall material (for [`crate::Material`]:
-/// [`crate::ContactCoefficients::safe_dt`]).
+/// species pair and wall material, each at its lightest reduced mass and smallest
+/// effective radius (for [`crate::Material`]: [`crate::ContactCoefficients::safe_dt`]).
 pub fn safe_dt<L: ContactLaw>(scene: &Scene<L>) -> f64 {
     scene
-        .pair_table()
-        .iter()
-        .chain(scene.walls().iter().map(|w| &w.material))
-        .map(L::safe_dt)
+        .contact_scales()
+        .map(|(law, m, r)| law.safe_dt(m, r))
         .fold(f64::INFINITY, f64::min)
 }

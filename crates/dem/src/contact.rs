@@ -5,7 +5,7 @@ use std::f64::consts::PI;
 
 use simkit_backend::{Real, Result};
 
-use crate::{Contact, ContactLaw, Material};
+use crate::{Contact, ContactForce, ContactLaw, Material};
 
 /// Spring and dashpot coefficients per unit reduced mass, from a [`Material`], in the real
 /// type `T` (`f64` unless stated; the CPU backend converts them to its precision with
@@ -163,20 +163,24 @@ impl ContactLaw for Material {
         self.mu_s > 0.0 && self.mu_k > 0.0
     }
 
-    fn contact_time(&self) -> f64 {
+    /// The requested `t_c`, whatever the masses (the coefficients scale with `m_ij`).
+    fn contact_time(&self, _m_ij: f64, _r_eff: f64) -> f64 {
         self.contact_time
     }
 
-    fn safe_dt(&self) -> f64 {
+    fn safe_dt(&self, _m_ij: f64, _r_eff: f64) -> f64 {
         ContactCoefficients::new(self).safe_dt(self)
     }
 
-    /// [`normal_force`] along `n`, plus [`friction_force`] when `FRICTION`.
+    /// [`normal_force`] along `n`, plus [`friction_force`] when `FRICTION` (at the contact
+    /// point's relative velocity, so a rotating scene gets the friction's torque); no
+    /// history, no couple.
     #[inline(always)]
     fn force<T: Real, const D: usize, const FRICTION: bool>(
         c: &ContactCoefficients<T>,
         k: &Contact<T, D>,
-    ) -> [T; D] {
+        _history: &mut [T],
+    ) -> ContactForce<T, D> {
         let fnorm = normal_force(c, k.m_ij, k.delta, k.v_n);
         let mut fp = k.n.map(|x| fnorm * x);
         if FRICTION && let Some(ft) = friction_force(c, &k.n, k.v_n, &k.v_rel, fnorm, k.m_ij) {
@@ -184,10 +188,10 @@ impl ContactLaw for Material {
                 *f += t;
             }
         }
-        fp
+        ContactForce::force(fp)
     }
 
-    fn elastic_energy<T: Real>(c: &ContactCoefficients<T>, m_ij: T, delta: T) -> T {
+    fn elastic_energy<T: Real>(c: &ContactCoefficients<T>, m_ij: T, _r_eff: T, delta: T) -> T {
         spring_energy(c, m_ij, delta)
     }
 }

@@ -13,9 +13,12 @@ use crate::prepared::Prepared;
 pub struct Diagnostics {
     /// Simulation time.
     pub time: f64,
-    /// Kinetic energy `sum m v^2 / 2`.
+    /// Kinetic energy of the translation `sum m v^2 / 2`.
     pub kinetic: f64,
-    /// Elastic energy stored in the springs `sum k delta^2 / 2` (pairs and walls).
+    /// Kinetic energy of the rotation `sum I w^2 / 2` (0 in a scene without rotation).
+    pub rotational: f64,
+    /// Elastic energy stored in the normal springs (pairs and walls; linear law:
+    /// `sum k delta^2 / 2`, see [`crate::ContactLaw::elastic_energy`]).
     pub elastic: f64,
     /// Potential energy in gravity `sum m g h` (h along the vertical axis from the box floor).
     pub potential: f64,
@@ -213,12 +216,14 @@ pub(crate) fn compute<L: ContactLaw>(
     time: f64,
     x: &[[f64; 3]],
     v: &[[f64; 3]],
+    w: &[[f64; 3]],
 ) -> Result<Diagnostics> {
     let mut out = Diagnostics {
         time,
         finite: x
             .iter()
             .chain(v.iter())
+            .chain(w.iter())
             .all(|a| a.iter().all(|c| c.is_finite())),
         ..Default::default()
     };
@@ -227,6 +232,7 @@ pub(crate) fn compute<L: ContactLaw>(
         let nan = f64::NAN;
         return Ok(Diagnostics {
             kinetic: nan,
+            rotational: nan,
             elastic: nan,
             potential: nan,
             momentum: [nan; 3],
@@ -249,6 +255,12 @@ pub(crate) fn compute<L: ContactLaw>(
         out.potential += m * p.gravity * (xi[p.vertical] - p.lo[p.vertical]);
     }
     out.com_height = mz / mtot;
+    out.rotational = p
+        .inertia
+        .iter()
+        .zip(w)
+        .map(|(&i, wi)| 0.5 * i * wi.iter().map(|c| c * c).sum::<f64>())
+        .sum();
     let vmean = out.momentum.map(|c| c / mtot);
     let mut t = 0.0;
     for (&m, vi) in p.mass.iter().zip(v) {
@@ -267,7 +279,8 @@ pub(crate) fn compute<L: ContactLaw>(
         if depth > 0.0 {
             let c = &coeff[crate::pair_index(p.species[i], p.species[j], p.n_species)];
             let mij = crate::reduced_mass(p.mass[i], p.mass[j]);
-            out.elastic += L::elastic_energy(c, mij, depth);
+            let r_eff = p.radius[i] * p.radius[j] / (p.radius[i] + p.radius[j]);
+            out.elastic += L::elastic_energy(c, mij, r_eff, depth);
             out.contacts += 1;
             worst = max_or_nan(worst, depth);
             worst_ratio = max_or_nan(worst_ratio, depth / p.radius[i].min(p.radius[j]));
@@ -275,14 +288,15 @@ pub(crate) fn compute<L: ContactLaw>(
     });
     let (zw, _) = p.wall_motion(time);
     for ((&xi, &r), &m) in x.iter().zip(&p.radius).zip(&p.mass) {
-        for w in &p.walls {
+        for wall in &p.walls {
             let depth = if p.axes == 2 {
-                w.overlap(&[xi[0], xi[1]], r, zw, p.vertical)
+                wall.overlap(&[xi[0], xi[1]], r, zw, p.vertical)
             } else {
-                w.overlap(&xi, r, zw, p.vertical)
+                wall.overlap(&xi, r, zw, p.vertical)
             };
             if depth > 0.0 {
-                out.elastic += L::elastic_energy(&w.material.coefficients::<f64>(), m, depth);
+                let c = wall.material.coefficients::<f64>();
+                out.elastic += L::elastic_energy(&c, m, r, depth);
                 out.wall_contacts += 1;
                 worst = max_or_nan(worst, depth);
                 worst_ratio = max_or_nan(worst_ratio, depth / r);

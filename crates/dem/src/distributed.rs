@@ -170,7 +170,7 @@ impl<L: ContactLaw> DistributedDem<L> {
                 format!("must equal the particle count {n}"),
             ));
         }
-        by_dim!(self.run.engine(), e => diagnostics::compute(&e.prep, state.time, &state.positions, &state.velocities))
+        by_dim!(self.run.engine(), e => diagnostics::compute(&e.prep, state.time, &state.positions, &state.velocities, &state.angular_velocities))
     }
 
     /// Vertical displacement of the vibrating walls at time `t`.
@@ -268,6 +268,16 @@ fn prepare<L: ContactLaw>(scene: &Scene<L>, config: &Config) -> Result<Prepared<
              or Dem for position Verlet"
                 .into(),
         ));
+    }
+    if scene.rotation() || L::HISTORY > 0 {
+        return Err(Error::Unsupported(format!(
+            "DistributedDem does not yet carry rotation or per-contact history across \
+             ranks (scene rotation: {}, law '{}' keeps {} values per contact); run the scene \
+             with Dem on the CPU backend",
+            scene.rotation(),
+            L::NAME,
+            L::HISTORY
+        )));
     }
     let prep = Prepared::new(scene, config, false)?;
     diagnostics::check_initial_overlaps(&prep)?;
@@ -429,6 +439,8 @@ where
             radius: &self.radius,
             mass: &self.mass,
             species: &self.species,
+            omega: &[],
+            dt: self.prep.dt,
             n_species: self.prep.n_species,
             coeff: &self.coeff,
             walls: &self.walls,
@@ -454,15 +466,25 @@ where
                         *f += g * inp.mass[i];
                     }
                     for w in inp.walls {
-                        wall_force::<f64, D, L, FRICTION>(&inp, w, i, &mut f);
+                        let mut torque = [0.0; 3];
+                        wall_force::<f64, D, L, FRICTION, false>(
+                            &inp,
+                            w,
+                            i,
+                            &mut [],
+                            &mut f,
+                            &mut torque,
+                        );
                     }
                     let xi = inp.pos[i];
                     for &j in list.partners(i) {
                         let j = j as usize;
                         let sep: [f64; D] = std::array::from_fn(|d| xi[d] - inp.pos[j][d]);
-                        if let Some(fp) = contact_force::<f64, D, L, FRICTION>(&inp, i, j, sep) {
-                            for d in 0..D {
-                                f[d] += fp[d];
+                        let fp =
+                            contact_force::<f64, D, L, FRICTION, false>(&inp, i, j, sep, &mut []);
+                        if let Some(fp) = fp {
+                            for (f, x) in f.iter_mut().zip(fp.f) {
+                                *f += x;
                             }
                         }
                     }
@@ -783,6 +805,7 @@ where
                 acc: column(7),
                 aux: column(10),
                 reference: column(13),
+                ..Dynamics::default()
             }
         }))
     }

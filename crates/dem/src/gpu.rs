@@ -611,6 +611,7 @@ impl<L: ContactLaw> Engine<L> for GpuEngine<L> {
             time: self.steps as f64 * self.prep.dt,
             positions: pos.iter().map(c).collect(),
             velocities: vel.iter().map(c).collect(),
+            angular_velocities: Vec::new(),
             species: self.prep.species.clone(),
         })
     }

@@ -97,7 +97,8 @@ impl Material {
     }
 }
 
-/// One particle: a disc (2D) or sphere (3D) without rotation.
+/// One particle: a solid disc (2D) or sphere (3D); it spins only in a scene with
+/// [`Scene::set_rotation`].
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Particle {
     /// Position (in 2D the z component must be 0).
@@ -110,6 +111,9 @@ pub struct Particle {
     pub mass: f64,
     /// Species index, < the scene's species count.
     pub species: u32,
+    /// Angular velocity (in 2D only z; read only in a rotating scene).
+    #[serde(default)]
+    pub angular_velocity: [f64; 3],
 }
 
 impl Particle {
@@ -122,7 +126,15 @@ impl Particle {
             radius,
             mass,
             species: 0,
+            angular_velocity: [0.0; 3],
         }
+    }
+
+    /// The same particle spinning at `omega` (any [`IntoVec3`]; in 2D only z may be
+    /// non-zero).
+    pub fn with_angular_velocity(mut self, omega: impl IntoVec3) -> Self {
+        self.angular_velocity = omega.into_vec3();
+        self
     }
 
     /// The same particle with a velocity (any [`IntoVec3`]).
@@ -257,6 +269,7 @@ pub struct Scene<L = Material> {
     walls: Vec<Wall<L>>,
     gravity: f64,
     vibration: Option<Vibration>,
+    rotation: bool,
 }
 
 const AXES: [&str; 3] = ["x", "y", "z"];
@@ -276,6 +289,8 @@ pub(crate) struct SceneRecord<L> {
     walls: Vec<Wall<L>>,
     gravity: f64,
     vibration: Option<Vibration>,
+    #[serde(default)]
+    rotation: bool,
 }
 
 impl<L: ContactLaw> Scene<L> {
@@ -310,7 +325,25 @@ impl<L: ContactLaw> Scene<L> {
             walls: Vec::new(),
             gravity: 0.0,
             vibration: None,
+            rotation: false,
         })
+    }
+
+    /// Lets the particles spin: each gets an angular velocity (2D: about z; 3D: three
+    /// components) driven by the torques of its contacts, integrated with the velocity
+    /// Verlet scheme of the translation (half kick, predicted angular velocity at the force
+    /// time, second half kick, as LAMMPS `fix nve/sphere`), with the moment of inertia of a
+    /// solid disc or sphere ([`crate::moment_of_inertia`]). Off by default: a scene without
+    /// it pays nothing for rotation. CPU backend of [`crate::Dem`] only (the GPU backend
+    /// and [`crate::DistributedDem`] refuse it); velocity Verlet only.
+    pub fn set_rotation(&mut self, on: bool) -> &mut Self {
+        self.rotation = on;
+        self
+    }
+
+    /// Whether the particles spin ([`set_rotation`](Self::set_rotation)).
+    pub fn rotation(&self) -> bool {
+        self.rotation
     }
 
     /// Makes the given axes periodic (in 2D the z flag is ignored). Periodic axes must not
@@ -446,6 +479,16 @@ impl<L: ContactLaw> Scene<L> {
                 "2D scenes need z = 0 and v_z = 0",
             ));
         }
+        for (axis, &w) in AXES.iter().zip(&p.angular_velocity) {
+            simkit_backend::require_finite(&format!("particle[{i}].angular_velocity.{axis}"), w)?;
+        }
+        if self.dim == Dim::Two && (p.angular_velocity[0] != 0.0 || p.angular_velocity[1] != 0.0) {
+            return Err(Error::invalid(
+                format!("particle[{i}] angular velocity"),
+                format!("{:?}", p.angular_velocity),
+                "discs in 2D spin about z only: x and y must be 0",
+            ));
+        }
         simkit_backend::require_positive(&format!("particle[{i}].radius"), p.radius)?;
         simkit_backend::require_positive(&format!("particle[{i}].mass"), p.mass)?;
         if p.species as usize >= self.n_species {
@@ -558,13 +601,41 @@ impl<L: ContactLaw> Scene<L> {
         self.particles.iter().map(|p| p.radius).fold(0.0, f64::max)
     }
 
-    /// Shortest contact time of any pair or wall material.
+    /// Shortest contact time of any pair or wall material ([`ContactLaw::contact_time`] at
+    /// each material's lightest reduced mass and smallest effective radius).
     pub fn min_contact_time(&self) -> f64 {
-        self.pairs
-            .iter()
-            .chain(self.walls.iter().map(|w| &w.material))
-            .map(L::contact_time)
+        self.contact_scales()
+            .map(|(law, m, r)| law.contact_time(m, r))
             .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Every material of the scene with the reduced mass and effective radius of its
+    /// lightest and smallest contact: for species pair `(a, b)` those of the lightest and
+    /// the smallest particles of `a` and `b`; for a wall, of the lightest and the smallest
+    /// particle (species without particles are skipped).
+    pub(crate) fn contact_scales(&self) -> impl Iterator<Item = (&L, f64, f64)> {
+        let n = self.n_species;
+        let mut lightest = vec![f64::INFINITY; n];
+        let mut smallest = vec![f64::INFINITY; n];
+        for p in &self.particles {
+            let s = p.species as usize;
+            lightest[s] = lightest[s].min(p.mass);
+            smallest[s] = smallest[s].min(p.radius);
+        }
+        let m_min = lightest.iter().copied().fold(f64::INFINITY, f64::min);
+        let r_min = smallest.iter().copied().fold(f64::INFINITY, f64::min);
+        let pairs = (0..n * n).filter_map(move |k| {
+            let (a, b) = (k / n, k % n);
+            let (ma, mb, ra, rb) = (lightest[a], lightest[b], smallest[a], smallest[b]);
+            (ma.is_finite() && mb.is_finite())
+                .then(|| (&self.pairs[k], ma * mb / (ma + mb), ra * rb / (ra + rb)))
+        });
+        let walls = self
+            .walls
+            .iter()
+            .filter(move |_| m_min.is_finite())
+            .map(move |w| (&w.material, m_min, r_min));
+        pairs.chain(walls)
     }
 
     /// The scene as a checkpoint stores it.
@@ -580,6 +651,7 @@ impl<L: ContactLaw> Scene<L> {
             walls: self.walls.clone(),
             gravity: self.gravity,
             vibration: self.vibration,
+            rotation: self.rotation,
         }
     }
 
@@ -618,6 +690,7 @@ impl<L: ContactLaw> Scene<L> {
             }
         }
         s.set_gravity(r.gravity)?;
+        s.set_rotation(r.rotation);
         if let Some(v) = r.vibration {
             s.set_vibration(v.amplitude, v.omega)?;
         }

@@ -21,6 +21,35 @@ pub struct Contact<T, const D: usize> {
     pub v_rel: [T; D],
     /// Normal relative velocity `v_rel . n` (negative when approaching).
     pub v_n: T,
+    /// Effective radius `R_i R_j / (R_i + R_j)` (against a wall: `R_i`).
+    pub r_eff: T,
+    /// Relative angular velocity `omega_i - omega_j` (against a wall: `omega_i`; zero in a
+    /// scene without rotation). 2D discs spin about z only.
+    pub w_rel: [T; 3],
+    /// The time step (laws with a per-contact history integrate it over one step).
+    pub dt: T,
+}
+
+/// What a [`ContactLaw`] returns for one contact: the force on `i` and the torque on `i`
+/// beyond the lever arm of that force (a rolling-resistance couple; `j` receives minus
+/// it). The engines add the torque `(-R_i n) x F` of the force itself.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContactForce<T, const D: usize> {
+    /// Force on particle `i`.
+    pub force: [T; D],
+    /// Couple on particle `i` (3 components; 2D discs use z only).
+    pub torque: [T; 3],
+}
+
+impl<T: Real, const D: usize> ContactForce<T, D> {
+    /// A force without a couple.
+    #[inline(always)]
+    pub fn force(force: [T; D]) -> Self {
+        Self {
+            force,
+            torque: [T::ZERO; 3],
+        }
+    }
 }
 
 /// A contact law between two materials (a species pair, or a species and a wall): its
@@ -40,14 +69,20 @@ pub struct Contact<T, const D: usize> {
 /// - [`force`](ContactLaw::force) returns the force on `i` of a contact with overlap
 ///   `delta > 0`; the tangential part only when `FRICTION` (the scene has a material with
 ///   friction, [`ContactLaw::has_friction`]); it depends on the contact's geometry and
-///   kinematics only (the engines keep no per-contact state).
+///   kinematics and on the contact's history (see below) only.
+/// - A law with [`HISTORY`](ContactLaw::HISTORY) `> 0` values per contact (a tangential
+///   spring, a rolling spring) reads and updates them in `force`; the CPU engine keeps them
+///   per contact from the step the contact closes (all zero) until it opens (reset to
+///   zero), carries them through neighbour-list rebuilds, particle reorderings, rollbacks
+///   and checkpoints, and, when a contact is listed the other way round (`j` first), hands
+///   them over through [`swap_history`](ContactLaw::swap_history).
 /// - The WGSL twin declares `struct DemCoeff` (the layout of [`ContactLaw::Gpu`]) and
 ///   `fn dem_contact_force(c: DemCoeff, m_ij: f32, delta: f32, n: vec3<f32>, v_rel:
 ///   vec3<f32>, v_n: f32, friction: bool) -> vec3<f32>`.
 ///
-/// Laws that remember the contact (a tangential spring per contact, rolling resistance)
-/// need the engines to carry a per-contact state through list rebuilds, reorderings and
-/// migrations; [`Contact`] is the struct that state will join.
+/// Laws with a history run on the CPU backend of [`Dem`](crate::Dem); the GPU backend and
+/// [`DistributedDem`](crate::DistributedDem) refuse them (and rotating scenes) with
+/// [`simkit_backend::Error::Unsupported`] until they carry per-contact state.
 pub trait ContactLaw:
     Copy + Debug + PartialEq + Send + Sync + Serialize + DeserializeOwned + 'static
 {
@@ -74,6 +109,15 @@ pub trait ContactLaw:
     #[doc(hidden)]
     const BUILT_IN: bool = false;
 
+    /// Values the law keeps per contact (0: a memoryless law).
+    const HISTORY: usize = 0;
+
+    /// Turns the history of a contact listed as `(i, j)` into that of `(j, i)` (e.g. a
+    /// tangential displacement changes sign). Only called when `HISTORY > 0`.
+    fn swap_history<T: Real>(history: &mut [T]) {
+        let _ = history;
+    }
+
     /// Checks the parameters; `what` names the material for the error message (e.g.
     /// `"species pair (0, 1)"`, `"wall 2"`).
     ///
@@ -95,20 +139,26 @@ pub trait ContactLaw:
     /// Whether the law has a tangential force with these parameters.
     fn has_friction(&self) -> bool;
 
-    /// The duration of a binary contact: the default time step is the shortest over the
-    /// scene divided by [`DEFAULT_STEPS_PER_CONTACT`](crate::DEFAULT_STEPS_PER_CONTACT).
-    fn contact_time(&self) -> f64;
+    /// The duration of a binary contact of reduced mass `m_ij` and effective radius
+    /// `r_eff` (the scene asks for its lightest and smallest pairs): the default time step
+    /// is the shortest over the scene divided by
+    /// [`DEFAULT_STEPS_PER_CONTACT`](crate::DEFAULT_STEPS_PER_CONTACT).
+    fn contact_time(&self, m_ij: f64, r_eff: f64) -> f64;
 
-    /// The largest stable time step for this material (larger steps are refused unless
+    /// The largest stable time step for this material at reduced mass `m_ij` and effective
+    /// radius `r_eff` (larger steps are refused unless
     /// [`Config::allow_unstable_dt`](crate::Config::allow_unstable_dt) is set).
-    fn safe_dt(&self) -> f64;
+    fn safe_dt(&self, m_ij: f64, r_eff: f64) -> f64;
 
-    /// The force on particle `i` of `contact` (see the contract).
+    /// The force (and couple) on particle `i` of `contact`, updating the contact's
+    /// `history` ([`HISTORY`](ContactLaw::HISTORY) values; see the contract).
     fn force<T: Real, const D: usize, const FRICTION: bool>(
         c: &Self::Coeff<T>,
         contact: &Contact<T, D>,
-    ) -> [T; D];
+        history: &mut [T],
+    ) -> ContactForce<T, D>;
 
-    /// The elastic energy stored in a contact of reduced mass `m_ij` and overlap `delta`.
-    fn elastic_energy<T: Real>(c: &Self::Coeff<T>, m_ij: T, delta: T) -> T;
+    /// The elastic energy stored in a contact of reduced mass `m_ij`, effective radius
+    /// `r_eff` and overlap `delta` (the normal spring's).
+    fn elastic_energy<T: Real>(c: &Self::Coeff<T>, m_ij: T, r_eff: T, delta: T) -> T;
 }

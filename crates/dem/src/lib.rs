@@ -101,11 +101,13 @@ mod distributed;
 mod engine;
 #[cfg(feature = "gpu")]
 mod gpu;
+mod hertz;
 mod input;
 mod law;
 mod prepared;
 pub mod scenes;
 mod sim;
+mod spin;
 mod units;
 mod walls;
 
@@ -114,12 +116,14 @@ pub use contact::{ContactCoefficients, friction_force, normal_force, reduced_mas
 pub use diagnostics::Diagnostics;
 pub use diagnostics::MAX_INITIAL_OVERLAP;
 pub use distributed::DistributedDem;
+pub use hertz::{HertzCoefficients, HertzMindlin, Solid, hertz_contact_time};
 pub use input::{Dim, Material, Particle, Scene, Vibration, Wall, WallShape, pair_index};
-pub use law::{Contact, ContactLaw};
+pub use law::{Contact, ContactForce, ContactLaw};
 pub use sim::Dem;
 pub use simkit_backend::particles::State;
 pub use simkit_backend::{
     Backend, Distributed, Error, Precision, Real, Restart, Result, Simulation,
 };
+pub use spin::{coulomb_spring, moment_of_inertia};
 pub use units::Units;
 pub use walls::{cylinder_overlap, plane_overlap, wall_motion};

@@ -88,6 +88,12 @@ pub(crate) struct Prepared<L> {
     pub skin: f64,
     pub positions: Vec<[f64; 3]>,
     pub velocities: Vec<[f64; 3]>,
+    /// Whether the particles spin ([`Scene::set_rotation`]).
+    pub rotation: bool,
+    /// Angular velocities (read only with `rotation`).
+    pub omega: Vec<[f64; 3]>,
+    /// Moments of inertia ([`crate::moment_of_inertia`]).
+    pub inertia: Vec<f64>,
     pub radius: Vec<f64>,
     pub mass: Vec<f64>,
     pub species: Vec<u32>,
@@ -180,6 +186,12 @@ impl<L: ContactLaw> Prepared<L> {
             skin: config.skin * 2.0 * r_max,
             positions: ps.iter().map(|p| p.position).collect(),
             velocities: ps.iter().map(|p| p.velocity).collect(),
+            rotation: scene.rotation(),
+            omega: ps.iter().map(|p| p.angular_velocity).collect(),
+            inertia: ps
+                .iter()
+                .map(|p| crate::moment_of_inertia(dim, p.mass, p.radius))
+                .collect(),
             radius: ps.iter().map(|p| p.radius).collect(),
             mass: ps.iter().map(|p| p.mass).collect(),
             species: ps.iter().map(|p| p.species).collect(),
@@ -242,6 +254,12 @@ impl<L: ContactLaw> Prepared<L> {
             )?;
         }
         in_range("dt", dt, limit, precision)?;
+        if scene.rotation() && config.integrator != Integrator::VelocityVerlet {
+            return Err(Error::Unsupported(
+                "a rotating scene (Scene::set_rotation) integrates with velocity Verlet only;                  use Integrator::VelocityVerlet"
+                    .into(),
+            ));
+        }
         not_huge("gravity", scene.gravity(), limit, precision)?;
         if let Some(v) = scene.vibration() {
             not_huge("vibration amplitude", v.amplitude, limit, precision)?;
@@ -289,6 +307,12 @@ impl<L: ContactLaw> Prepared<L> {
                 not_huge(
                     &format!("particle[{i}].velocity.{}", AXES[d]),
                     p.velocity[d],
+                    limit,
+                    precision,
+                )?;
+                not_huge(
+                    &format!("particle[{i}].angular_velocity.{}", AXES[d]),
+                    p.angular_velocity[d],
                     limit,
                     precision,
                 )?;

@@ -112,6 +112,17 @@ impl<L: ContactLaw> Dem<L> {
         let prep = Prepared::new(&scene, config, single)?;
         diagnostics::check_initial_overlaps(&prep)?;
         #[cfg(feature = "gpu")]
+        if backend.is_gpu() && (scene.rotation() || L::HISTORY > 0) {
+            return Err(Error::Unsupported(format!(
+                "the GPU backend does not yet integrate rotation or keep per-contact history \
+                 (scene rotation: {}, law '{}' keeps {} values per contact); use \
+                 Backend::Cpu",
+                scene.rotation(),
+                L::NAME,
+                L::HISTORY
+            )));
+        }
+        #[cfg(feature = "gpu")]
         if backend.is_gpu() && config.integrator != Integrator::VelocityVerlet {
             return Err(Error::Unsupported(
                 "the GPU backend integrates with velocity Verlet only; use \
@@ -158,7 +169,15 @@ impl<L: ContactLaw> Dem<L> {
                 format!("must equal the particle count {}", p.n),
             ));
         }
-        crate::diagnostics::compute(p, state.time, &state.positions, &state.velocities)
+        let w = &state.angular_velocities;
+        if !w.is_empty() && w.len() != p.n {
+            return Err(Error::invalid(
+                "angular velocities",
+                w.len(),
+                format!("must be empty or one per particle ({})", p.n),
+            ));
+        }
+        crate::diagnostics::compute(p, state.time, &state.positions, &state.velocities, w)
     }
 
     /// Vertical displacement of the vibrating walls at time `t`.

@@ -7,7 +7,7 @@
 use serde::{Deserialize, Serialize};
 use simkit_backend::testing::backends;
 use simkit_backend::{Error, Precision, Real, Result, Simulation};
-use simkit_dem::{Config, Contact, ContactLaw, Dem, Dim, Particle, Scene};
+use simkit_dem::{Config, Contact, ContactForce, ContactLaw, Dem, Dim, Particle, Scene};
 
 /// `F_n = m_ij omega^2 delta` along the normal: a frictionless elastic contact.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -62,23 +62,24 @@ fn dem_contact_force(c: DemCoeff, m_ij: f32, delta: f32, n: vec3<f32>, v_rel: ve
         false
     }
 
-    fn contact_time(&self) -> f64 {
+    fn contact_time(&self, _m_ij: f64, _r_eff: f64) -> f64 {
         std::f64::consts::PI / self.omega
     }
 
-    fn safe_dt(&self) -> f64 {
-        (self.contact_time() / 5.0).min(1.0 / self.omega)
+    fn safe_dt(&self, m_ij: f64, r_eff: f64) -> f64 {
+        (self.contact_time(m_ij, r_eff) / 5.0).min(1.0 / self.omega)
     }
 
     fn force<T: Real, const D: usize, const FRICTION: bool>(
         c: &ElasticCoeff<T>,
         k: &Contact<T, D>,
-    ) -> [T; D] {
+        _history: &mut [T],
+    ) -> ContactForce<T, D> {
         let f = k.m_ij * (c.omega2 * k.delta);
-        k.n.map(|x| f * x)
+        ContactForce::force(k.n.map(|x| f * x))
     }
 
-    fn elastic_energy<T: Real>(c: &ElasticCoeff<T>, m_ij: T, delta: T) -> T {
+    fn elastic_energy<T: Real>(c: &ElasticCoeff<T>, m_ij: T, _r_eff: T, delta: T) -> T {
         T::from_f64(0.5) * m_ij * c.omega2 * delta * delta
     }
 }
@@ -185,8 +186,11 @@ fn the_user_law_wgsl_matches_its_rust_function() {
             n: [x[2], x[3], 0.0],
             v_rel: [0.0; 3],
             v_n: 0.0,
+            r_eff: 0.25,
+            w_rel: [0.0; 3],
+            dt: 1e-3,
         };
-        let f = Elastic::force::<f32, 3, false>(&c, &contact);
+        let f = Elastic::force::<f32, 3, false>(&c, &contact, &mut []).force;
         for d in 0..3 {
             let scale = (x[1] * c.omega2 * x[0]).abs();
             assert!(

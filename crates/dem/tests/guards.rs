@@ -221,6 +221,7 @@ fn diagnostics_of_a_non_finite_state_are_nan() {
         time: 0.0,
         positions: scene.particles().iter().map(|p| p.position).collect(),
         velocities: vec![[0.0; 3]; scene.particles().len()],
+        angular_velocities: Vec::new(),
         species: vec![0; scene.particles().len()],
     };
     state.velocities[3][1] = f64::INFINITY;

@@ -487,11 +487,14 @@ fn the_contact_force_matches_its_wgsl_twin() {
             n: [k.b[0], k.b[1], k.b[2]],
             v_rel: [k.c[0], k.c[1], k.c[2]],
             v_n: k.b[3],
+            r_eff: 0.5,
+            w_rel: [0.0; 3],
+            dt: 1e-3,
         };
         let f = if k.d[1] > 0.5 {
-            Material::force::<f32, 3, true>(&c, &contact)
+            Material::force::<f32, 3, true>(&c, &contact, &mut []).force
         } else {
-            Material::force::<f32, 3, false>(&c, &contact)
+            Material::force::<f32, 3, false>(&c, &contact, &mut []).force
         };
         let fnorm = f64::from(normal_force(&c, contact.m_ij, contact.delta, contact.v_n));
         let vr: f64 = contact

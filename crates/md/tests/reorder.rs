@@ -58,6 +58,7 @@ fn the_listing_order_changes_results_only_by_rounding() -> Result<()> {
             time: b.time,
             positions: unshuffle(&idx, &b.positions),
             velocities: unshuffle(&idx, &b.velocities),
+            angular_velocities: Vec::new(),
             species: unshuffle(&idx, &b.species),
         };
         let d = max_diff(&a, &back);

@@ -134,6 +134,7 @@ impl<A: RankRun, B: RankRun> DistributedRun<A, B> {
             time: self.time(),
             positions: rows.clone().map(|r| [r[0], r[1], r[2]]).collect(),
             velocities: rows.map(|r| [r[3], r[4], r[5]]).collect(),
+            angular_velocities: Vec::new(),
             species: species.to_vec(),
         })
     }

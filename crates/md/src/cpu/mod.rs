@@ -774,6 +774,7 @@ impl<const D: usize, T: Real, L: PairLaw> Engine for CpuEngine<D, T, L> {
             time: self.steps as f64 * self.dt,
             positions: self.unslot(&widen(&self.wrapped_positions())),
             velocities: self.unslot(&widen(&self.synced_velocities())),
+            angular_velocities: Vec::new(),
             species: self.unslot(&self.species),
         })
     }

@@ -618,6 +618,7 @@ impl<L: PairLaw> Engine for GpuEngine<L> {
             time: self.steps as f64 * self.dt,
             positions: self.widen(&pos),
             velocities: self.widen(&vel),
+            angular_velocities: Vec::new(),
             species: self.system.species().to_vec(),
         })
     }
