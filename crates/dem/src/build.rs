@@ -9,7 +9,7 @@ use simkit_backend::{Backend, Error, Precision, Result};
 use crate::cpu::CpuEngine;
 use crate::engine::Engine;
 use crate::prepared::Prepared;
-use crate::{ContactLaw, HertzMindlin, Material};
+use crate::{ContactLaw, HertzMindlin, LinearHistory, Material};
 
 /// The engine of a prepared scene on `backend`: the built-in law's, compiled in this crate
 /// (see [`ContactLaw::BUILT_IN`]), or `L`'s compiled where it is used.
@@ -35,7 +35,7 @@ pub(crate) fn engine_for<L: ContactLaw>(
 }
 
 /// The engine (as `Box<dyn Engine<L>>`) of a prepared scene of a built-in law `L`
-/// ([`Material`] or [`HertzMindlin`]), compiled here once.
+/// ([`Material`], [`HertzMindlin`] or [`LinearHistory`]), compiled here once.
 #[inline(never)]
 fn built_in(
     prep: Box<dyn Any>,
@@ -48,7 +48,11 @@ fn built_in(
         Ok(prep) => return Ok(Box::new(build_engine(*prep, precision, backend, saved)?)),
         Err(prep) => prep,
     };
-    match prep.downcast::<Prepared<HertzMindlin>>() {
+    let prep = match prep.downcast::<Prepared<HertzMindlin>>() {
+        Ok(prep) => return Ok(Box::new(build_engine(*prep, precision, backend, saved)?)),
+        Err(prep) => prep,
+    };
+    match prep.downcast::<Prepared<LinearHistory>>() {
         Ok(prep) => Ok(Box::new(build_engine(*prep, precision, backend, saved)?)),
         Err(_) => Err(not_built_in(name)),
     }

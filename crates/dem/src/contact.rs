@@ -195,3 +195,187 @@ impl ContactLaw for Material {
         spring_energy(c, m_ij, delta)
     }
 }
+
+/// The linear spring–dashpot of [`Material`] with a tangential spring per contact and an
+/// optional rolling spring: the normal force is [`normal_force`] (from the requested `e`
+/// and `t_c` with the reduced mass), the tangential force the Cundall–Strack spring
+/// [`crate::coulomb_spring`] with stiffness `k_t = stiffness_ratio * k_n`
+/// (`k_n = m_ij kappa`) and damping `m_ij b` (half the normal damping `2 m_ij b`), capped at
+/// `mu |F_n|`; the rolling spring (with `mu_r > 0`) has the tangential stiffness and
+/// damping, is capped at `mu_r |F_n|` and acts as the couple `R* n x F_r`. The
+/// history-keeping counterpart of LAMMPS `pair gran/hooke/history` (which takes `k_t` and
+/// the dampings directly): static friction holds, unlike the viscous friction of
+/// [`Material`], whose tangential force vanishes with the sliding speed.
+///
+/// ```
+/// use simkit_dem::LinearHistory;
+/// let law = LinearHistory::new(0.8, 0.01, 0.5).with_rolling_friction(0.02);
+/// assert_eq!(law.stiffness_ratio, 2.0 / 7.0);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct LinearHistory {
+    /// Normal coefficient of restitution `e` in (0, 1].
+    pub restitution: f64,
+    /// Duration `t_c > 0` of a binary normal contact.
+    pub contact_time: f64,
+    /// Coulomb coefficient `mu` (0: no tangential force).
+    pub friction: f64,
+    /// `k_t / k_n`, in (0, 1]; default 2/7, for which the tangential and normal
+    /// oscillations of two spheres have the same period.
+    pub stiffness_ratio: f64,
+    /// Rolling friction coefficient `mu_r` (0: no rolling resistance).
+    pub rolling_friction: f64,
+}
+
+impl LinearHistory {
+    /// Restitution `e`, contact time `t_c` and Coulomb friction `mu`, with
+    /// `k_t / k_n = 2/7` and no rolling resistance.
+    pub fn new(restitution: f64, contact_time: f64, friction: f64) -> Self {
+        Self {
+            restitution,
+            contact_time,
+            friction,
+            stiffness_ratio: 2.0 / 7.0,
+            rolling_friction: 0.0,
+        }
+    }
+
+    /// The same law with rolling resistance `mu_r`.
+    pub fn with_rolling_friction(mut self, mu_r: f64) -> Self {
+        self.rolling_friction = mu_r;
+        self
+    }
+
+    /// The same law with another `k_t / k_n`.
+    pub fn with_stiffness_ratio(mut self, ratio: f64) -> Self {
+        self.stiffness_ratio = ratio;
+        self
+    }
+
+    /// The normal part as a [`Material`] (no friction of its own).
+    fn normal(&self) -> Material {
+        Material::new(self.restitution, self.contact_time)
+    }
+}
+
+/// The coefficients of [`LinearHistory`] as the force loop reads them: the normal
+/// [`ContactCoefficients`] (without friction), `k_t / k_n`, `mu` and `mu_r`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LinearHistoryCoefficients<T> {
+    /// Normal spring and dashpot.
+    pub normal: ContactCoefficients<T>,
+    /// `k_t / k_n`.
+    pub ratio: T,
+    /// `mu`.
+    pub mu: T,
+    /// `mu_r`.
+    pub mu_r: T,
+}
+
+impl ContactLaw for LinearHistory {
+    type Coeff<T: Real> = LinearHistoryCoefficients<T>;
+    type Gpu = [f32; 8];
+    const NAME: &'static str = "linear-history";
+    /// Not on the GPU yet: the GPU backend refuses laws with a history.
+    const WGSL: &'static str = "";
+    const BUILT_IN: bool = true;
+    const HISTORY: usize = 6;
+
+    /// The tangential displacement changes sign, the rolling one does not.
+    fn swap_history<T: Real>(h: &mut [T]) {
+        for x in &mut h[..3] {
+            *x = -*x;
+        }
+    }
+
+    fn validate(&self, what: &str) -> Result<()> {
+        self.normal().check(what)?;
+        let r = self.stiffness_ratio;
+        if !(r > 0.0 && r <= 1.0) {
+            return Err(simkit_backend::Error::invalid(
+                format!("{what}: stiffness_ratio"),
+                r,
+                "must be in (0, 1] (k_t / k_n; 2/7 is usual)",
+            ));
+        }
+        for (name, v) in [
+            ("friction", self.friction),
+            ("rolling_friction", self.rolling_friction),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(simkit_backend::Error::invalid(
+                    format!("{what}: {name}"),
+                    v,
+                    "must be finite and >= 0",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn coefficients<T: Real>(&self) -> LinearHistoryCoefficients<T> {
+        LinearHistoryCoefficients {
+            normal: ContactCoefficients::new(&self.normal()).to_real(),
+            ratio: T::from_f64(self.stiffness_ratio),
+            mu: T::from_f64(self.friction),
+            mu_r: T::from_f64(self.rolling_friction),
+        }
+    }
+
+    fn gpu(c: &LinearHistoryCoefficients<f32>) -> [f32; 8] {
+        let n = &c.normal;
+        [n.kappa, n.two_b, c.ratio, c.mu, c.mu_r, 0.0, 0.0, 0.0]
+    }
+
+    fn scales(&self) -> Vec<(&'static str, f64, bool)> {
+        let mut s = self.normal().scales();
+        s.retain(|x| !x.0.starts_with("friction"));
+        s.push(("friction mu", self.friction, false));
+        s.push(("rolling friction mu_r", self.rolling_friction, false));
+        s
+    }
+
+    fn has_friction(&self) -> bool {
+        self.friction > 0.0 || self.rolling_friction > 0.0
+    }
+
+    fn contact_time(&self, _m_ij: f64, _r_eff: f64) -> f64 {
+        self.contact_time
+    }
+
+    /// The normal law's bound: with `k_t <= k_n` the tangential oscillation is no faster.
+    fn safe_dt(&self, _m_ij: f64, _r_eff: f64) -> f64 {
+        let m = self.normal();
+        ContactCoefficients::new(&m).safe_dt(&m)
+    }
+
+    #[inline(always)]
+    fn force<T: Real, const D: usize, const FRICTION: bool>(
+        c: &LinearHistoryCoefficients<T>,
+        k: &Contact<T, D>,
+        history: &mut [T],
+    ) -> ContactForce<T, D> {
+        let f_n = normal_force(&c.normal, k.m_ij, k.delta, k.v_n);
+        let mut out = ContactForce::force(k.n.map(|x| f_n * x));
+        if FRICTION {
+            let (k_t, g_t) = (
+                c.ratio * c.normal.kappa * k.m_ij,
+                T::from_f64(0.5) * c.normal.two_b * k.m_ij,
+            );
+            let springs = crate::spin::Springs {
+                k: k_t,
+                gamma: g_t,
+                mu: c.mu,
+                k_r: k_t,
+                gamma_r: g_t,
+                mu_r: c.mu_r,
+            };
+            springs.add(k, f_n, history, &mut out);
+        }
+        out
+    }
+
+    fn elastic_energy<T: Real>(c: &LinearHistoryCoefficients<T>, m_ij: T, _r: T, delta: T) -> T {
+        spring_energy(&c.normal, m_ij, delta)
+    }
+}

@@ -356,11 +356,15 @@ pub(crate) fn contact_force<
     let out = L::force::<T, D, FRICTION>(c, &contact, history);
     let (mut t_i, mut t_j) = ([T::ZERO; 3], [T::ZERO; 3]);
     if ROT {
-        // The force acts at -r_i n from i's centre and (as -F) at +r_j n from j's.
+        // The force acts at the middle of the overlap: `-(r_i - delta / 2) n` from i's
+        // centre and (as -F) at `+(r_j - delta / 2) n` from j's (as LAMMPS `pair
+        // granular`).
         let lever = cross(&to3(&n), &to3(&out.force));
+        let half = T::from_f64(0.5) * delta;
+        let (l_i, l_j) = (r_i - half, r_j - half);
         for d in 0..3 {
-            t_i[d] = out.torque[d] - r_i * lever[d];
-            t_j[d] = -out.torque[d] - r_j * lever[d];
+            t_i[d] = out.torque[d] - l_i * lever[d];
+            t_j[d] = -out.torque[d] - l_j * lever[d];
         }
     }
     Some(PairForce {
@@ -1392,6 +1396,16 @@ impl<const D: usize, T: Real, L: ContactLaw> CpuEngine<D, T, L> {
         )
     }
 
+    /// The first force evaluation of a velocity Verlet run, at the initial velocities.
+    fn start_velocity_verlet(&mut self) {
+        self.p.aux.clone_from(&self.p.vel);
+        self.p.omega_p.clone_from(&self.p.omega);
+        self.forces(self.time, true);
+        self.finish(false, false);
+        self.finish_rotation(false);
+        self.started = true;
+    }
+
     /// `steps` velocity Verlet steps: per step one force pass and one pass that finishes
     /// the forces, closes this step and (except after the last) opens the next.
     fn advance_velocity_verlet(&mut self, steps: u32) -> Result<()> {
@@ -1399,12 +1413,7 @@ impl<const D: usize, T: Real, L: ContactLaw> CpuEngine<D, T, L> {
             return Ok(());
         }
         if !self.started {
-            self.p.aux.clone_from(&self.p.vel);
-            self.p.omega_p.clone_from(&self.p.omega);
-            self.forces(self.time, true);
-            self.finish(false, false);
-            self.finish_rotation(false);
-            self.started = true;
+            self.start_velocity_verlet();
         }
         let mut max2 = self.drift_velocity_verlet();
         self.open_rotation();
@@ -1650,6 +1659,34 @@ impl<const D: usize, T: Real, L: ContactLaw> crate::engine::Engine<L> for CpuEng
         Ok(self.to_saved())
     }
 
+    fn forces(&mut self) -> Result<(Vec<[f64; 3]>, Vec<[f64; 3]>)> {
+        if !self.started {
+            match self.prep.integrator {
+                Integrator::VelocityVerlet => self.start_velocity_verlet(),
+                Integrator::PositionVerlet => {
+                    return Err(simkit_backend::Error::Unsupported(
+                        "Dem::forces before the first step of a position Verlet run (its \
+                         forces are evaluated inside the step); step once first"
+                            .into(),
+                    ));
+                }
+            }
+        }
+        let n = self.p.pos.len();
+        let (mut f, mut t) = (vec![[0.0; 3]; n], vec![[0.0; 3]; n]);
+        let prep = &self.prep;
+        for (k, &id) in self.p.id.iter().enumerate() {
+            let i = id as usize;
+            for d in 0..D {
+                f[i][d] = self.p.acc[k][d].to_f64() * prep.mass[i];
+            }
+            if let Some(a) = self.p.alpha.get(k) {
+                t[i] = a.map(|x| x.to_f64() * prep.inertia[i]);
+            }
+        }
+        Ok((f, t))
+    }
+
     fn name(&self) -> String {
         let precision = if std::mem::size_of::<T>() == 4 {
             "f32"
@@ -1721,7 +1758,7 @@ mod tests {
         let s = Solid::new(1e5, 0.3);
         let law = HertzMindlin::new(s, s, 0.6, 0.4)
             .expect("law")
-            .with_rolling_friction(0.05);
+            .with_rolling(0.05, 2000.0, 20.0);
         let mut scene = Scene::new(Dim::Three, [0.0; 3], [8.0; 3], law).expect("scene");
         scene.set_rotation(true);
         scene.add_box_walls(law, false).expect("walls");

@@ -37,4 +37,8 @@ pub(crate) trait Engine<L>: Send {
     /// the accumulated time; GPU: `(x, y, z, radius)`, `(vx, vy, vz, mass)`, the
     /// accelerations with the deepest overlap ratio as `w`, in scene order.
     fn save(&mut self) -> Result<Dynamics>;
+    /// The forces and torques on every particle (scene order) that the next step starts
+    /// from: evaluated now if the run has not started (as its first step would, so the
+    /// run's results do not change), else those of the last step.
+    fn forces(&mut self) -> Result<(Vec<[f64; 3]>, Vec<[f64; 3]>)>;
 }

@@ -548,6 +548,12 @@ impl<L: ContactLaw> GpuEngine<L> {
 }
 
 impl<L: ContactLaw> Engine<L> for GpuEngine<L> {
+    fn forces(&mut self) -> Result<(Vec<[f64; 3]>, Vec<[f64; 3]>)> {
+        Err(Error::Unsupported(
+            "Dem::forces reads the CPU engine's forces; run the scene on Backend::Cpu".into(),
+        ))
+    }
+
     fn step(&mut self, steps: u32) -> Result<()> {
         let ctx = &self.ctx;
         let n = self.prep.n as u64;

@@ -6,7 +6,7 @@ use std::f64::consts::PI;
 use serde::{Deserialize, Serialize};
 use simkit_backend::{Error, Real, Result};
 
-use crate::spin::{coulomb_spring, cross, to3};
+use crate::spin::Springs;
 use crate::{Contact, ContactForce, ContactLaw};
 
 /// An elastic solid: Young's modulus `E` and Poisson ratio `nu`, from which
@@ -61,11 +61,10 @@ impl Solid {
 ///   displacement `xi` kept per contact (Cundall–Strack, [`crate::coulomb_spring`]), the
 ///   damping `gamma_t = 2 sqrt(5/6) beta sqrt(k_t m*)`, and the Coulomb cap `mu |F_n|`
 ///   (LAMMPS `pair granular` `hertz/material` with `tangential mindlin`);
-/// - rolling (opt-in, [`with_rolling_friction`](Self::with_rolling_friction)): a
-///   spring–dashpot on the rolling displacement `R* (w_i - w_j) x n` with the tangential
-///   stiffness and damping, capped at `mu_r |F_n|`, whose force `F_r` acts as the couple
-///   `R* n x F_r` (the elastic–plastic "type C" model; LAMMPS `rolling sds` with
-///   `k_roll = k_t`, `gamma_roll = gamma_t`).
+/// - rolling (opt-in, [`with_rolling`](Self::with_rolling)): a spring–dashpot of stiffness
+///   `k_roll` and damping `gamma_roll` on the rolling displacement `R* (w_i - w_j) x n`,
+///   capped at `mu_r |F_n|`, whose force `F_r` acts as the couple `R* n x F_r` (the
+///   elastic–plastic "type C" model; LAMMPS `rolling sds k_roll gamma_roll mu_roll`).
 ///
 /// The history (6 values per contact: `xi` and the rolling displacement, both in the
 /// contact plane) is why this law needs a scene with [`crate::Scene::set_rotation`] for the
@@ -76,7 +75,7 @@ impl Solid {
 /// use simkit_dem::{HertzMindlin, Solid};
 /// # fn main() -> simkit_backend::Result<()> {
 /// let glass = Solid::new(6.3e10, 0.24);
-/// let law = HertzMindlin::new(glass, glass, 0.9, 0.3)?.with_rolling_friction(0.01);
+/// let law = HertzMindlin::new(glass, glass, 0.9, 0.3)?.with_rolling(0.01, 1e6, 0.0);
 /// assert!((law.e_star - 6.3e10 / (2.0 * (1.0 - 0.24 * 0.24))).abs() < 1.0);
 /// # Ok(())
 /// # }
@@ -93,6 +92,10 @@ pub struct HertzMindlin {
     pub friction: f64,
     /// Rolling friction coefficient `mu_r` (0: no rolling resistance).
     pub rolling_friction: f64,
+    /// Stiffness `k_roll` of the rolling spring (force per length).
+    pub rolling_stiffness: f64,
+    /// Damping `gamma_roll` of the rolling spring (force per speed).
+    pub rolling_damping: f64,
 }
 
 impl HertzMindlin {
@@ -114,15 +117,22 @@ impl HertzMindlin {
             restitution,
             friction,
             rolling_friction: 0.0,
+            rolling_stiffness: 0.0,
+            rolling_damping: 0.0,
         };
         law.validate("Hertz–Mindlin law")?;
         Ok(law)
     }
 
-    /// The same law with rolling resistance `mu_r` (a length ratio: the couple is capped
-    /// at `mu_r R* |F_n|`).
-    pub fn with_rolling_friction(mut self, mu_r: f64) -> Self {
+    /// The same law with rolling resistance: coefficient `mu_r` (the couple is capped at
+    /// `mu_r R* |F_n|`), spring stiffness `k_roll > 0` and damping `gamma_roll >= 0` (the
+    /// spring sets how far a ball turns back and forth before it stops; `k_roll` of the
+    /// order of the tangential stiffness `8 G* sqrt(R* delta)` at a typical overlap is
+    /// usual).
+    pub fn with_rolling(mut self, mu_r: f64, k_roll: f64, gamma_roll: f64) -> Self {
         self.rolling_friction = mu_r;
+        self.rolling_stiffness = k_roll;
+        self.rolling_damping = gamma_roll;
         self
     }
 
@@ -153,6 +163,10 @@ pub struct HertzCoefficients<T> {
     pub mu: T,
     /// `mu_r`.
     pub mu_r: T,
+    /// `k_roll`.
+    pub k_r: T,
+    /// `gamma_roll`.
+    pub gamma_r: T,
 }
 
 /// Hertz's head-on contact time of an elastic impact at relative speed `v`:
@@ -204,6 +218,8 @@ impl ContactLaw for HertzMindlin {
         for (name, v) in [
             ("friction", self.friction),
             ("rolling_friction", self.rolling_friction),
+            ("rolling_stiffness", self.rolling_stiffness),
+            ("rolling_damping", self.rolling_damping),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(Error::invalid(
@@ -212,6 +228,13 @@ impl ContactLaw for HertzMindlin {
                     "must be finite and >= 0",
                 ));
             }
+        }
+        if self.rolling_friction > 0.0 && self.rolling_stiffness <= 0.0 {
+            return Err(Error::invalid(
+                format!("{what}: rolling_stiffness"),
+                self.rolling_stiffness,
+                "must be > 0 when rolling_friction > 0 (HertzMindlin::with_rolling)",
+            ));
         }
         Ok(())
     }
@@ -223,11 +246,15 @@ impl ContactLaw for HertzMindlin {
             damping: T::from_f64(self.damping_factor()),
             mu: T::from_f64(self.friction),
             mu_r: T::from_f64(self.rolling_friction),
+            k_r: T::from_f64(self.rolling_stiffness),
+            gamma_r: T::from_f64(self.rolling_damping),
         }
     }
 
     fn gpu(c: &HertzCoefficients<f32>) -> [f32; 8] {
-        [c.e_star, c.g_star, c.damping, c.mu, c.mu_r, 0.0, 0.0, 0.0]
+        [
+            c.e_star, c.g_star, c.damping, c.mu, c.mu_r, c.k_r, c.gamma_r, 0.0,
+        ]
     }
 
     fn scales(&self) -> Vec<(&'static str, f64, bool)> {
@@ -236,6 +263,8 @@ impl ContactLaw for HertzMindlin {
             ("effective shear modulus G*", self.g_star, true),
             ("friction mu", self.friction, false),
             ("rolling friction mu_r", self.rolling_friction, false),
+            ("rolling stiffness k_roll", self.rolling_stiffness, false),
+            ("rolling damping gamma_roll", self.rolling_damping, false),
         ]
     }
 
@@ -272,22 +301,17 @@ impl ContactLaw for HertzMindlin {
             T::from_f64(2.0 / 3.0) * s_n * k.delta - c.damping * (s_n * k.m_ij).sqrt() * k.v_n;
         let mut out = ContactForce::force(k.n.map(|x| f_n * x));
         if FRICTION {
-            let n3 = to3(&k.n);
-            let v3 = to3(&k.v_rel);
-            let v_t: [T; 3] = std::array::from_fn(|d| v3[d] - k.v_n * n3[d]);
             let k_t = T::from_f64(8.0) * c.g_star * a;
             let g_t = c.damping * (k_t * k.m_ij).sqrt();
-            let f_abs = if f_n > T::ZERO { f_n } else { -f_n };
-            let (tangential, rolling) = history.split_at_mut(3);
-            let f_t = coulomb_spring(tangential, &n3, &v_t, k.dt, k_t, g_t, c.mu * f_abs);
-            for (f, x) in out.force.iter_mut().zip(f_t) {
-                *f += x;
-            }
-            if c.mu_r > T::ZERO {
-                let v_r = cross(&k.w_rel, &n3).map(|x| k.r_eff * x);
-                let f_r = coulomb_spring(rolling, &n3, &v_r, k.dt, k_t, g_t, c.mu_r * f_abs);
-                out.torque = cross(&n3, &f_r).map(|x| k.r_eff * x);
-            }
+            let springs = Springs {
+                k: k_t,
+                gamma: g_t,
+                mu: c.mu,
+                k_r: c.k_r,
+                gamma_r: c.gamma_r,
+                mu_r: c.mu_r,
+            };
+            springs.add(k, f_n, history, &mut out);
         }
         out
     }

@@ -112,7 +112,10 @@ mod units;
 mod walls;
 
 pub use config::{Config, DEFAULT_MAX_OVERLAP, DEFAULT_STEPS_PER_CONTACT, Integrator, safe_dt};
-pub use contact::{ContactCoefficients, friction_force, normal_force, reduced_mass, spring_energy};
+pub use contact::{
+    ContactCoefficients, LinearHistory, LinearHistoryCoefficients, friction_force, normal_force,
+    reduced_mass, spring_energy,
+};
 pub use diagnostics::Diagnostics;
 pub use diagnostics::MAX_INITIAL_OVERLAP;
 pub use distributed::DistributedDem;

@@ -180,6 +180,18 @@ impl<L: ContactLaw> Dem<L> {
         crate::diagnostics::compute(p, state.time, &state.positions, &state.velocities, w)
     }
 
+    /// The force and torque on every particle (scene order; torques zero without rotation)
+    /// at the current state, as the next step starts from them: before the first step they
+    /// are evaluated now (exactly as the first step would, so the run does not change),
+    /// after a step they are those of its end. For comparisons with other codes and for
+    /// analysis (e.g. force chains). CPU backend, velocity Verlet.
+    ///
+    /// Errors: [`Error::Unsupported`] on the GPU, and before the first step of a position
+    /// Verlet run.
+    pub fn forces(&mut self) -> Result<(Vec<[f64; 3]>, Vec<[f64; 3]>)> {
+        self.engine.forces()
+    }
+
     /// Vertical displacement of the vibrating walls at time `t`.
     pub fn wall_displacement(&self, t: f64) -> f64 {
         self.engine.prepared().wall_motion(t).0

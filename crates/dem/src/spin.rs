@@ -3,7 +3,7 @@
 
 use simkit_backend::Real;
 
-use crate::Dim;
+use crate::{Contact, ContactForce, Dim};
 
 /// Moment of inertia of a solid disc (2D, about its axis: `m R^2 / 2`) or a solid sphere
 /// (3D: `2 m R^2 / 5`) of mass `m` and radius `r`.
@@ -104,6 +104,51 @@ pub fn coulomb_spring<T: Real>(
         }
     }
     f
+}
+
+/// The tangential and rolling springs of a contact law with history: stiffness `k` and
+/// damping `gamma` of the tangential spring, `k_r` and `gamma_r` of the rolling one,
+/// Coulomb coefficients `mu` (tangential) and `mu_r` (rolling; 0 = no rolling
+/// resistance). The history holds 6 values: the tangential displacement, then the
+/// rolling displacement.
+pub(crate) struct Springs<T> {
+    pub k: T,
+    pub gamma: T,
+    pub mu: T,
+    pub k_r: T,
+    pub gamma_r: T,
+    pub mu_r: T,
+}
+
+impl<T: Real> Springs<T> {
+    /// Adds to `out` the tangential force of contact `k` (normal force `f_n`) and, with
+    /// `mu_r > 0`, the rolling couple `R* n x F_r`, advancing both springs
+    /// ([`coulomb_spring`]).
+    #[inline(always)]
+    pub fn add<const D: usize>(
+        &self,
+        k: &Contact<T, D>,
+        f_n: T,
+        history: &mut [T],
+        out: &mut ContactForce<T, D>,
+    ) {
+        let n3 = to3(&k.n);
+        let v3 = to3(&k.v_rel);
+        let v_t: [T; 3] = std::array::from_fn(|d| v3[d] - k.v_n * n3[d]);
+        let f_abs = if f_n > T::ZERO { f_n } else { -f_n };
+        let (tangential, rolling) = history.split_at_mut(3);
+        let cap = self.mu * f_abs;
+        let f_t = coulomb_spring(tangential, &n3, &v_t, k.dt, self.k, self.gamma, cap);
+        for (f, x) in out.force.iter_mut().zip(f_t) {
+            *f += x;
+        }
+        if self.mu_r > T::ZERO {
+            let v_r = cross(&k.w_rel, &n3).map(|x| k.r_eff * x);
+            let cap = self.mu_r * f_abs;
+            let f_r = coulomb_spring(rolling, &n3, &v_r, k.dt, self.k_r, self.gamma_r, cap);
+            out.torque = cross(&n3, &f_r).map(|x| k.r_eff * x);
+        }
+    }
 }
 
 #[cfg(test)]

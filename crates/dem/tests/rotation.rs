@@ -4,8 +4,8 @@
 use simkit_backend::comm::Comm;
 use simkit_backend::{Backend, Error, Precision, Restart, Result, Simulation};
 use simkit_dem::{
-    Config, Dem, Dim, DistributedDem, HertzMindlin, Material, Particle, Scene, Solid, Wall,
-    hertz_contact_time,
+    Config, ContactLaw, Dem, Dim, DistributedDem, HertzMindlin, LinearHistory, Material, Particle,
+    Scene, Solid, Wall, hertz_contact_time,
 };
 
 /// The solid of every test: `E = 1e5`, `nu = 0.3` (diameter 1, mass 1, `g = 1`: overlaps
@@ -84,8 +84,12 @@ fn hertz_contact_time_and_restitution_over_three_decades_of_impact_speed() -> Re
 /// A sphere (radius 0.5, mass 1) resting on a plane tilted by `theta` about y, `g = 1`,
 /// released from rest with rotation: its acceleration along the slope between times 1 and
 /// `1 + t`, its speed along the slope and its spin then.
-fn incline(theta: f64, mu: f64, t: f64, precision: Precision) -> Result<(f64, f64, f64)> {
-    let law = law(0.5, mu);
+fn incline<L: ContactLaw>(
+    theta: f64,
+    law: L,
+    t: f64,
+    precision: Precision,
+) -> Result<(f64, f64, f64)> {
     let (s, c) = theta.sin_cos();
     let mut scene = Scene::new(Dim::Three, [0.0; 3], [40.0, 4.0, 40.0], law)?;
     scene.set_gravity(1.0)?.set_rotation(true);
@@ -96,7 +100,7 @@ fn incline(theta: f64, mu: f64, t: f64, precision: Precision) -> Result<(f64, f6
     scene.add_particle(Particle::new(centre, 0.5, 1.0))?;
     let config = Config::default().with_precision(precision);
     let mut sim = Dem::new(scene, &config, Backend::Cpu)?;
-    let steps = |t: f64, sim: &Dem<HertzMindlin>| (t / sim.dt()).round() as u32;
+    let steps = |t: f64, sim: &Dem<L>| (t / sim.dt()).round() as u32;
     let n1 = steps(1.0, &sim);
     sim.step(n1)?;
     let v1 = sim.state()?.velocities[0];
@@ -119,7 +123,7 @@ fn a_sphere_rolls_down_an_incline_below_the_critical_angle_and_slides_above() ->
     // Measured: a within 6e-9 (f64) and 8e-7 (f32) of the analytic value, the contact
     // point's speed 4e-15 v (f64) and 4e-6 v (f32).
     for (precision, tolerance) in [(Precision::F64, 1e-7), (Precision::F32, 1e-5)] {
-        let (a, v, w) = incline(theta, 0.5, 4.0, precision)?;
+        let (a, v, w) = incline(theta, law(0.5, 0.5), 4.0, precision)?;
         assert!(
             (a / rolling - 1.0).abs() < tolerance,
             "rolling: a = {a}, expected {rolling}"
@@ -133,7 +137,7 @@ fn a_sphere_rolls_down_an_incline_below_the_critical_angle_and_slides_above() ->
     }
     // tan(30 deg) = 0.58 > 3.5 mu = 0.35: sliding, a = g (sin - mu cos).
     let theta = 30f64.to_radians();
-    let (a, v, w) = incline(theta, 0.1, 4.0, Precision::F64)?;
+    let (a, v, w) = incline(theta, law(0.5, 0.1), 4.0, Precision::F64)?;
     let sliding = theta.sin() - 0.1 * theta.cos();
     // Measured: 4e-8.
     assert!(
@@ -230,7 +234,7 @@ fn rolling_resistance_stops_a_ball_over_the_predicted_distance() -> Result<()> {
     // A ball rolling at 1 on a floor: the saturated rolling couple mu_r R |F_n| removes
     // kinetic energy (1 + 2/5) m v^2 / 2 over d = (1 + 2/5) v^2 / (2 mu_r g).
     let mu_r = 0.1;
-    let law = law(0.5, 0.5).with_rolling_friction(mu_r);
+    let law = law(0.5, 0.5).with_rolling(mu_r, 2000.0, 20.0);
     let mut scene = Scene::new(Dim::Three, [0.0; 3], [20.0, 4.0, 4.0], law)?;
     scene.set_gravity(1.0)?.set_rotation(true);
     scene.add_wall(Wall::plane([0.0, 0.0, 1.0], [0.0; 3], law))?;
@@ -295,9 +299,30 @@ fn static_friction_holds_a_pyramid_that_viscous_friction_lets_collapse() -> Resu
     Ok(())
 }
 
+#[test]
+fn the_linear_law_with_history_rolls_without_slip_and_holds_the_pyramid() -> Result<()> {
+    let theta = 20f64.to_radians();
+    let law = LinearHistory::new(0.5, 0.05, 0.5);
+    let (a, v, w) = incline(theta, law, 4.0, Precision::F64)?;
+    let rolling = theta.sin() / 1.4;
+    assert!(
+        (a / rolling - 1.0).abs() < 1e-7,
+        "rolling: a = {a}, expected {rolling}"
+    );
+    assert!(
+        (v - 0.5 * w).abs() < 2e-5 * v,
+        "rolling: v = {v}, w R = {}",
+        0.5 * w
+    );
+    let (ke, drop) = pyramid(law)?;
+    assert!(ke < 1e-20, "the pyramid still moves: kinetic energy {ke}");
+    assert!(drop < 0.005, "the top disc sank by {drop}");
+    Ok(())
+}
+
 /// 60 spheres with Hertz–Mindlin and rolling resistance poured into a box.
 fn poured() -> Result<Scene<HertzMindlin>> {
-    let law = law(0.6, 0.4).with_rolling_friction(0.05);
+    let law = law(0.6, 0.4).with_rolling(0.05, 2000.0, 20.0);
     let mut scene = Scene::new(Dim::Three, [0.0; 3], [4.0, 4.0, 8.0], law)?;
     scene
         .set_gravity(1.0)?
