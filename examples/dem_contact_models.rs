@@ -11,8 +11,9 @@
 //! on the CPU in `f64` and `f32`, all at the same time step and `mu = 0.5`. For each: the
 //! wall time per particle-step over the whole run (2 threads on the machine of the table),
 //! the kinetic energy left at the end (static friction brings a heap to rest; viscous
-//! friction lets it creep flat) and the heap's slope: the angle of the line fitted to the
-//! top of the heap between 20 % and 80 % of its height, both flanks averaged.
+//! friction lets it creep on; without rolling resistance lone discs roll away) and the
+//! deposit's height and runout (the distance from the centre line within which 95 % of the
+//! discs lie).
 //!
 //! ```text
 //! cargo run --release --example dem_contact_models                  # N = 1500
@@ -55,9 +56,9 @@ struct Args {
 const DT: f64 = 1e-3;
 const TC: f64 = 0.03;
 /// Width of the column the heap falls from, in discs.
-const COLUMN: usize = 20;
+const COLUMN: usize = 40;
 /// Width of the floor.
-const WIDTH: f64 = 160.0;
+const WIDTH: f64 = 300.0;
 
 /// The column: `n` discs in rows 1.02 apart, `COLUMN` per row at spacing 1.12 with a
 /// random offset of up to 0.05 each (so that no two rows line up), centred on a floor
@@ -83,45 +84,29 @@ fn column<L: ContactLaw>(law: L, n: usize, rotation: bool) -> Result<Scene<L>> {
     Ok(s)
 }
 
-/// The heap's slope in degrees: the top surface (highest disc top per bin one diameter
-/// wide) fitted by least squares between 20 % and 80 % of the peak, each flank, averaged.
-fn slope(positions: &[[f64; 3]]) -> f64 {
-    let bins = WIDTH as usize;
-    let mut top = vec![0.0f64; bins];
-    for x in positions {
-        let b = (x[0] as usize).min(bins - 1);
-        top[b] = top[b].max(x[1] + 0.5);
-    }
-    let peak = top.iter().copied().fold(0.0, f64::max);
-    let centre = top.iter().position(|&h| h == peak).unwrap_or(bins / 2);
-    let fit = |range: Vec<usize>| -> f64 {
-        let pts: Vec<(f64, f64)> = range
-            .into_iter()
-            .filter(|&b| top[b] > 0.2 * peak && top[b] < 0.8 * peak)
-            .map(|b| (b as f64 + 0.5, top[b]))
-            .collect();
-        let n = pts.len() as f64;
-        if n < 2.0 {
-            return f64::NAN;
-        }
-        let (mx, my) = (
-            pts.iter().map(|p| p.0).sum::<f64>() / n,
-            pts.iter().map(|p| p.1).sum::<f64>() / n,
-        );
-        let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-        let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
-        (sxy / sxx).abs().atan().to_degrees()
-    };
-    0.5 * (fit((0..centre).collect()) + fit((centre..bins).collect()))
+/// The deposit's height (highest disc top) and runout: the distance from the centre line
+/// within which 95 % of the discs lie (lone discs that roll away do not count).
+fn deposit(positions: &[[f64; 3]]) -> (f64, f64) {
+    let height = positions.iter().map(|x| x[1] + 0.5).fold(0.0, f64::max);
+    let mut reach: Vec<f64> = positions
+        .iter()
+        .map(|x| (x[0] - 0.5 * WIDTH).abs() + 0.5)
+        .collect();
+    reach.sort_by(f64::total_cmp);
+    let runout = reach[(0.95 * (reach.len() - 1) as f64).round() as usize];
+    (height, runout)
 }
 
-/// (seconds per particle-step, kinetic energy per particle, slope in degrees).
+/// Seconds per particle-step, kinetic energy per particle, deposit height and runout.
+type Measured = (f64, f64, (f64, f64));
+
+/// (seconds per particle-step, kinetic energy per particle, deposit height and runout).
 fn measure<L: ContactLaw>(
     law: L,
     rotation: bool,
     precision: Precision,
     args: &Args,
-) -> Result<(f64, f64, f64)> {
+) -> Result<Measured> {
     let config = Config::default().with_dt(DT).with_precision(precision);
     let mut sim = Dem::new(column(law, args.n, rotation)?, &config, Backend::Cpu)?;
     let steps = (args.time / DT) as u32;
@@ -133,7 +118,7 @@ fn measure<L: ContactLaw>(
     Ok((
         secs,
         (d.kinetic + d.rotational) / args.n as f64,
-        slope(&s.positions),
+        deposit(&s.positions),
     ))
 }
 
@@ -148,14 +133,14 @@ fn run(args: &Args) -> Result<()> {
     let viscous = Material::new(0.5, TC).with_friction(0.5, 40.0);
     let mut lines = vec![
         format!(
-            "| contact model | rotation | precision | ns / particle-step | kinetic energy / particle at t = {} | heap slope (deg) |",
+            "| contact model | rotation | precision | ns / particle-step | kinetic energy / particle at t = {} | deposit height | runout (95 %) |",
             args.time
         ),
-        "|---|---|---|---|---|---|".to_string(),
+        "|---|---|---|---|---|---|---|".to_string(),
     ];
     let bar = progress::bar("contact models", 12, "runs");
     for precision in [Precision::F64, Precision::F32] {
-        let rows: Vec<(&str, bool, (f64, f64, f64))> = vec![
+        let rows: Vec<(&str, bool, Measured)> = vec![
             (
                 "linear, viscous friction",
                 false,
@@ -192,12 +177,14 @@ fn run(args: &Args) -> Result<()> {
                 )?,
             ),
         ];
-        for (name, rotation, (secs, ke, angle)) in rows {
+        for (name, rotation, (secs, ke, heap)) in rows {
             bar.inc(1);
             lines.push(format!(
-                "| {name} | {} | {precision:?} | {:.0} | {ke:.2e} | {angle:.1} |",
+                "| {name} | {} | {precision:?} | {:.0} | {ke:.2e} | {:.1} | {:.1} |",
                 if rotation { "yes" } else { "no" },
-                secs * 1e9
+                secs * 1e9,
+                heap.0,
+                heap.1
             ));
         }
     }

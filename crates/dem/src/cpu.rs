@@ -1659,7 +1659,7 @@ impl<const D: usize, T: Real, L: ContactLaw> crate::engine::Engine<L> for CpuEng
         Ok(self.to_saved())
     }
 
-    fn forces(&mut self) -> Result<(Vec<[f64; 3]>, Vec<[f64; 3]>)> {
+    fn forces(&mut self) -> Result<crate::Forces> {
         if !self.started {
             match self.prep.integrator {
                 Integrator::VelocityVerlet => self.start_velocity_verlet(),
@@ -1677,14 +1677,17 @@ impl<const D: usize, T: Real, L: ContactLaw> crate::engine::Engine<L> for CpuEng
         let prep = &self.prep;
         for (k, &id) in self.p.id.iter().enumerate() {
             let i = id as usize;
-            for d in 0..D {
-                f[i][d] = self.p.acc[k][d].to_f64() * prep.mass[i];
+            for (f, a) in f[i].iter_mut().zip(&self.p.acc[k]) {
+                *f = a.to_f64() * prep.mass[i];
             }
             if let Some(a) = self.p.alpha.get(k) {
                 t[i] = a.map(|x| x.to_f64() * prep.inertia[i]);
             }
         }
-        Ok((f, t))
+        Ok(crate::Forces {
+            force: f,
+            torque: t,
+        })
     }
 
     fn name(&self) -> String {

@@ -40,5 +40,5 @@ pub(crate) trait Engine<L>: Send {
     /// The forces and torques on every particle (scene order) that the next step starts
     /// from: evaluated now if the run has not started (as its first step would, so the
     /// run's results do not change), else those of the last step.
-    fn forces(&mut self) -> Result<(Vec<[f64; 3]>, Vec<[f64; 3]>)>;
+    fn forces(&mut self) -> Result<crate::Forces>;
 }

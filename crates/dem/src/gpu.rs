@@ -548,7 +548,7 @@ impl<L: ContactLaw> GpuEngine<L> {
 }
 
 impl<L: ContactLaw> Engine<L> for GpuEngine<L> {
-    fn forces(&mut self) -> Result<(Vec<[f64; 3]>, Vec<[f64; 3]>)> {
+    fn forces(&mut self) -> Result<crate::Forces> {
         Err(Error::Unsupported(
             "Dem::forces reads the CPU engine's forces; run the scene on Backend::Cpu".into(),
         ))

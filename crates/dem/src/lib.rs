@@ -10,7 +10,13 @@
 //!   contact time and the safe time step). Every backend is compiled for the scene's law,
 //!   so a law of your own runs at the speed of the built-in one. [`Material`] is the
 //!   built-in law and the default.
-//! - [`Scene`]: particles, species-pair material table, walls, gravity, [`Vibration`].
+//! - [`HertzMindlin`] (from [`Solid`]s) and [`LinearHistory`]: laws with a tangential
+//!   spring per contact (Cundall–Strack, [`coulomb_spring`]) and optional rolling
+//!   resistance; with [`Scene::set_rotation`] the particles spin (solid discs and
+//!   spheres, [`moment_of_inertia`]). CPU backend; their forces and torques equal LAMMPS
+//!   `pair granular`'s (see `docs/dem.md`).
+//! - [`Scene`]: particles, species-pair material table, walls, gravity, [`Vibration`],
+//!   rotation.
 //! - [`ContactCoefficients`]: spring and dashpot from the requested restitution `e` and
 //!   contact time `t_c` with the reduced mass, so `e` holds for any mass pair and for walls.
 //! - The laws, one function each for every CPU path (both precisions, diagnostics
@@ -19,7 +25,8 @@
 //!   [`cylinder_overlap`], [`wall_motion`] (walls); [`spring_energy`] for the diagnostics.
 //! - [`Config`]: [`Integrator`] (velocity or position Verlet), [`Precision`], time step
 //!   (default `t_c / 30`; above [`safe_dt`] an error unless overridden).
-//! - [`Dem`]: the simulation ([`simkit_backend::Simulation`]), with [`Diagnostics`].
+//! - [`Dem`]: the simulation ([`simkit_backend::Simulation`]), with [`Diagnostics`] and
+//!   [`Dem::forces`].
 //! - [`Units`]: the source's normalised units from cm, g, s, Hz and `Gamma`.
 //!
 //! # Runs that cannot silently go wrong
@@ -122,7 +129,7 @@ pub use distributed::DistributedDem;
 pub use hertz::{HertzCoefficients, HertzMindlin, Solid, hertz_contact_time};
 pub use input::{Dim, Material, Particle, Scene, Vibration, Wall, WallShape, pair_index};
 pub use law::{Contact, ContactForce, ContactLaw};
-pub use sim::Dem;
+pub use sim::{Dem, Forces};
 pub use simkit_backend::particles::State;
 pub use simkit_backend::{
     Backend, Distributed, Error, Precision, Real, Restart, Result, Simulation,

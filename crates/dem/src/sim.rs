@@ -64,6 +64,15 @@ struct Payload<L> {
     engine: Dynamics,
 }
 
+/// The force and torque on every particle, in scene order ([`Dem::forces`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Forces {
+    /// Force on each particle (`[x, y, 0]` in 2D).
+    pub force: Vec<[f64; 3]>,
+    /// Torque on each particle (`[0, 0, t_z]` in 2D; zero without rotation).
+    pub torque: Vec<[f64; 3]>,
+}
+
 /// A granular DEM simulation of a [`Scene`] with contact law `L` on a chosen backend.
 ///
 /// ```
@@ -188,7 +197,7 @@ impl<L: ContactLaw> Dem<L> {
     ///
     /// Errors: [`Error::Unsupported`] on the GPU, and before the first step of a position
     /// Verlet run.
-    pub fn forces(&mut self) -> Result<(Vec<[f64; 3]>, Vec<[f64; 3]>)> {
+    pub fn forces(&mut self) -> Result<Forces> {
         self.engine.forces()
     }
 

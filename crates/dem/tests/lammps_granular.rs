@@ -79,7 +79,8 @@ fn compare<L: ContactLaw>(dump: &str, law: L) -> Result<(f64, f64)> {
     }
     let config = Config::default().with_dt(1e-4);
     let mut sim = Dem::new(scene, &config, Backend::Cpu)?;
-    let (f, t) = sim.forces()?;
+    let loads = sim.forces()?;
+    let (f, t) = (loads.force, loads.torque);
     let worst = |ours: &[[f64; 3]], theirs: &dyn Fn(&Atom) -> [f64; 3]| {
         let scale = atoms
             .iter()

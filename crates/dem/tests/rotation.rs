@@ -366,6 +366,30 @@ fn a_checkpoint_with_contact_history_resumes_bit_for_bit() -> Result<()> {
 }
 
 #[test]
+fn asking_for_the_forces_before_the_first_step_does_not_change_the_run() -> Result<()> {
+    let mut asked = Dem::new(poured()?, &Config::default(), Backend::Cpu)?;
+    let loads = asked.forces()?;
+    // Gravity on every sphere (no contacts yet): -m g along z, no torque.
+    assert!(
+        loads.force.iter().all(|f| *f == [0.0, 0.0, -1.0]),
+        "{:?}",
+        loads.force[0]
+    );
+    assert!(loads.torque.iter().all(|t| *t == [0.0; 3]));
+    let mut plain = Dem::new(poured()?, &Config::default(), Backend::Cpu)?;
+    asked.step(2000)?;
+    plain.step(2000)?;
+    assert_eq!(asked.state()?, plain.state()?);
+    // After a step: the forces the next step starts from, with contacts now.
+    let loads = asked.forces()?;
+    assert!(
+        loads.torque.iter().any(|t| t.iter().any(|&c| c != 0.0)),
+        "no torque"
+    );
+    Ok(())
+}
+
+#[test]
 fn contact_history_survives_neighbour_list_rebuilds() -> Result<()> {
     // A thin skin rebuilds the lists (reordering the particles) every few steps, a thick
     // one seldom: with the history carried across, the runs differ by the round-off of the
