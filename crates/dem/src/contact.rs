@@ -279,13 +279,10 @@ impl ContactLaw for LinearHistory {
     /// Not on the GPU yet: the GPU backend refuses laws with a history.
     const WGSL: &'static str = "";
     const BUILT_IN: bool = true;
-    const HISTORY: usize = 6;
+    const HISTORY: usize = crate::spin::Springs::<f64>::HISTORY;
 
-    /// The tangential displacement changes sign, the rolling one does not.
     fn swap_history<T: Real>(h: &mut [T]) {
-        for x in &mut h[..3] {
-            *x = -*x;
-        }
+        crate::spin::Springs::<T>::swap(h);
     }
 
     fn validate(&self, what: &str) -> Result<()> {
@@ -302,13 +299,7 @@ impl ContactLaw for LinearHistory {
             ("friction", self.friction),
             ("rolling_friction", self.rolling_friction),
         ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(simkit_backend::Error::invalid(
-                    format!("{what}: {name}"),
-                    v,
-                    "must be finite and >= 0",
-                ));
-            }
+            simkit_backend::require_non_negative(&format!("{what}: {name}"), v)?;
         }
         Ok(())
     }

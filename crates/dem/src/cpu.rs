@@ -1193,32 +1193,24 @@ impl<const D: usize, T: Real, L: ContactLaw> CpuEngine<D, T, L> {
             cut2: self.cut2,
             block: bs,
         };
-        type Task<'a, T, const D: usize> = (
-            (
-                (&'a HalfListBlock<T, D>, &'a mut BlockWork<T, D>),
-                &'a mut [[T; D]],
-            ),
-            &'a mut [[T; 3]],
-        );
-        let force = |(((nb, b), f), t): Task<'_, T, D>| {
+        let run = |nb: &HalfListBlock<T, D>,
+                   b: &mut BlockWork<T, D>,
+                   f: &mut [[T; D]],
+                   t: &mut [[T; 3]]| {
             block_forces::<T, D, L, FRICTION, ROT>(&inp, nb, b, f, t);
         };
         let blocks = self.list.blocks();
-        // Without rotation there is no torque array: every block gets an empty slice.
-        let n_blocks = blocks.len();
-        let mut none: Vec<&mut [[T; 3]]> = Vec::new();
-        if !ROT {
-            none.resize_with(n_blocks, || &mut []);
-        }
         if self.parallel {
             let tasks = blocks
                 .par_iter()
                 .zip(self.work.par_iter_mut())
                 .zip(p.acc.par_chunks_mut(bs));
             if ROT {
-                tasks.zip(p.alpha.par_chunks_mut(bs)).for_each(force);
+                let tasks = tasks.zip(p.alpha.par_chunks_mut(bs));
+                tasks.for_each(|(((nb, b), f), t)| run(nb, b, f, t));
             } else {
-                tasks.zip(none.into_par_iter()).for_each(force);
+                // Without rotation there is no torque array: an empty slice per block.
+                tasks.for_each(|((nb, b), f)| run(nb, b, f, &mut []));
             }
         } else {
             let tasks = blocks
@@ -1226,9 +1218,10 @@ impl<const D: usize, T: Real, L: ContactLaw> CpuEngine<D, T, L> {
                 .zip(self.work.iter_mut())
                 .zip(p.acc.chunks_mut(bs));
             if ROT {
-                tasks.zip(p.alpha.chunks_mut(bs)).for_each(force);
+                let tasks = tasks.zip(p.alpha.chunks_mut(bs));
+                tasks.for_each(|(((nb, b), f), t)| run(nb, b, f, t));
             } else {
-                tasks.zip(none).for_each(force);
+                tasks.for_each(|((nb, b), f)| run(nb, b, f, &mut []));
             }
         }
     }

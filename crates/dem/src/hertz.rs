@@ -186,14 +186,10 @@ impl ContactLaw for HertzMindlin {
     /// Not on the GPU yet: the GPU backend refuses laws with a history.
     const WGSL: &'static str = "";
     const BUILT_IN: bool = true;
-    const HISTORY: usize = 6;
+    const HISTORY: usize = Springs::<f64>::HISTORY;
 
-    /// The tangential displacement changes sign; the rolling displacement
-    /// `R* (w_i - w_j) x n` does not (both factors change sign).
     fn swap_history<T: Real>(h: &mut [T]) {
-        for x in &mut h[..3] {
-            *x = -*x;
-        }
+        Springs::<T>::swap(h);
     }
 
     fn validate(&self, what: &str) -> Result<()> {
@@ -221,13 +217,7 @@ impl ContactLaw for HertzMindlin {
             ("rolling_stiffness", self.rolling_stiffness),
             ("rolling_damping", self.rolling_damping),
         ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(Error::invalid(
-                    format!("{what}: {name}"),
-                    v,
-                    "must be finite and >= 0",
-                ));
-            }
+            simkit_backend::require_non_negative(&format!("{what}: {name}"), v)?;
         }
         if self.rolling_friction > 0.0 && self.rolling_stiffness <= 0.0 {
             return Err(Error::invalid(

@@ -121,6 +121,18 @@ pub(crate) struct Springs<T> {
 }
 
 impl<T: Real> Springs<T> {
+    /// Values per contact: the tangential and the rolling displacement.
+    pub const HISTORY: usize = 6;
+
+    /// The history of contact `(j, i)` from that of `(i, j)`: the tangential displacement
+    /// changes sign; the rolling displacement `R* (w_i - w_j) x n` does not (both factors
+    /// change sign).
+    pub fn swap(history: &mut [T]) {
+        for x in &mut history[..3] {
+            *x = -*x;
+        }
+    }
+
     /// Adds to `out` the tangential force of contact `k` (normal force `f_n`) and, with
     /// `mu_r > 0`, the rolling couple `R* n x F_r`, advancing both springs
     /// ([`coulomb_spring`]).
