@@ -98,6 +98,9 @@ fn dem_force(
             }
             var wv = vec3<f32>(0.0);
             wv[prm.vertical] = vib * motion.y;
+            if (wall.cylinder.w > 0.5) {
+                wv = vec3<f32>(wv.xy + dem_cylinder_surface_velocity(wall.motion.y, wall.cylinder.z, n.xy), wv.z);
+            }
             let vrel = vi.xyz - wv;
             let vn = dot(vrel, n);
             deepest = max(deepest, delta / ri);

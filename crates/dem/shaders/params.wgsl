@@ -24,6 +24,6 @@ struct DemWall {
     plane: vec4<f32>,
     // Axis (x, y) in grid-origin coordinates, radius, kind (1 = cylinder, 0 = plane).
     cylinder: vec4<f32>,
-    // (1 if the wall vibrates else 0, 0, 0, 0).
+    // (1 if the wall vibrates else 0, angular velocity of a cylinder wall, 0, 0).
     motion: vec4<f32>,
 }

@@ -22,3 +22,11 @@ fn dem_cylinder_overlap(center: vec2<f32>, radius: f32, x: vec2<f32>, r: f32) ->
 fn dem_wall_motion(amplitude: f32, omega: f32, phase: f32) -> vec2<f32> {
     return vec2<f32>(-amplitude * cos(phase), amplitude * omega * sin(phase));
 }
+
+// Velocity (v_x, v_y) of the surface of a cylinder wall of radius R turning at spin
+// (counter-clockwise seen from +z) where it touches a particle with contact normal n:
+// spin R (n_y, -n_x).
+fn dem_cylinder_surface_velocity(spin: f32, radius: f32, n: vec2<f32>) -> vec2<f32> {
+    let s = spin * radius;
+    return vec2<f32>(s * n.y, -(s * n.x));
+}

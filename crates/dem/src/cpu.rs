@@ -26,8 +26,8 @@ use simkit_neighbor::{BlockedHalfList, HalfListBlock, wrap_periodic};
 use crate::prepared::Prepared;
 use crate::spin::{contact_point_velocity, cross, to3};
 use crate::{
-    Contact, ContactLaw, Integrator, State, cylinder_overlap, pair_index, plane_overlap,
-    reduced_mass,
+    Contact, ContactLaw, Integrator, State, cylinder_overlap, cylinder_surface_velocity,
+    pair_index, plane_overlap, reduced_mass,
 };
 use simkit_backend::particles::Dynamics;
 
@@ -63,6 +63,8 @@ pub(crate) struct WallT<T, C> {
     radius: T,
     coeff: C,
     vibrating: bool,
+    /// Angular velocity of a cylinder wall (0: at rest).
+    spin: T,
     /// Whether the wall depends on a periodic coordinate (then the particle position is
     /// wrapped before the wall test: positions are wrapped only at list builds).
     pub wrap: bool,
@@ -247,6 +249,11 @@ pub(crate) fn wall_force<
     let mut wv = [T::ZERO; D];
     if w.vibrating {
         wv[inp.vert] = inp.vw;
+    }
+    if w.cylinder {
+        let s = cylinder_surface_velocity(w.spin, w.radius, [n[0], n[1]]);
+        wv[0] += s[0];
+        wv[1] += s[1];
     }
     let mut vrel = [T::ZERO; D];
     let mut vn = T::ZERO;
@@ -579,6 +586,7 @@ pub(crate) fn walls_of<T: Real, const D: usize, L: ContactLaw>(
             radius: T::from_f64(w.radius),
             coeff: w.material.coefficients(),
             vibrating: w.vibrating,
+            spin: T::from_f64(w.spin),
             wrap: if w.cylinder {
                 (0..D.min(2)).any(|d| periodic[d])
             } else {

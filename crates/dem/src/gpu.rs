@@ -90,7 +90,8 @@ struct GpuWall {
     plane: [f32; 4],
     /// Axis `(x, y)` relative to the grid origin, radius, kind (1 = cylinder, 0 = plane).
     cylinder: [f32; 4],
-    /// `(1, 0, 0, 0)` for a vibrating wall, zero otherwise.
+    /// `(vibrates, spin, 0, 0)`: 1 for a vibrating wall (else 0), the angular velocity of a
+    /// cylinder wall.
     motion: [f32; 4],
 }
 
@@ -268,7 +269,7 @@ impl<L: ContactLaw> GpuEngine<L> {
                     w.radius as f32,
                     if w.cylinder { 1.0 } else { 0.0 },
                 ],
-                motion: [if w.vibrating { 1.0 } else { 0.0 }, 0.0, 0.0, 0.0],
+                motion: [if w.vibrating { 1.0 } else { 0.0 }, w.spin as f32, 0.0, 0.0],
             };
             walls.push(record);
         }

@@ -161,9 +161,10 @@ pub enum WallShape {
         /// Plane offset along the normal.
         offset: f64,
     },
-    /// 3D only: a vertical cylinder side wall (axis along z through `center`), particles
-    /// inside. The contact treats the wall as a sphere of radius `radius` centred on the
-    /// axis at the particle's height: overlap `rho + R - radius`.
+    /// A cylinder with its axis along z through `center`, particles inside: in 3D a
+    /// vertical side wall (the contact treats the wall as a sphere of radius `radius`
+    /// centred on the axis at the particle's height: overlap `rho + R - radius`), in 2D a
+    /// circle (a drum whose axis is normal to the plane).
     Cylinder {
         /// Axis position (x, y).
         center: [f64; 2],
@@ -183,6 +184,12 @@ pub struct Wall<L = Material> {
     pub material: L,
     /// Whether the wall moves with the scene's [`Vibration`].
     pub vibrating: bool,
+    /// Angular velocity of a cylinder wall about its axis (counter-clockwise seen from +z;
+    /// 0 for a plane): the wall keeps its place and its surface moves at
+    /// `spin * radius` ([`crate::cylinder_surface_velocity`]), as the shell of a rotating
+    /// drum.
+    #[serde(default)]
+    pub spin: f64,
 }
 
 impl<L: ContactLaw> Wall<L> {
@@ -199,16 +206,27 @@ impl<L: ContactLaw> Wall<L> {
             shape: WallShape::Plane { normal: n, offset },
             material,
             vibrating: false,
+            spin: 0.0,
         }
     }
 
-    /// A fixed vertical cylinder side wall (3D).
+    /// A fixed cylinder wall with its axis along z through `center`, particles inside: a
+    /// vertical side wall in 3D, a circle in 2D.
     pub fn cylinder(center: [f64; 2], radius: f64, material: L) -> Self {
         Self {
             shape: WallShape::Cylinder { center, radius },
             material,
             vibrating: false,
+            spin: 0.0,
         }
+    }
+
+    /// The same cylinder wall turning about its axis at `spin` radians per time unit
+    /// (counter-clockwise seen from +z): a rotating drum in 2D. [`Scene::add_wall`] refuses
+    /// a spin on a plane or one that is not finite.
+    pub fn spinning(mut self, spin: f64) -> Self {
+        self.spin = spin;
+        self
     }
 
     /// The same wall, moving with the container vibration.
@@ -422,11 +440,6 @@ impl<L: ContactLaw> Scene<L> {
                 }
             }
             WallShape::Cylinder { center, radius } => {
-                if self.dim != Dim::Three {
-                    return Err(Error::Unsupported(
-                        "cylinder walls exist only in 3D scenes".into(),
-                    ));
-                }
                 if !(center[0].is_finite()
                     && center[1].is_finite()
                     && radius.is_finite()
@@ -439,6 +452,21 @@ impl<L: ContactLaw> Scene<L> {
                     ));
                 }
             }
+        }
+        if !wall.spin.is_finite() {
+            return Err(Error::invalid(
+                "wall spin",
+                wall.spin,
+                "must be finite (radians per time unit)",
+            ));
+        }
+        if wall.spin != 0.0 && matches!(wall.shape, WallShape::Plane { .. }) {
+            return Err(Error::invalid(
+                "wall spin",
+                wall.spin,
+                "only a cylinder wall can spin (Wall::cylinder(..).spinning(spin)); a plane \
+                 must have spin 0",
+            ));
         }
         self.walls.push(wall);
         Ok(self)

@@ -1,7 +1,7 @@
 //! `dem`: granular discrete-element dynamics of discs (2D) and spheres (3D) with a contact
 //! law of the user's choice (built in: the linear spring–dashpot with Coulomb-capped
-//! friction), walls (planes, boxes, a 3D cylinder), a vibrated container and periodic axes,
-//! on the CPU (rayon, `f64` or `f32`) and on the GPU (wgpu, `f32`, the whole step on the
+//! friction), walls (planes, boxes, a cylinder that may spin), a vibrated container and
+//! periodic axes, on the CPU (rayon, `f64` or `f32`) and on the GPU (wgpu, `f32`, the whole step on the
 //! device).
 //!
 //! - [`ContactLaw`]: what a contact model provides (its parameters per material pair, the
@@ -22,7 +22,8 @@
 //! - The laws, one function each for every CPU path (both precisions, diagnostics
 //!   included) with a WGSL twin in `shaders/` that the GPU force kernel calls:
 //!   [`normal_force`], [`friction_force`], [`reduced_mass`] (contact), [`plane_overlap`],
-//!   [`cylinder_overlap`], [`wall_motion`] (walls); [`spring_energy`] for the diagnostics.
+//!   [`cylinder_overlap`], [`cylinder_surface_velocity`], [`wall_motion`] (walls);
+//!   [`spring_energy`] for the diagnostics.
 //! - [`Config`]: [`Integrator`] (velocity or position Verlet), [`Precision`], time step
 //!   (default `t_c / 30`; above [`safe_dt`] an error unless overridden).
 //! - [`Dem`]: the simulation ([`simkit_backend::Simulation`]), with [`Diagnostics`] and
@@ -136,4 +137,4 @@ pub use simkit_backend::{
 };
 pub use spin::{coulomb_spring, moment_of_inertia};
 pub use units::Units;
-pub use walls::{cylinder_overlap, plane_overlap, wall_motion};
+pub use walls::{cylinder_overlap, cylinder_surface_velocity, plane_overlap, wall_motion};

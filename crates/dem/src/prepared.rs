@@ -56,6 +56,8 @@ pub(crate) struct PreparedWall<L> {
     pub radius: f64,
     pub material: L,
     pub vibrating: bool,
+    /// Angular velocity of a cylinder wall about its axis.
+    pub spin: f64,
 }
 
 impl<L> PreparedWall<L> {
@@ -164,6 +166,7 @@ impl<L: ContactLaw> Prepared<L> {
                         radius: 0.0,
                         material,
                         vibrating: w.vibrating,
+                        spin: w.spin,
                     },
                     WallShape::Cylinder { center, radius } => PreparedWall {
                         cylinder: true,
@@ -173,6 +176,7 @@ impl<L: ContactLaw> Prepared<L> {
                         radius,
                         material,
                         vibrating: w.vibrating,
+                        spin: w.spin,
                     },
                 }
             })

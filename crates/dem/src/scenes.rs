@@ -1,10 +1,14 @@
-//! Ready-made scenes from the source and the benchmarks.
+//! Ready-made scenes from the source and the benchmarks, and piles under gravity (a
+//! poured heap, a rotating drum) with the angle of their surface.
 
 use std::f64::consts::PI;
 
 use simkit_backend::Result;
 
 use crate::{Dim, Material, Particle, Scene, Units, Wall};
+
+mod piles;
+pub use piles::{DrumParams, HeapParams, poured_heap, rotating_drum, surface_angle};
 
 /// Parameters of the 2D vibrated bed (source chapter 1) in physical units.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,6 +1,7 @@
 //! Wall geometry, written once for every path (CPU force loop, wall candidate lists,
-//! diagnostics): the overlap and normal of a particle with a plane or a cylinder wall, and
-//! the motion of a vibrating wall. WGSL twins in `shaders/walls.wgsl`.
+//! diagnostics): the overlap and normal of a particle with a plane or a cylinder wall, the
+//! surface velocity of a turning cylinder (a rotating drum), and the motion of a vibrating
+//! wall. WGSL twins in `shaders/walls.wgsl`.
 
 use simkit_backend::Real;
 
@@ -42,6 +43,18 @@ pub fn cylinder_overlap<T: Real>(center: [T; 2], radius: T, x: [T; 2], r: T) -> 
         return (T::ZERO, [T::ZERO; 2]);
     }
     (rho + r - radius, [-(dx / rho), -(dy / rho)])
+}
+
+/// Velocity `(v_x, v_y)` of the surface of a cylinder wall of radius `R` turning at `spin`
+/// (radians per time unit, counter-clockwise seen from +z) where it touches a particle
+/// whose contact normal is `n` ([`cylinder_overlap`]): the contact point is `center - R n`,
+/// so the wall moves there at `spin z x (-R n) = spin R (n_y, -n_x)`.
+///
+/// WGSL twin: `dem_cylinder_surface_velocity(spin, radius, n)` in `shaders/walls.wgsl`.
+#[inline(always)]
+pub fn cylinder_surface_velocity<T: Real>(spin: T, radius: T, n: [T; 2]) -> [T; 2] {
+    let s = spin * radius;
+    [s * n[1], -(s * n[0])]
 }
 
 /// Vertical displacement and velocity of a vibrating wall at phase `omega t`:

@@ -1,7 +1,8 @@
 //! Law-level checks: the WGSL contact law (`shaders/contact.wgsl`) and wall geometry
 //! (`shaders/walls.wgsl`) that the GPU force kernel calls, evaluated on the GPU for a sample
 //! of inputs, against their Rust twins (`simkit_dem::{normal_force, friction_force,
-//! reduced_mass, plane_overlap, cylinder_overlap, wall_motion}`) at `f32`.
+//! reduced_mass, plane_overlap, cylinder_overlap, cylinder_surface_velocity, wall_motion}`)
+//! at `f32`.
 //!
 //! Tolerance of the arithmetic laws: 8 f32 ulps (`8 * 2^-23`) relative to the size of the
 //! terms that are summed (not to the result, which may cancel). Both sides run the same
@@ -19,8 +20,9 @@ use bytemuck::{Pod, Zeroable};
 use simkit_backend::rng::rng_uniform;
 use simkit_backend::testing::{eval_wgsl, gpu_or_skip};
 use simkit_dem::{
-    Contact, ContactCoefficients, ContactLaw, Material, cylinder_overlap, friction_force,
-    normal_force, plane_overlap, reduced_mass, wall_motion,
+    Contact, ContactCoefficients, ContactLaw, Material, cylinder_overlap,
+    cylinder_surface_velocity, friction_force, normal_force, plane_overlap, reduced_mass,
+    wall_motion,
 };
 
 const CONTACT_WGSL: &str = simkit_backend::wgsl!("contact.wgsl");
@@ -379,6 +381,48 @@ fn wall_geometry_matches_its_wgsl_twin() {
     }
     check("cylinder overlap", &gd, &cd, &sd, ULPS8);
     check("cylinder normal", &gn, &cn, &sn, ULPS8);
+}
+
+#[test]
+fn cylinder_surface_velocity_matches_its_wgsl_twin() {
+    let Some(ctx) = gpu_or_skip("cylinder_surface_velocity_matches_its_wgsl_twin") else {
+        return;
+    };
+    let mut cases = Vec::new();
+    for &(spin, radius) in &[(0.0f32, 10.0f32), (0.03, 15.0), (-2.5, 0.7), (1e3, 1e-2)] {
+        for k in 0..8u32 {
+            let phi = 0.2 + 0.8 * k as f32;
+            cases.push([spin, radius, phi.cos(), phi.sin()]);
+        }
+    }
+    let gpu: Vec<[f32; 2]> = eval_wgsl(
+        &ctx,
+        &[WALLS_WGSL],
+        "vec4<f32>",
+        "vec2<f32>",
+        "dem_cylinder_surface_velocity(x.x, x.y, x.zw)",
+        &cases,
+    )
+    .unwrap();
+    let (mut g, mut c, mut s) = (vec![], vec![], vec![]);
+    for (x, out) in cases.iter().zip(&gpu) {
+        let v = cylinder_surface_velocity(x[0], x[1], [x[2], x[3]]);
+        // The surface speed is |spin| R: the contact point goes round the axis.
+        let speed = f64::from(v[0]).hypot(f64::from(v[1]));
+        let expected = f64::from(x[0].abs() * x[1]);
+        assert!(
+            (speed - expected).abs() <= 4.0 * f64::from(f32::EPSILON) * expected,
+            "surface speed {speed} for spin {} R {}",
+            x[0],
+            x[1]
+        );
+        for d in 0..2 {
+            g.push(out[d]);
+            c.push(v[d]);
+            s.push(expected.max(f64::MIN_POSITIVE));
+        }
+    }
+    check("cylinder surface velocity", &g, &c, &s, ULPS8);
 }
 
 #[test]

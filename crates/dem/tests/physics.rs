@@ -492,12 +492,18 @@ fn bad_input_is_refused_with_clear_errors() {
     assert_abs_diff_eq!(d.max_overlap, 0.02, epsilon = 1e-12);
     sim.step(100).unwrap();
     assert!(sim.diagnostics().unwrap().finite);
-    // Cylinder walls only in 3D, bad dt.
+    // A cylinder in 2D is a circle (a drum) and may spin; a plane may not, nor may a
+    // cylinder spin at NaN. Bad dt.
     let mut s2 = Scene::new(Dim::Two, [0.0; 3], [4.0, 4.0, 0.0], m).unwrap();
-    assert!(
-        s2.add_wall(simkit_dem::Wall::cylinder([0.0, 0.0], 1.0, m))
-            .is_err()
-    );
+    s2.add_wall(simkit_dem::Wall::cylinder([2.0, 2.0], 2.0, m).spinning(0.5))
+        .unwrap();
+    for bad in [
+        simkit_dem::Wall::plane([0.0, 1.0, 0.0], [0.0; 3], m).spinning(1.0),
+        simkit_dem::Wall::cylinder([2.0, 2.0], 2.0, m).spinning(f64::NAN),
+    ] {
+        let err = s2.add_wall(bad).unwrap_err();
+        assert!(err.to_string().contains("wall spin"), "{err}");
+    }
     assert!(matches!(
         Dem::new(s, &Config::default().with_dt(f64::NAN), Backend::Cpu),
         Err(Error::InvalidParameter { .. })

@@ -109,7 +109,7 @@ fn scene_setters_never_panic() {
             s.set_periodic(per);
             for r in [
                 s.add_wall(Wall::plane(normal, point, wm)).map(|_| ()),
-                s.add_wall(Wall::cylinder([cx, cy], cr, wm).vibrating())
+                s.add_wall(Wall::cylinder([cx, cy], cr, wm).vibrating().spinning(cx))
                     .map(|_| ()),
                 s.add_particle(Particle::new(x, r, mass).with_velocity(v).with_species(sp))
                     .map(|_| ()),

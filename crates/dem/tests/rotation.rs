@@ -447,3 +447,92 @@ fn rotation_and_history_are_refused_where_they_do_not_run_yet() -> Result<()> {
     }
     Ok(())
 }
+
+/// A sphere (3D) or disc (2D) of radius 0.5 and mass 1 hitting a floor with normal speed 1
+/// and tangential speed `vt`, without spin, under the elastic linear law with history
+/// (`e = 1`, `t_c = 0.01`, `mu`, `k_t / k_n = ratio`): the tangential velocity of the
+/// contact point, the centre's tangential velocity and the spin after the impact.
+fn linear_oblique(dim: Dim, ratio: f64, mu: f64, vt: f64) -> Result<(f64, f64, f64)> {
+    let law = LinearHistory::new(1.0, 0.01, mu).with_stiffness_ratio(ratio);
+    let up = dim.vertical();
+    let mut hi = [40.0, 4.0, 4.0];
+    let mut x = [2.0, 2.0, 2.0];
+    let mut v = [vt, 0.0, 0.0];
+    let mut normal = [0.0; 3];
+    if dim == Dim::Two {
+        hi[2] = 0.0;
+        x[2] = 0.0;
+    }
+    x[up] = 0.501;
+    v[up] = -1.0;
+    normal[up] = 1.0;
+    let mut scene = Scene::new(dim, [0.0; 3], hi, law)?;
+    scene.set_rotation(true);
+    scene.add_wall(Wall::plane(normal, [0.0; 3], law))?;
+    scene.add_particle(Particle::new(x, 0.5, 1.0).with_velocity(v))?;
+    let dt = 0.01 / 2000.0;
+    let mut sim = Dem::new(
+        scene,
+        &Config::default().with_dt(dt).with_check_every(0),
+        Backend::Cpu,
+    )?;
+    // 0.001 of flight, the contact (0.01), and 0.002 away.
+    sim.step(2600)?;
+    let s = sim.state()?;
+    assert!(s.positions[0][up] > 0.501, "still in contact");
+    // The spin about the axis normal to the floor and the motion: y in 3D, z in 2D (whose
+    // sign is opposite: a disc rolling along +x on a floor turns clockwise).
+    let w = match dim {
+        Dim::Three => s.angular_velocities[0][1],
+        Dim::Two => -s.angular_velocities[0][2],
+    };
+    Ok((s.velocities[0][0] - 0.5 * w, s.velocities[0][0], w))
+}
+
+#[test]
+fn oblique_impacts_of_the_linear_law_follow_its_exact_curve_over_all_incidences() -> Result<()> {
+    // With k_t / k_n = 1 / (1 + m R^2 / I) (2/7 for spheres, 1/3 for discs) the tangential
+    // spring of the contact point (effective mass m / (1 + m R^2 / I)) oscillates with the
+    // normal one, and the elastic impact has a closed form in the normalised incidence
+    // psi = (k_t / k_n) w / (mu v_n) (w the contact point's tangential speed): for
+    // psi <= 1 the contact sticks throughout and the contact point leaves reversed,
+    // psi' = -psi; for psi > 1 the spring sits on the Coulomb cap mu |F_n| for the whole
+    // contact and psi' = psi - 2 (the gross-sliding line, tangential impulse mu J_n).
+    // This is the linear model's counterpart of the curves of Maw, Barber & Fawcett (1976)
+    // and Thornton, Cummins & Cleary (2011), derived in docs/dem.md.
+    let mu = 0.3;
+    for (dim, ratio, inertia) in [(Dim::Three, 2.0 / 7.0, 0.4), (Dim::Two, 1.0 / 3.0, 0.5)] {
+        // The largest error on each branch: in psi', and in the rebound velocity and spin
+        // relative to the incident tangential speed.
+        let (mut sticking, mut sliding) = (0.0f64, 0.0f64);
+        for psi in [0.1, 0.4, 0.8, 0.95, 1.05, 1.3, 1.7, 2.0, 3.0, 6.0] {
+            let vt = psi * mu / ratio;
+            let (w, v, spin) = linear_oblique(dim, ratio, mu, vt)?;
+            let exact = if psi <= 1.0 { -psi } else { psi - 2.0 };
+            // The rebound velocity and spin that the contact point's speed implies: the
+            // tangential impulse m (v' - vt) turns the particle by (vt - v') m R / I
+            // (m = 1, R = 0.5, I = inertia m R^2).
+            let v_exact = (exact * mu / ratio + vt / inertia) / (1.0 + 1.0 / inertia);
+            let spin_exact = (vt - v_exact) / (inertia * 0.5);
+            let err = (ratio * w / mu - exact)
+                .abs()
+                .max((v - v_exact).abs() / vt)
+                .max((spin - spin_exact).abs() / vt);
+            if psi <= 1.0 {
+                sticking = sticking.max(err);
+            } else {
+                sliding = sliding.max(err);
+            }
+        }
+        // Measured (dt = t_c / 2000): sticking 1.8e-3 in 3D, 1.6e-3 in 2D, first order in
+        // dt (half at t_c / 4000: the spring is advanced with the velocity of the step
+        // before); sliding: 3.5e-10 in both.
+        assert!(
+            sticking < 2.5e-3,
+            "{dim:?}: sticking branch off by {sticking}"
+        );
+        assert!(sliding < 1e-9, "{dim:?}: sliding branch off by {sliding}");
+        println!("{dim:?}: sticking {sticking:.2e}, sliding {sliding:.2e}");
+    }
+    Ok(())
+}
