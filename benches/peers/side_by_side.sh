@@ -19,10 +19,14 @@
 #   neighbor     kiddo 6 (ImmutableKdTree build + per-point within().unsorted().visit()
 #                queries in tree order, rayon, 2 threads) vs simkit sorted cells (build + count
 #                every pair, 2 threads), N = 1e6 uniform points at density 1, cutoff 2.5; pairs/s
-#   dem          LAMMPS gran/hooke (mpirun -np 2) vs simkit dem (2 threads) on
+#   dem          LAMMPS (mpirun -np 2) vs simkit dem (2 threads) on
 #                benches/peers/dem_gran3d.lmp, 20,000 spheres, the first 4000 steps and the
 #                first 30,000 (the pile settles: dense contacts), and 1,000,000 spheres (100^3
-#                lattice, 200 steps); particle-steps/s
+#                lattice, 200 steps), and the first window on 1 core; particle-steps/s; two
+#                models: the same physics (LAMMPS gran/hooke/history + nve/sphere vs simkit
+#                LinearHistory with rotation, `dem_box_timer --model history`), and the old
+#                "no rotation" rows (LAMMPS gran/hooke, which integrates rotation, vs simkit's
+#                viscous friction without rotation)
 #   md           LAMMPS lj/cut vs simkit md (examples/lj_fluid, f64) on benches/peers/in.lj,
 #                32,000 atoms, 1 core and 2 cores; atom-steps/s
 #   lattice-gas  STREAM-like triad (2 OpenMP threads) vs simkit lattice-gas lookup table at
@@ -212,18 +216,23 @@ m_kiddo() {
     END { if (p > 0 && build + q > 0) printf "%.6g\n", p / (build + q) }'
 }
 m_sk_nb() { sk neighbor --n "$NB_N" --threads 2 --reps "$NB_REPS" | rate_of; }
-m_lmp_dem2() { lammps_rate "$DEM_DECK" "$DEM_N" "$DEM_STEPS" 2; }
-m_sk_dem2() { dem_timer_rate 2 "$DEM_STEPS"; }
-m_lmp_dem_long() { lammps_rate "$DEM_DECK" "$DEM_N" "$DEM_LONG_STEPS" 2; }
-m_sk_dem_long() { dem_timer_rate 2 "$DEM_LONG_STEPS"; }
+# dem: $DM is the LAMMPS model (hooke or hooke/history), $SM simkit's (viscous or history).
+m_lmp_dem1() { lammps_rate "$DEM_DECK" "$DEM_N" "$DEM_STEPS" 1 -var model "$DM"; }
+m_sk_dem1() { dem_timer_rate 1 "$DEM_STEPS" --model "$SM"; }
+m_lmp_dem2() { lammps_rate "$DEM_DECK" "$DEM_N" "$DEM_STEPS" 2 -var model "$DM"; }
+m_sk_dem2() { dem_timer_rate 2 "$DEM_STEPS" --model "$SM"; }
+m_lmp_dem_long() { lammps_rate "$DEM_DECK" "$DEM_N" "$DEM_LONG_STEPS" 2 -var model "$DM"; }
+m_sk_dem_long() { dem_timer_rate 2 "$DEM_LONG_STEPS" --model "$SM"; }
 DEM_BIG_N=$((DEM_BIG * DEM_BIG * DEM_BIG))
 m_lmp_dem_big() {
   lammps_rate "$DEM_DECK" "$DEM_BIG_N" "$DEM_BIG_STEPS" 2 -var nx "$DEM_BIG" -var ny "$DEM_BIG" \
-    -var nz "$DEM_BIG"
+    -var nz "$DEM_BIG" -var model "$DM"
 }
 m_sk_dem_big() {
-  dem_timer_rate 2 "$DEM_BIG_STEPS" --nx "$DEM_BIG" --ny "$DEM_BIG" --nz "$DEM_BIG"
+  dem_timer_rate 2 "$DEM_BIG_STEPS" --nx "$DEM_BIG" --ny "$DEM_BIG" --nz "$DEM_BIG" --model "$SM"
 }
+# The dem models: "tag LAMMPS-model simkit-model".
+DEM_MODELS="h:hooke/history:history v:hooke:viscous"
 m_lmp_md1() { lammps_rate "$MD_DECK" "$MD_N" "$MD_STEPS" 1; }
 m_lmp_md2() { lammps_rate "$MD_DECK" "$MD_N" "$MD_STEPS" 2; }
 m_sk_md1() { lj_fluid_rate 1 "$MD_STEPS"; }
@@ -274,9 +283,15 @@ while [ "$r" -le "$ROUNDS" ]; do
   if want rd && [ -n "$PYPDE" ]; then say "  rd"; pair pypde m_pypde skrd m_sk_rd "$r"; fi
   if want neighbor && [ -n "$KIDDO" ]; then say "  neighbor"; pair kiddo m_kiddo sknb m_sk_nb "$r"; fi
   if want dem && [ "$LMP" -eq 1 ] && [ "$MPI" -eq 1 ] && [ -z "${DEM_BUILD:-}" ]; then
-    say "  dem"; pair lmpdem2 m_lmp_dem2 skdem2 m_sk_dem2 "$r"
-    pair lmpdemlong m_lmp_dem_long skdemlong m_sk_dem_long "$r"
-    pair lmpdembig m_lmp_dem_big skdembig m_sk_dem_big "$r"
+    say "  dem"
+    for m in $DEM_MODELS; do
+      t=${m%%:*} DM=${m#*:} SM=${m##*:}
+      DM=${DM%:*}
+      pair "lmpdem1$t" m_lmp_dem1 "skdem1$t" m_sk_dem1 "$r"
+      pair "lmpdem2$t" m_lmp_dem2 "skdem2$t" m_sk_dem2 "$r"
+      pair "lmpdemlong$t" m_lmp_dem_long "skdemlong$t" m_sk_dem_long "$r"
+      pair "lmpdembig$t" m_lmp_dem_big "skdembig$t" m_sk_dem_big "$r"
+    done
   fi
   if want md && [ "$LMP" -eq 1 ] && [ -z "${MD_BUILD:-}" ]; then
     say "  md"; pair lmpmd1 m_lmp_md1 skmd1 m_sk_md1 "$r"
@@ -320,15 +335,26 @@ if want dem && [ "$LMP" -eq 1 ]; then
   if [ "$MPI" -eq 0 ]; then skip "dem" "mpirun not found (the target is on 2 cores)"
   elif [ -n "${DEM_BUILD:-}" ]; then skip "dem" "cargo build --example dem_box_timer failed"
   else
-    row dem "LAMMPS gran/hooke, 2 MPI ranks vs 2 threads, N=$DEM_N, $DEM_STEPS steps" \
-      "$(med lmpdem2)" "$(med skdem2)" "particle-steps/s" ratio 2
-    note "dem: LAMMPS: $(samples lmpdem2); simkit: $(samples skdem2)"
-    row dem "LAMMPS gran/hooke, 2 MPI ranks vs 2 threads, N=$DEM_N, $DEM_LONG_STEPS steps (settled pile)" \
-      "$(med lmpdemlong)" "$(med skdemlong)" "particle-steps/s" ratio 2
-    note "dem long window: LAMMPS: $(samples lmpdemlong); simkit: $(samples skdemlong)"
-    row dem "LAMMPS gran/hooke, 2 MPI ranks vs 2 threads, N=$DEM_BIG_N, $DEM_BIG_STEPS steps" \
-      "$(med lmpdembig)" "$(med skdembig)" "particle-steps/s" ratio 2
-    note "dem N=$DEM_BIG_N: LAMMPS: $(samples lmpdembig); simkit: $(samples skdembig)"
+    for m in $DEM_MODELS; do
+      t=${m%%:*}
+      if [ "$t" = h ]; then
+        what="LAMMPS gran/hooke/history + nve/sphere vs simkit LinearHistory with rotation (same physics)"
+      else
+        what="no rotation: LAMMPS gran/hooke (with rotation) vs simkit viscous friction without rotation"
+      fi
+      row dem "$what, 1 rank vs 1 thread, N=$DEM_N, $DEM_STEPS steps" \
+        "$(med "lmpdem1$t")" "$(med "skdem1$t")" "particle-steps/s" ratio 2
+      note "dem ($t) 1 core: LAMMPS: $(samples "lmpdem1$t"); simkit: $(samples "skdem1$t")"
+      row dem "$what, 2 MPI ranks vs 2 threads, N=$DEM_N, $DEM_STEPS steps" \
+        "$(med "lmpdem2$t")" "$(med "skdem2$t")" "particle-steps/s" ratio 2
+      note "dem ($t): LAMMPS: $(samples "lmpdem2$t"); simkit: $(samples "skdem2$t")"
+      row dem "$what, 2 MPI ranks vs 2 threads, N=$DEM_N, $DEM_LONG_STEPS steps (settled pile)" \
+        "$(med "lmpdemlong$t")" "$(med "skdemlong$t")" "particle-steps/s" ratio 2
+      note "dem ($t) long window: LAMMPS: $(samples "lmpdemlong$t"); simkit: $(samples "skdemlong$t")"
+      row dem "$what, 2 MPI ranks vs 2 threads, N=$DEM_BIG_N, $DEM_BIG_STEPS steps" \
+        "$(med "lmpdembig$t")" "$(med "skdembig$t")" "particle-steps/s" ratio 2
+      note "dem ($t) N=$DEM_BIG_N: LAMMPS: $(samples "lmpdembig$t"); simkit: $(samples "skdembig$t")"
+    done
   fi
 fi
 if want md && [ "$LMP" -eq 1 ]; then

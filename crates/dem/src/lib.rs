@@ -1,8 +1,8 @@
 //! `dem`: granular discrete-element dynamics of discs (2D) and spheres (3D) with a contact
 //! law of the user's choice (built in: the linear spring–dashpot with Coulomb-capped
 //! friction), walls (planes, boxes, a cylinder that may spin), a vibrated container and
-//! periodic axes, on the CPU (rayon, `f64` or `f32`) and on the GPU (wgpu, `f32`, the whole step on the
-//! device).
+//! periodic axes, on the CPU (rayon, `f64` or `f32`) and on the GPU (wgpu, `f32`, the whole
+//! step on the device).
 //!
 //! - [`ContactLaw`]: what a contact model provides (its parameters per material pair, the
 //!   coefficients the force loops read, the force of a [`Contact`] as one Rust function

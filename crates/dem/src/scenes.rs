@@ -5,7 +5,7 @@ use std::f64::consts::PI;
 
 use simkit_backend::Result;
 
-use crate::{Dim, Material, Particle, Scene, Units, Wall};
+use crate::{ContactLaw, Dim, LinearHistory, Material, Particle, Scene, Units, Wall};
 
 mod piles;
 pub use piles::{DrumParams, HeapParams, poured_heap, rotating_drum, surface_angle};
@@ -105,21 +105,64 @@ pub fn granular_box(nx: usize, ny: usize, nz: usize, seed: u32) -> Result<Scene>
     let m = PI / 6.0;
     // LAMMPS Hooke: F = k_n delta - m_eff gamma_n v_n. Ours: m_ij (kappa delta - 2b v_n).
     // For equal spheres m_ij = m/2: kappa = k_n / m_ij, 2b = gamma_n.
-    let mij = m / 2.0;
-    let kappa = 2.0e5 / mij;
-    let b = 25.0;
-    let omega = (kappa - b * b).sqrt();
-    let tc = PI / omega;
-    let e = (-b * tc).exp();
+    let (e, tc) = hooke(m / 2.0);
     let mat = Material::new(e, tc).with_friction(0.5, 25.0);
-    let l = 1.05;
-    let hi = [nx as f64 * l, ny as f64 * l, (nz as f64 * l * 2.0).max(4.0)];
-    let mut s = Scene::new(Dim::Three, [0.0; 3], hi, mat)?;
-    s.set_periodic([true, true, false]);
-    s.set_gravity(1.0)?;
     // Floor: same e and t_c against a wall (m_ij = m for a wall, so the floor contact is
     // softer in time than LAMMPS's; see docs/dem.md).
-    s.add_wall(Wall::plane([0.0, 0.0, 1.0], [0.0; 3], mat))?;
+    lattice_box(nx, ny, nz, seed, mat, mat)
+}
+
+/// The box of [`granular_box`] with the physics of LAMMPS `pair gran/hooke/history` and
+/// `fix wall/gran hooke/history` under `fix nve/sphere` (`benches/peers/dem_gran3d.lmp
+/// -var model hooke/history`): rotation on, [`LinearHistory`] with the deck's `k_n = 2e5`,
+/// `gamma_n = 50`, `k_t = 2/7 k_n`, `gamma_t = gamma_n / 2` and `mu = 0.5` between spheres
+/// (`m_ij = m / 2`) and against the floor (`m_ij = m`: a material of its own, so that both
+/// contacts have LAMMPS's stiffness `k_n`). Differences that remain: LAMMPS turns the
+/// tangential spring into the contact plane without keeping its length, and takes the
+/// torque's lever at the full radius (ours: `R - delta / 2`).
+pub fn granular_box_history(
+    nx: usize,
+    ny: usize,
+    nz: usize,
+    seed: u32,
+) -> Result<Scene<LinearHistory>> {
+    let m = PI / 6.0;
+    let law = |m_ij: f64| {
+        let (e, tc) = hooke(m_ij);
+        LinearHistory::new(e, tc, 0.5)
+    };
+    let mut s = lattice_box(nx, ny, nz, seed, law(m / 2.0), law(m))?;
+    s.set_rotation(true);
+    Ok(s)
+}
+
+/// `(e, t_c)` of the linear law whose spring and dashpot are LAMMPS's `k_n = 2e5`,
+/// `gamma_n = 50` (damping force `m_ij gamma_n v_n`) at reduced mass `m_ij`:
+/// `kappa = k_n / m_ij`, `b = gamma_n / 2`.
+fn hooke(m_ij: f64) -> (f64, f64) {
+    let kappa = 2.0e5 / m_ij;
+    let b = 25.0;
+    let tc = PI / (kappa - b * b).sqrt();
+    ((-b * tc).exp(), tc)
+}
+
+/// The lattice, velocities, gravity, periodic sides and floor of [`granular_box`], with
+/// material `pair` between spheres and `floor` against the floor.
+fn lattice_box<L: ContactLaw>(
+    nx: usize,
+    ny: usize,
+    nz: usize,
+    seed: u32,
+    pair: L,
+    floor: L,
+) -> Result<Scene<L>> {
+    let m = PI / 6.0;
+    let l = 1.05;
+    let hi = [nx as f64 * l, ny as f64 * l, (nz as f64 * l * 2.0).max(4.0)];
+    let mut s = Scene::new(Dim::Three, [0.0; 3], hi, pair)?;
+    s.set_periodic([true, true, false]);
+    s.set_gravity(1.0)?;
+    s.add_wall(Wall::plane([0.0, 0.0, 1.0], [0.0; 3], floor))?;
     let mut k = 0u32;
     for z in 0..nz {
         for y in 0..ny {
