@@ -1,6 +1,6 @@
-//! Piles of rolling grains: a heap poured onto a floor (2D discs or 3D spheres) and a
-//! rotating drum (2D), with static friction (a tangential spring per contact) and rolling
-//! resistance, and the angle of their free surface over time.
+//! Piles of rolling grains: a heap from a column released onto a floor (2D discs or 3D
+//! spheres) and a rotating drum (2D), with static friction (a tangential spring per
+//! contact) and rolling resistance, and the angle of their free surface over time.
 //!
 //! ```text
 //! cargo run --release --example dem_piles                           # drum, 400 discs
@@ -26,7 +26,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, ValueEnum};
 use simkit::backend::{Backend, Result, Simulation};
-use simkit::dem::scenes::{DrumParams, HeapParams, poured_heap, rotating_drum, surface_angle};
+use simkit::dem::scenes::{DrumParams, HeapParams, column_heap, rotating_drum, surface_angle};
 use simkit::dem::{Config, ContactLaw, Dem, Dim, HertzMindlin, LinearHistory, Scene, Solid, State};
 use simkit::output::colormap::Colormap;
 use simkit::output::csv::CsvWriter;
@@ -43,9 +43,9 @@ mod progress;
 enum Pile {
     /// A 2D rotating drum.
     Drum,
-    /// A 2D heap poured onto a floor.
+    /// A 2D heap from a column released onto a floor.
     Heap,
-    /// A 3D heap poured onto a floor.
+    /// A 3D heap from a column released onto a floor.
     Heap3d,
 }
 
@@ -57,7 +57,7 @@ enum Law {
     HertzMindlin,
 }
 
-/// A heap poured onto a floor or a rotating drum, with rolling grains; writes frames
+/// A heap from a released column or a rotating drum, with rolling grains; writes frames
 /// (PNG, GIF, VTK, extended XYZ) and the surface angle over time.
 #[derive(Parser, Debug)]
 #[command(version)]
@@ -137,7 +137,7 @@ fn pile<L: ContactLaw>(args: &Args, law: L) -> Result<()> {
                 ..HeapParams::default()
             };
             (
-                poured_heap(law, None, &p)?,
+                column_heap(law, None, &p)?,
                 args.time.unwrap_or(150.0),
                 if three { "heap3d" } else { "heap" },
             )

@@ -1,5 +1,5 @@
 //! Ready-made scenes from the source and the benchmarks, and piles under gravity (a
-//! poured heap, a rotating drum) with the angle of their surface.
+//! heap from a collapsing column, a rotating drum) with the angle of their surface.
 
 use std::f64::consts::PI;
 
@@ -8,7 +8,7 @@ use simkit_backend::Result;
 use crate::{ContactLaw, Dim, LinearHistory, Material, Particle, Scene, Units, Wall};
 
 mod piles;
-pub use piles::{DrumParams, HeapParams, poured_heap, rotating_drum, surface_angle};
+pub use piles::{DrumParams, HeapParams, column_heap, rotating_drum, surface_angle};
 
 /// Parameters of the 2D vibrated bed (source chapter 1) in physical units.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -2,7 +2,7 @@
 //! floor comes to rest with sloping flanks, and a rotating drum keeps a sloping surface.
 
 use simkit_backend::{Backend, Result, Simulation};
-use simkit_dem::scenes::{DrumParams, HeapParams, poured_heap, rotating_drum, surface_angle};
+use simkit_dem::scenes::{DrumParams, HeapParams, column_heap, rotating_drum, surface_angle};
 use simkit_dem::{Config, Dem, LinearHistory};
 
 /// The 2D heap of `n` discs from a column 24 wide under `LinearHistory` (`e = 0.5`,
@@ -17,7 +17,7 @@ fn heap(mu_r: f64) -> Result<(f64, f64)> {
         floor: 60.0,
         ..HeapParams::default()
     };
-    let scene = poured_heap(law, None, &p)?;
+    let scene = column_heap(law, None, &p)?;
     let radii: Vec<f64> = scene.particles().iter().map(|q| q.radius).collect();
     let mut sim = Dem::new(scene, &Config::default(), Backend::Cpu)?;
     sim.step((40.0 / sim.dt()) as u32)?;

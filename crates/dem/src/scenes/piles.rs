@@ -1,5 +1,5 @@
-//! Piles under gravity: a heap poured onto a floor and a rotating drum, with the angle of
-//! their free surface.
+//! Piles under gravity: a heap from a column released onto a floor and a rotating drum,
+//! with the angle of their free surface.
 
 use simkit_backend::rng::rng_uniform;
 use simkit_backend::{Error, Result, require_positive};
@@ -30,7 +30,7 @@ fn check_spread(spread: f64) -> Result<()> {
     Ok(())
 }
 
-/// Parameters of [`poured_heap`].
+/// Parameters of [`column_heap`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HeapParams {
     /// Discs (2D) or spheres (3D).
@@ -49,12 +49,12 @@ pub struct HeapParams {
 }
 
 impl Default for HeapParams {
-    /// 1500 discs from a column 10 wide onto a floor 120 wide, radii within ±10 %.
+    /// 1500 discs from a column 40 wide onto a floor 120 wide, radii within ±10 %.
     fn default() -> Self {
         Self {
             dim: Dim::Two,
             n: 1500,
-            column: 10,
+            column: 40,
             floor: 60.0,
             polydispersity: 0.2,
             seed: 1,
@@ -62,29 +62,31 @@ impl Default for HeapParams {
     }
 }
 
-/// A heap poured onto a floor: grains of mean diameter 1 (mass 1 at diameter 1, `g = 1`)
+/// A heap released onto a floor: grains of mean diameter 1 (mass 1 at diameter 1, `g = 1`)
 /// stacked in a column (rows and columns the largest diameter + 0.12 apart, random offsets
-/// of up to 0.05)
-/// above the middle of a floor, released at rest. The column's bottom lands first and the
-/// rest streams onto it, as from a funnel, building a heap whose flanks settle at the
-/// angle of repose the contact law gives ([`surface_angle`] measures it). The floor
-/// (`y = 0` in 2D, `z = 0` in 3D, the particle–particle material unless `floor` is given)
-/// is flanked by walls at `±HeapParams::floor` about the column's axis, which is at the
-/// origin. Rotation is on: a heap of grains that cannot roll is not what a user expects.
+/// of up to 0.05) standing on the middle of a floor, released at rest. The column collapses
+/// into a heap whose flanks [`surface_angle`] measures. This is a column-collapse (or
+/// cylinder-lift) test, not a slow pour: the grains arrive with the speed of the collapse
+/// and spread inertially, so the flanks settle below the angle of repose of a slowly poured
+/// heap, the more so the taller the column (a column about as tall as wide, the default,
+/// spreads least). The floor (`y = 0` in 2D, `z = 0` in 3D, the particle–particle material
+/// unless `floor` is given) is flanked by walls at `±HeapParams::floor` about the column's
+/// axis, which is at the origin. Rotation is on: a heap of grains that cannot roll is not
+/// what a user expects.
 /// Use a law with static friction ([`crate::HertzMindlin`], [`crate::LinearHistory`]);
 /// rolling resistance raises the angle.
 ///
 /// ```
-/// use simkit_dem::scenes::{HeapParams, poured_heap};
+/// use simkit_dem::scenes::{HeapParams, column_heap};
 /// use simkit_dem::LinearHistory;
 /// # fn main() -> simkit_backend::Result<()> {
 /// let law = LinearHistory::new(0.5, 0.03, 0.5).with_rolling_friction(0.1);
-/// let scene = poured_heap(law, None, &HeapParams { n: 200, ..HeapParams::default() })?;
+/// let scene = column_heap(law, None, &HeapParams { n: 200, ..HeapParams::default() })?;
 /// assert_eq!(scene.particles().len(), 200);
 /// # Ok(())
 /// # }
 /// ```
-pub fn poured_heap<L: ContactLaw>(law: L, floor: Option<L>, p: &HeapParams) -> Result<Scene<L>> {
+pub fn column_heap<L: ContactLaw>(law: L, floor: Option<L>, p: &HeapParams) -> Result<Scene<L>> {
     require_positive("heap particle count", p.n as f64)?;
     require_positive("heap column width", p.column as f64)?;
     check_spread(p.polydispersity)?;
