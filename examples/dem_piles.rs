@@ -7,6 +7,7 @@
 //! cargo run --release --example dem_piles -- --pile heap            # 2D heap, 1500 discs
 //! cargo run --release --example dem_piles -- --pile heap3d --n 4000 # 3D heap
 //! cargo run --release --example dem_piles -- --law hertz-mindlin --mu 0.3 --mu-r 0
+//! cargo run --release --example dem_piles -- --gpu                  # the drum on the GPU
 //! ```
 //!
 //! Writes to `out/dem_piles/<pile>/`:
@@ -26,7 +27,9 @@ use std::process::ExitCode;
 
 use clap::{Parser, ValueEnum};
 use simkit::backend::{Backend, Result, Simulation};
-use simkit::dem::scenes::{DrumParams, HeapParams, column_heap, rotating_drum, surface_angle};
+use simkit::dem::scenes::{
+    DrumParams, HeapParams, column_heap, heap_flank, rotating_drum, surface_angle,
+};
 use simkit::dem::{Config, ContactLaw, Dem, Dim, HertzMindlin, LinearHistory, Scene, Solid, State};
 use simkit::output::colormap::Colormap;
 use simkit::output::csv::CsvWriter;
@@ -89,6 +92,9 @@ struct Args {
     /// Output folder (a subfolder per pile).
     #[arg(long, default_value = "out/dem_piles")]
     out: PathBuf,
+    /// Run on the GPU (f32) instead of the CPU (f64).
+    #[arg(long)]
+    gpu: bool,
 }
 
 fn main() -> ExitCode {
@@ -146,7 +152,13 @@ fn pile<L: ContactLaw>(args: &Args, law: L) -> Result<()> {
     let out = args.out.join(name);
     std::fs::create_dir_all(&out).map_err(|e| simkit::output::atomic::io_error(&out, &e))?;
     let radii: Vec<f64> = scene.particles().iter().map(|p| p.radius).collect();
-    let mut sim = Dem::new(scene.clone(), &Config::default(), Backend::Cpu)?;
+    let ctx = if args.gpu {
+        Some(simkit::backend::GpuContext::new()?)
+    } else {
+        None
+    };
+    let backend = ctx.as_ref().map_or(Backend::Cpu, Backend::Gpu);
+    let mut sim = Dem::new(scene.clone(), &Config::default(), backend)?;
     let frames = args.frames.max(1);
     let per_frame = ((time / sim.dt()) as u32 / frames).max(1);
     println!(
@@ -239,14 +251,10 @@ fn angle<L: ContactLaw>(scene: &Scene<L>, s: &State, radii: &[f64]) -> Option<Fi
             to: (b, mid + slope * (b - center[0])),
         });
     }
-    let three = scene.dim() == Dim::Three;
-    let grains = tops(&|p| if three { p[0].hypot(p[1]) } else { p[0].abs() });
-    let mut reach: Vec<f64> = grains.iter().map(|g| g.0).collect();
-    reach.sort_by(f64::total_cmp);
-    let toe = reach[(0.95 * (reach.len() - 1) as f64) as usize];
-    let (a, b) = (0.15 * toe, 0.85 * toe);
-    let angle = -surface_angle(&grains, a, b, 1.0).ok()?;
-    let crest = grains
+    let flank = heap_flank(scene.dim(), &s.positions, radii).ok()?;
+    let (angle, a, b) = (flank.angle, flank.from, flank.to);
+    let crest = flank
+        .grains
         .iter()
         .filter(|g| g.0 < a)
         .map(|g| g.1)

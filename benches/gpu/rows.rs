@@ -173,7 +173,26 @@ pub fn all(quick: bool, f64_ok: bool) -> Vec<Spec> {
     v.push(spec(
         format!("dem settling box {} f32", side * side * side),
         None,
-        move |ctx, t| dem_row(ctx, t, side),
+        move |ctx, t| {
+            let scene = dem::scenes::granular_box(side, side, side, 4_928_459)?;
+            // Position, velocity, force (12 bytes each, read and written), the radius read.
+            dem_row(ctx, t, scene, 76.0)
+        },
+    ));
+    // The same box with rotation and the tangential spring per contact (LAMMPS
+    // gran/hooke/history + nve/sphere): what rotation and contact history cost on a GPU.
+    v.push(spec(
+        format!(
+            "dem settling box {} f32, rotation + history",
+            side * side * side
+        ),
+        None,
+        move |ctx, t| {
+            let scene = dem::scenes::granular_box_history(side, side, side, 4_928_459)?;
+            // The plain box's 76 bytes, the spin records (48 bytes read, 32 written), and a
+            // history slot (32 bytes) read and written per contact, about 6 per sphere.
+            dem_row(ctx, t, scene, 76.0 + 80.0 + 6.0 * 64.0)
+        },
     ));
     let n = pick(16384, 256);
     for layout in [
@@ -329,12 +348,16 @@ fn md_row(
     })
 }
 
-/// The 3D settling box (spheres of diameter 1 on a lattice, gravity, frictional floor),
-/// `side^3` spheres: 20 steps on the CPU (f64) and the GPU (f32) from the same start, largest
-/// position difference in diameters, then the GPU timed.
-fn dem_row(ctx: &GpuContext, timing: Timing, side: usize) -> Result<Measured> {
-    let nz = side;
-    let scene = dem::scenes::granular_box(side, side, nz, 4_928_459)?;
+/// A 3D settling box of `dem::scenes` (spheres of diameter 1 on a lattice, gravity,
+/// frictional floor): 20 steps on the CPU (f64) and the GPU (f32) from the same start, largest
+/// position difference in diameters, then the GPU timed; `bytes`: the least memory traffic
+/// of a particle-step.
+fn dem_row<L: dem::ContactLaw>(
+    ctx: &GpuContext,
+    timing: Timing,
+    scene: dem::Scene<L>,
+    bytes: f64,
+) -> Result<Measured> {
     let config = dem::Config::default().with_dt(1e-4);
     let mut cpu = dem::Dem::new(scene.clone(), &config, Backend::Cpu)?;
     let mut gpu = dem::Dem::new(scene.clone(), &config, Backend::Gpu(ctx))?;
@@ -353,8 +376,7 @@ fn dem_row(ctx: &GpuContext, timing: Timing, side: usize) -> Result<Measured> {
         work_per_step: scene.particles().len() as f64,
         steps,
         samples,
-        // Position, velocity, force (12 bytes each, read and written) and the radius read.
-        limit: Limit::Bytes(76.0),
+        limit: Limit::Bytes(bytes),
         check: verdict(
             "max |x_gpu - x_cpu| after 20 steps (diameters)",
             error,

@@ -2,7 +2,8 @@
 // kernels, before the GpuGuard records; needs guard.wgsl for finite_f32_bits). Failures:
 // 1 non-finite position, 2 non-finite velocity, 3 centre more than its radius outside the
 // box along a closed axis, 4 a contact deeper than max_overlap of the smaller radius
-// (acc.w, written by dem_force). A failing particle keeps its first failure of this
+// (acc.w, written by dem_force), 5 more contacts than the particle's history slots hold
+// (clock[1], written by dem_force). A failing particle keeps its first failure of this
 // step(n) call in `evidence` (kind * 4 + axis, value bits, check step relative to the call's
 // start, epoch), `first` gets the earliest failing relative step, and `alarm` turns
 // non-finite, which stops the guard's snapshots (the state is then rolled back).
@@ -72,6 +73,9 @@ fn dem_check(
         && (!finite_f32_bits(bitcast<u32>(ratio)) || ratio > chk.max_overlap)) {
         kind = 4u;
         value = bitcast<u32>(ratio);
+    }
+    if (kind == 0u && clock[1] == i + 1u) {
+        kind = 5u;
     }
     if (kind != 0u) {
         let rel = clock[0] - chk.begin;

@@ -10,7 +10,7 @@ struct DemCoeff {
 
 // Normal force magnitude (positive = repulsive): m_ij (kappa delta - 2b v_n).
 fn dem_normal_force(c: DemCoeff, m_ij: f32, delta: f32, v_n: f32) -> f32 {
-    return m_ij * (c.kappa * delta - c.two_b * v_n);
+    return dem_spring_dashpot(c.kappa, c.two_b, m_ij, delta, v_n);
 }
 
 // Tangential force -min(mu_s |F_n|, mu_k m_ij |v_t|) v_t / |v_t| with v_t = v_rel - v_n n;
@@ -27,12 +27,12 @@ fn dem_friction_force(c: DemCoeff, n: vec3<f32>, v_n: f32, v_rel: vec3<f32>, f_n
 }
 
 // The contact force on i (twin of <Material as ContactLaw>::force): the normal force along
-// n, plus the tangential force when `friction`.
-fn dem_contact_force(c: DemCoeff, m_ij: f32, delta: f32, n: vec3<f32>, v_rel: vec3<f32>, v_n: f32, friction: bool) -> vec3<f32> {
-    let fnorm = dem_normal_force(c, m_ij, delta, v_n);
-    var f = fnorm * n;
+// n, plus the tangential force when `friction`; no couple, no history.
+fn dem_contact_force(c: DemCoeff, k: DemContact, h: ptr<function, DemHistory>, friction: bool) -> DemForce {
+    let fnorm = dem_normal_force(c, k.m_ij, k.delta, k.v_n);
+    var f = fnorm * k.n;
     if (friction) {
-        f += dem_friction_force(c, n, v_n, v_rel, fnorm, m_ij);
+        f += dem_friction_force(c, k.n, k.v_n, k.v_rel, fnorm, k.m_ij);
     }
-    return f;
+    return DemForce(f, vec3<f32>(0.0));
 }

@@ -1,13 +1,27 @@
 // Contact forces by gathering over the full shell of neighbour cells (one invocation per
 // particle, writing only its own acceleration), walls, gravity, and the second half kick.
 // acc.w receives the deepest overlap of the particle's contacts over the smaller radius
-// (against a wall: its radius), which the blow-up check (check.wgsl) reads.
-// Variants (override constants, chosen once): FRICTION, INIT (initial accelerations only).
-// The contact law is the law's WGSL (dem_contact_force; the linear law's is contact.wgsl),
-// the wall geometry walls.wgsl (one copy each, shared by the particle and the wall
-// contacts).
+// (against a wall: its radius), which the blow-up check (check.wgsl) reads, or -1 when the
+// particle has more contacts than its history slots hold.
+// Variants (override constants, chosen once): FRICTION, INIT (initial accelerations only),
+// ROTATION (torques, angular accelerations and the angular half kick), SLOTS (history slots
+// per particle; 0 for a law without history).
+// The contact law is the law's WGSL (dem_contact_force; the linear law's is contact.wgsl)
+// after law.wgsl and spin.wgsl, the wall geometry walls.wgsl (one copy each, shared by the
+// particle and the wall contacts).
+//
+// Contact history: each particle keeps its own copy of the history of each of its
+// contacts (particle j keeps the mirror image of i's), SLOTS slots of 8 words
+// (partner + 1, 0 = empty; then 7 values) per particle, in two halves of the `hist` buffer:
+// a force evaluation reads the slots the previous one wrote and writes the other half, so
+// the history follows the particle's index, whatever the cell list's order. Partners are
+// particle indices or, from n on, wall n + w. A force evaluation at device step count c
+// reads half (c + 1) & 1 and writes half c & 1 (INIT, at c = 0 before any step: reads 0,
+// writes 1).
 override FRICTION: bool = false;
 override INIT: bool = false;
+override ROTATION: bool = false;
+override SLOTS: u32 = 0u;
 
 @group(0) @binding(0) var<uniform> grid: NbGrid;
 @group(0) @binding(1) var<uniform> prm: DemParams;
@@ -23,7 +37,53 @@ override INIT: bool = false;
 @group(0) @binding(9) var<storage, read> walls: array<DemWall>;
 @group(0) @binding(10) var<storage, read_write> acc: array<vec4<f32>>;
 @group(0) @binding(11) var<storage, read_write> vel: array<vec4<f32>>;
-@group(0) @binding(12) var<storage, read> clock: array<u32>;
+// [0]: device step counter; [1]: 1 + a particle whose history slots overflowed (0: none;
+// the largest such index), read by the check.
+@group(0) @binding(12) var<storage, read_write> clock: array<atomic<u32>>;
+// Per particle 3 records: (w, 1 / I), (angular acceleration, 0), (predicted w, 0).
+@group(0) @binding(13) var<storage, read_write> spin: array<vec4<f32>>;
+// History slots (see above), as words.
+@group(0) @binding(14) var<storage, read_write> hist: array<u32>;
+
+// Scratch of one invocation: where its slots are read and written, how many it wrote.
+struct Slots {
+    read: u32,
+    write: u32,
+    used: u32,
+}
+
+// The history of contact partner p from the slots read (zero if p was not in contact).
+fn history_of(s: Slots, p: u32) -> DemHistory {
+    var h: DemHistory;
+    for (var k = 0u; k < SLOTS; k++) {
+        let at = s.read + k * 8u;
+        let q = hist[at];
+        if (q == 0u) {
+            break;
+        }
+        if (q == p + 1u) {
+            for (var v = 0u; v < 7u; v++) {
+                h[v] = bitcast<f32>(hist[at + 1u + v]);
+            }
+            break;
+        }
+    }
+    return h;
+}
+
+// Stores the history of partner p in the next free slot written; false when all are used.
+fn keep_history(s: ptr<function, Slots>, p: u32, h: DemHistory) -> bool {
+    if ((*s).used >= SLOTS) {
+        return false;
+    }
+    let at = (*s).write + (*s).used * 8u;
+    hist[at] = p + 1u;
+    for (var v = 0u; v < 7u; v++) {
+        hist[at + 1u + v] = bitcast<u32>(h[v]);
+    }
+    (*s).used += 1u;
+    return true;
+}
 
 @compute @workgroup_size(64)
 fn dem_force(
@@ -42,6 +102,23 @@ fn dem_force(
     let mi = vi.w;
     let row = species[i] * prm.n_species;
     var f = prm.gravity.xyz * mi;
+    var torque = vec3<f32>(0.0);
+    var omega_i = vec3<f32>(0.0);
+    if (ROTATION) {
+        omega_i = spin[3u * i + 2u].xyz;
+    }
+    let steps_done = atomicLoad(&clock[0]);
+    var slots = Slots(0u, 0u, 0u);
+    if (SLOTS > 0u) {
+        var write_half = steps_done & 1u;
+        if (INIT) {
+            write_half = 1u - write_half;
+        }
+        let stride = prm.n * SLOTS * 8u;
+        slots.write = write_half * stride + i * SLOTS * 8u;
+        slots.read = (1u - write_half) * stride + i * SLOTS * 8u;
+    }
+    var overflow = false;
     var deepest = 0.0;
     let c = nb_cell_coord(grid, ti);
     let lo = nb_shell_lo(grid, c);
@@ -64,17 +141,38 @@ fn dem_force(
                     let n = sep / dist;
                     let vj = vpred[j];
                     let mij = dem_reduced_mass(mi, vj.w);
-                    let vrel = vi.xyz - vj.xyz;
+                    var vrel = vi.xyz - vj.xyz;
                     let vn = dot(vrel, n);
-                    deepest = max(deepest, (rsum - dist) / min(ri, pj.w));
-                    f += dem_contact_force(coeff[row + species[j]], mij, rsum - dist, n, vrel, vn, FRICTION);
+                    let delta = rsum - dist;
+                    deepest = max(deepest, delta / min(ri, pj.w));
+                    var w_rel = vec3<f32>(0.0);
+                    if (ROTATION) {
+                        let omega_j = spin[3u * j + 2u].xyz;
+                        vrel = dem_contact_point_velocity(vrel, n, ri, omega_i, pj.w, omega_j);
+                        w_rel = omega_i - omega_j;
+                    }
+                    let contact = DemContact(n, delta, vrel, vn, w_rel, mij, ri * pj.w / rsum, prm.dt);
+                    var h: DemHistory;
+                    if (SLOTS > 0u) {
+                        h = history_of(slots, j);
+                    }
+                    let out = dem_contact_force(coeff[row + species[j]], contact, &h, FRICTION);
+                    if (SLOTS > 0u && !keep_history(&slots, j, h)) {
+                        overflow = true;
+                    }
+                    f += out.force;
+                    if (ROTATION) {
+                        // The force acts at the middle of the overlap, -(R_i - delta / 2) n
+                        // from i's centre.
+                        torque += out.torque - (ri - 0.5 * delta) * cross(n, out.force);
+                    }
                 }
             }
         }
     }
     if (prm.n_walls > 0u) {
         // Walls see the time of this force evaluation: t + dt (or t for INIT).
-        var steps = clock[0];
+        var steps = steps_done;
         if (!INIT) {
             steps = steps + 1u;
         }
@@ -101,16 +199,47 @@ fn dem_force(
             if (wall.cylinder.w > 0.5) {
                 wv = vec3<f32>(wv.xy + dem_cylinder_surface_velocity(wall.motion.y, wall.cylinder.z, n.xy), wv.z);
             }
-            let vrel = vi.xyz - wv;
+            var vrel = vi.xyz - wv;
             let vn = dot(vrel, n);
             deepest = max(deepest, delta / ri);
-            f += dem_contact_force(coeff[base + w], mi, delta, n, vrel, vn, FRICTION);
+            if (ROTATION) {
+                vrel = dem_contact_point_velocity(vrel, n, ri, omega_i, 0.0, vec3<f32>(0.0));
+            }
+            let contact = DemContact(n, delta, vrel, vn, omega_i, mi, ri, prm.dt);
+            var h: DemHistory;
+            if (SLOTS > 0u) {
+                h = history_of(slots, prm.n + w);
+            }
+            let out = dem_contact_force(coeff[base + w], contact, &h, FRICTION);
+            if (SLOTS > 0u && !keep_history(&slots, prm.n + w, h)) {
+                overflow = true;
+            }
+            f += out.force;
+            if (ROTATION) {
+                torque += out.torque - ri * cross(n, out.force);
+            }
         }
+    }
+    if (SLOTS > 0u && slots.used < SLOTS) {
+        // The lookup stops at the first empty slot: one marker ends the written ones.
+        hist[slots.write + slots.used * 8u] = 0u;
+    }
+    if (overflow) {
+        deepest = -1.0;
+        atomicMax(&clock[1], i + 1u);
     }
     let a = f / mi;
     acc[i] = vec4<f32>(a, deepest);
     if (!INIT) {
         let v = vel[i];
         vel[i] = vec4<f32>(v.xyz + a * prm.half_dt, v.w);
+    }
+    if (ROTATION) {
+        let s = spin[3u * i];
+        let alpha = torque * s.w;
+        spin[3u * i + 1u] = vec4<f32>(alpha, 0.0);
+        if (!INIT) {
+            spin[3u * i] = vec4<f32>(s.xyz + alpha * prm.half_dt, s.w);
+        }
     }
 }

@@ -276,8 +276,7 @@ impl ContactLaw for LinearHistory {
     type Coeff<T: Real> = LinearHistoryCoefficients<T>;
     type Gpu = [f32; 8];
     const NAME: &'static str = "linear-history";
-    /// Not on the GPU yet: the GPU backend refuses laws with a history.
-    const WGSL: &'static str = "";
+    const WGSL: &'static str = simkit_backend::wgsl!("linear_history.wgsl");
     const BUILT_IN: bool = true;
     const HISTORY: usize = crate::spin::Springs::<f64>::HISTORY;
 

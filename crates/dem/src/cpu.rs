@@ -850,41 +850,7 @@ impl<const D: usize, T: Real, L: ContactLaw> CpuEngine<D, T, L> {
     /// Checks the rotation and history columns of a checkpoint against the scene and
     /// returns the history in the engine's precision.
     fn check_saved_extras(&self, s: &Dynamics) -> Result<Histories<T>> {
-        let (n, h) = (self.prep.n, L::HISTORY);
-        let bad = |what: String| {
-            simkit_backend::Error::checkpoint(format!(
-                "{what}; the file does not belong to this scene"
-            ))
-        };
-        let spin = if self.prep.rotation { 9 * n } else { 0 };
-        if s.spin.len() != spin {
-            return Err(bad(format!(
-                "{} rotation values, expected {spin}",
-                s.spin.len()
-            )));
-        }
-        let partners = n + self.prep.walls.len();
-        if s.contacts.len().checked_mul(h) != Some(s.history.len())
-            || (h == 0 && !s.contacts.is_empty())
-        {
-            return Err(bad(format!(
-                "{} history values for {} contacts of a law with {h} per contact",
-                s.history.len(),
-                s.contacts.len()
-            )));
-        }
-        if let Some(c) = s
-            .contacts
-            .iter()
-            .find(|c| c[0] as usize >= n || c[1] as usize >= partners || c[0] == c[1])
-        {
-            return Err(bad(format!("contact {c:?} with {n} particles")));
-        }
-        if let Some(x) = s.spin.iter().chain(&s.history).find(|x| !x.is_finite()) {
-            return Err(simkit_backend::Error::checkpoint(format!(
-                "a stored rotation or history value is {x}; the file is corrupt"
-            )));
-        }
+        self.prep.check_saved_extras(s)?;
         Ok(Histories {
             keys: s.contacts.clone(),
             values: s.history.iter().map(|&x| T::from_f64(x)).collect(),

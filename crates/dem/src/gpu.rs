@@ -7,6 +7,16 @@
 //! of neighbour cells, walls, gravity, second half kick) and `dem_tick` (device step
 //! counter for the wall motion). [`Engine::state`] downloads the state.
 //!
+//! Rotation: the drift kernel opens the angular velocity's step as the velocity's (half
+//! kick, predicted angular velocity), the force kernel sums each particle's torques and
+//! closes it. Contact history (a law with [`ContactLaw::HISTORY`] values per contact):
+//! each particle keeps [`history_slots`] slots of `(partner, values)` for its own contacts,
+//! in two halves of one buffer; a force evaluation looks the partner up in the half the
+//! last one wrote and writes the other, so the history is keyed by particle index and
+//! survives every rebuild of the device's cell list. A pair's two copies are mirror images
+//! (each particle integrates its own; the arithmetic is symmetric under exchanging `i` and
+//! `j`). A particle with more contacts than slots is a blow-up naming it.
+//!
 //! Blow-up check: at every check step (`Config::check_every`, and at the end of a call)
 //! `dem_check` (shaders/check.wgsl) tests every particle for non-finite positions and
 //! velocities, a centre more than its radius outside the box along a closed axis, and a
@@ -30,6 +40,7 @@ use simkit_backend::guard::blow_up;
 use simkit_backend::{Error, GpuBuffer, GpuContext, Kernel, KernelDesc, Precision, Result};
 
 use crate::engine::Engine;
+use crate::law::LAW_PRELUDE_WGSL;
 use crate::prepared::Prepared;
 use crate::{ContactLaw, State};
 use simkit_backend::particles::Dynamics;
@@ -45,10 +56,22 @@ const MASS_WGSL: &str = simkit_backend::wgsl!("mass.wgsl");
 /// [`crate::wall_motion`]).
 const WALLS_WGSL: &str = simkit_backend::wgsl!("walls.wgsl");
 
+/// History values a contact keeps on the device (`DemHistory` in `shaders/law.wgsl`).
+pub(crate) const GPU_HISTORY: usize = 7;
+/// Words per history slot: the partner and [`GPU_HISTORY`] values.
+const SLOT_WORDS: usize = 8;
+
+/// History slots per particle on the GPU: the most contacts a particle keeps a history for
+/// (12 discs in 2D, 20 spheres in 3D: the kissing numbers are 6 and 12; the rest leaves
+/// room for neighbours up to about half the particle's size).
+pub fn history_slots(axes: usize) -> usize {
+    if axes == 2 { 12 } else { 20 }
+}
+
 /// Steps recorded into one command buffer.
 const STEPS_PER_SUBMIT: u32 = 64;
 /// Storage buffers the force kernel binds.
-const STORAGE_BUFFERS_NEEDED: u32 = 11;
+const STORAGE_BUFFERS_NEEDED: u32 = 13;
 
 /// Mirror of `DemParams` in `shaders/params.wgsl`.
 #[repr(C)]
@@ -139,6 +162,13 @@ pub(crate) struct GpuEngine<L: ContactLaw> {
     check_params: Uniform<GpuCheck>,
     check_host: GpuCheck,
     acc: GpuBuffer<[f32; 4]>,
+    /// Per particle `(w, 1 / I)`, `(angular acceleration, 0)`, `(predicted w, 0)` (one
+    /// unused record without rotation).
+    spin: GpuBuffer<[f32; 4]>,
+    /// History slots (one unused word without history).
+    hist: GpuBuffer<u32>,
+    /// History slots per particle (0: none kept).
+    slots: usize,
     evidence: GpuBuffer<[u32; 4]>,
     first: GpuBuffer<u32>,
     steps: u64,
@@ -209,6 +239,19 @@ impl<L: ContactLaw> GpuEngine<L> {
                 ctx.shader_loop_limit().unwrap_or(0)
             )));
         }
+        if L::HISTORY > GPU_HISTORY {
+            return Err(Error::Unsupported(format!(
+                "contact law '{}' keeps {} values per contact; the GPU backend keeps at most \
+                 {GPU_HISTORY}; use the CPU backend",
+                L::NAME,
+                L::HISTORY
+            )));
+        }
+        let slots = if L::HISTORY > 0 && prep.friction {
+            history_slots(prep.axes)
+        } else {
+            0
+        };
         let origin = prep.lo;
         let pos_h: Vec<[f32; 4]> = (0..n)
             .map(|i| {
@@ -222,16 +265,41 @@ impl<L: ContactLaw> GpuEngine<L> {
                 [v[0] as f32, v[1] as f32, v[2] as f32, prep.mass[i] as f32]
             })
             .collect();
+        let mut spin_h: Vec<[f32; 4]> = if prep.rotation {
+            (0..n)
+                .flat_map(|i| {
+                    let w = prep.omega[i].map(|x| x as f32);
+                    let inv = (1.0 / prep.inertia[i]) as f32;
+                    [[w[0], w[1], w[2], inv], [0.0; 4], [w[0], w[1], w[2], 0.0]]
+                })
+                .collect()
+        } else {
+            vec![[0.0; 4]]
+        };
+        let mut hist_h = vec![0u32; (2 * n * slots * SLOT_WORDS).max(1)];
         let (pos_h, vel_h, acc_h, steps) = match saved {
             None => (pos_h, vel_h, vec![[0.0f32; 4]; n], 0),
             Some(s) => {
                 let (p, v, a) = load(s, n)?;
+                prep.check_saved_extras(s)?;
+                if prep.rotation {
+                    load_spin(s, &mut spin_h);
+                }
+                if slots > 0 {
+                    // The next force evaluation reads half (steps + 1) & 1.
+                    let half = (s.steps as usize + 1) & 1;
+                    let len = n * slots * SLOT_WORDS;
+                    load_history::<L>(s, slots, &mut hist_h[half * len..(half + 1) * len])?;
+                }
                 // Radii and masses from the scene (the same numbers the run had).
                 let p = p.iter().zip(&pos_h).map(|(x, h)| [x[0], x[1], x[2], h[3]]);
                 let v = v.iter().zip(&vel_h).map(|(x, h)| [x[0], x[1], x[2], h[3]]);
                 (p.collect(), v.collect(), a, s.steps)
             }
         };
+        let spin = GpuBuffer::from_slice(ctx, "dem spin", &spin_h)?;
+        let hist = GpuBuffer::from_slice(ctx, "dem contact history", &hist_h)?;
+        drop((spin_h, hist_h));
         let pos = GpuBuffer::from_slice(ctx, "dem pos", &pos_h)?;
         let vel = GpuBuffer::from_slice(ctx, "dem vel", &vel_h)?;
         let acc = GpuBuffer::from_slice(ctx, "dem acc", &acc_h)?;
@@ -240,7 +308,7 @@ impl<L: ContactLaw> GpuEngine<L> {
         // The kernel indexes the table by the WGSL struct's size: refuse a law whose mirror
         // differs.
         simkit_backend::testing::check_struct_size::<L::Gpu>(
-            L::WGSL,
+            &[LAW_PRELUDE_WGSL, L::WGSL].concat(),
             "DemCoeff",
             &format!("contact law '{}'", L::NAME),
         )?;
@@ -280,7 +348,8 @@ impl<L: ContactLaw> GpuEngine<L> {
         let walls = GpuBuffer::from_slice(ctx, "dem walls", &walls)?;
         // The device step counter keys the wall phase (wrapping at 2^32 steps, as on the
         // device).
-        let clock = GpuBuffer::from_slice(ctx, "dem clock", &[steps as u32])?;
+        // clock[1]: a particle whose history slots overflowed (none).
+        let clock = GpuBuffer::from_slice(ctx, "dem clock", &[steps as u32, 0])?;
         let (amp, omega) = prep
             .vibration
             .map_or((0.0, 0.0), |v| (v.amplitude, v.omega));
@@ -310,7 +379,14 @@ impl<L: ContactLaw> GpuEngine<L> {
             sorted_pos,
             wrapped,
         } = cells.buffers();
-        let k = kernel(ctx, &[DRIFT_WGSL], "dem_drift", 64, &[])?;
+        let rotation = if prep.rotation { 1.0 } else { 0.0 };
+        let k = kernel(
+            ctx,
+            &[DRIFT_WGSL],
+            "dem_drift",
+            64,
+            &[("ROTATION", rotation)],
+        )?;
         let b = k.bind(
             ctx,
             &[
@@ -320,6 +396,7 @@ impl<L: ContactLaw> GpuEngine<L> {
                 vel.binding(),
                 acc.binding(),
                 vpred.binding(),
+                spin.binding(),
             ],
         )?;
         let drift = (k, b);
@@ -338,23 +415,22 @@ impl<L: ContactLaw> GpuEngine<L> {
             acc.binding(),
             vel.binding(),
             clock.binding(),
+            spin.binding(),
+            hist.binding(),
         ];
-        let k = kernel(
-            ctx,
-            &[MASS_WGSL, L::WGSL, WALLS_WGSL, FORCE_WGSL],
-            "dem_force",
-            64,
-            &[("FRICTION", friction), ("INIT", 0.0)],
-        )?;
+        let sources = [MASS_WGSL, LAW_PRELUDE_WGSL, L::WGSL, WALLS_WGSL, FORCE_WGSL];
+        let variant = |init: f64| {
+            [
+                ("FRICTION", friction),
+                ("INIT", init),
+                ("ROTATION", rotation),
+                ("SLOTS", slots as f64),
+            ]
+        };
+        let k = kernel(ctx, &sources, "dem_force", 64, &variant(0.0))?;
         let b = k.bind(ctx, &force_resources)?;
         let force = (k, b);
-        let init = kernel(
-            ctx,
-            &[MASS_WGSL, L::WGSL, WALLS_WGSL, FORCE_WGSL],
-            "dem_force",
-            64,
-            &[("FRICTION", friction), ("INIT", 1.0)],
-        )?;
+        let init = kernel(ctx, &sources, "dem_force", 64, &variant(1.0))?;
         let init_bind = init.bind(ctx, &force_resources)?;
         let k = kernel(ctx, &[TICK_WGSL], "dem_tick", 1, &[])?;
         let b = k.bind(ctx, &[clock.binding()])?;
@@ -402,16 +478,20 @@ impl<L: ContactLaw> GpuEngine<L> {
         let check = (k, b);
         // Every buffer a step reads before writing it is state; vpred and the cell list
         // are rewritten from them every step.
-        let guard = GpuGuard::new(
-            ctx,
-            &[
-                Watch::checked(&pos, Precision::F32),
-                Watch::checked(&vel, Precision::F32),
-                Watch::checked(&acc, Precision::F32),
-                Watch::checked(&alarm, Precision::F32),
-                Watch::copied(&clock),
-            ],
-        )?;
+        let mut watched = vec![
+            Watch::checked(&pos, Precision::F32),
+            Watch::checked(&vel, Precision::F32),
+            Watch::checked(&acc, Precision::F32),
+            Watch::checked(&alarm, Precision::F32),
+            Watch::copied(&clock),
+        ];
+        if prep.rotation {
+            watched.push(Watch::checked(&spin, Precision::F32));
+        }
+        if slots > 0 {
+            watched.push(Watch::copied(&hist));
+        }
+        let guard = GpuGuard::new(ctx, &watched)?;
         if saved.is_none() {
             // Initial accelerations a(0) with the initial velocities.
             let mut encoder = ctx.encoder("dem init");
@@ -436,6 +516,9 @@ impl<L: ContactLaw> GpuEngine<L> {
             check_params,
             check_host,
             acc,
+            spin,
+            hist,
+            slots,
             evidence,
             first,
             steps,
@@ -473,7 +556,63 @@ fn load(s: &Dynamics, n: usize) -> Result<Loaded> {
     Ok((arrays(&s.pos), arrays(&s.vel), arrays(&s.acc)))
 }
 
+/// The rotation columns of a checked checkpoint (9 values per particle: `w`, the angular
+/// acceleration, the predicted `w`) into the device layout, keeping each `1 / I`.
+fn load_spin(s: &Dynamics, spin: &mut [[f32; 4]]) {
+    for (v, rec) in s.spin.chunks_exact(9).zip(spin.chunks_exact_mut(3)) {
+        for (c, r) in rec.iter_mut().enumerate() {
+            for d in 0..3 {
+                r[d] = v[3 * c + d] as f32;
+            }
+        }
+    }
+}
+
+/// The contact history of a checked checkpoint into one half of the device's slots
+/// (`slots` per particle). A contact stored in one orientation only gives its partner
+/// particle the mirror image ([`ContactLaw::swap_history`]).
+///
+/// Errors: a particle with more contacts than `slots`.
+fn load_history<L: ContactLaw>(s: &Dynamics, slots: usize, out: &mut [u32]) -> Result<()> {
+    let h = L::HISTORY;
+    let n = out.len() / (slots * SLOT_WORDS);
+    let stored: std::collections::HashSet<[u32; 2]> = s.contacts.iter().copied().collect();
+    let mut used = vec![0usize; n];
+    let mut put = |a: u32, b: u32, values: &[f32]| -> Result<()> {
+        let a = a as usize;
+        if used[a] == slots {
+            return Err(Error::checkpoint(format!(
+                "particle {a} has more than {slots} contacts with a history, the most the GPU                  backend keeps; resume this checkpoint on the CPU"
+            )));
+        }
+        let at = (a * slots + used[a]) * SLOT_WORDS;
+        out[at] = b + 1;
+        for (w, v) in out[at + 1..at + 1 + h].iter_mut().zip(values) {
+            *w = v.to_bits();
+        }
+        used[a] += 1;
+        Ok(())
+    };
+    for (c, v) in s.contacts.iter().zip(s.history.chunks_exact(h.max(1))) {
+        let mut values: Vec<f32> = v.iter().map(|&x| x as f32).collect();
+        put(c[0], c[1], &values)?;
+        if (c[1] as usize) < n && !stored.contains(&[c[1], c[0]]) {
+            L::swap_history(&mut values);
+            put(c[1], c[0], &values)?;
+        }
+    }
+    Ok(())
+}
+
 impl<L: ContactLaw> GpuEngine<L> {
+    /// The half of the history slots that the last force evaluation wrote.
+    fn current_history(&self) -> Result<Vec<u32>> {
+        let len = self.prep.n * self.slots * SLOT_WORDS;
+        let half = (self.steps as usize + 1) & 1;
+        let all = self.hist.download(&self.ctx)?;
+        Ok(all[half * len..(half + 1) * len].to_vec())
+    }
+
     /// Records one step into `encoder`.
     fn record_step(&self, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
         let ctx = &self.ctx;
@@ -527,6 +666,17 @@ impl<L: ContactLaw> GpuEngine<L> {
                             p.escape_cause(),
                         )
                     }
+                    5 => (
+                        format!(
+                            "particle {i} has more than {} contacts with a history, the most \
+                             the GPU backend keeps per particle",
+                            self.slots
+                        ),
+                        "grains far smaller than their neighbours, or grains pressed \
+                         together much deeper than usual; run the scene on the CPU backend, \
+                         which keeps any number"
+                            .to_string(),
+                    ),
                     _ => (
                         format!(
                             "particle {i} has a contact deeper than {value} of the smaller \
@@ -614,11 +764,20 @@ impl<L: ContactLaw> Engine<L> for GpuEngine<L> {
             }
             o
         };
+        let angular_velocities = if self.prep.rotation {
+            let spin = self.spin.download(&self.ctx)?;
+            spin.iter()
+                .step_by(3)
+                .map(|w| [0, 1, 2].map(|d| f64::from(w[d])))
+                .collect()
+        } else {
+            Vec::new()
+        };
         Ok(State {
             time: self.steps as f64 * self.prep.dt,
             positions: pos.iter().map(c).collect(),
             velocities: vel.iter().map(c).collect(),
-            angular_velocities: Vec::new(),
+            angular_velocities,
             species: self.prep.species.clone(),
         })
     }
@@ -644,6 +803,34 @@ impl<L: ContactLaw> Engine<L> for GpuEngine<L> {
         let flat = |v: Vec<[f32; 4]>| -> Vec<f64> {
             v.as_flattened().iter().map(|&x| f64::from(x)).collect()
         };
+        let spin = if self.prep.rotation {
+            let s = self.spin.download(&self.ctx)?;
+            s.chunks_exact(3)
+                .flat_map(|r| r.iter().flat_map(|v| v[..3].iter().map(|&x| f64::from(x))))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        // Both copies of every contact (each particle's own), as the device has them, so
+        // a resumed run continues with the same bits; contacts with an all-zero history
+        // are left out (they restart from zero anyway).
+        let (mut contacts, mut history) = (Vec::new(), Vec::new());
+        if self.slots > 0 {
+            let h = L::HISTORY;
+            let slots = self.current_history()?;
+            for (i, particle) in slots.chunks_exact(self.slots * SLOT_WORDS).enumerate() {
+                for slot in particle.chunks_exact(SLOT_WORDS) {
+                    if slot[0] == 0 {
+                        break;
+                    }
+                    let values = &slot[1..1 + h];
+                    if values.iter().any(|&w| f32::from_bits(w) != 0.0) {
+                        contacts.push([i as u32, slot[0] - 1]);
+                        history.extend(values.iter().map(|&w| f64::from(f32::from_bits(w))));
+                    }
+                }
+            }
+        }
         Ok(Dynamics {
             steps: self.steps,
             time: self.steps as f64 * self.prep.dt,
@@ -652,6 +839,9 @@ impl<L: ContactLaw> Engine<L> for GpuEngine<L> {
             pos: flat(self.pos.download(&self.ctx)?),
             vel: flat(self.vel.download(&self.ctx)?),
             acc: flat(self.acc.download(&self.ctx)?),
+            spin,
+            contacts,
+            history,
             ..Dynamics::default()
         })
     }

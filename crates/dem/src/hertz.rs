@@ -66,10 +66,9 @@ impl Solid {
 ///   capped at `mu_r |F_n|`, whose force `F_r` acts as the couple `R* n x F_r` (the
 ///   elastic–plastic "type C" model; LAMMPS `rolling sds k_roll gamma_roll mu_roll`).
 ///
-/// The history (6 values per contact: `xi` and the rolling displacement, both in the
-/// contact plane) is why this law needs a scene with [`crate::Scene::set_rotation`] for the
-/// rolling part and runs on the CPU backend of [`crate::Dem`]. In 2D the same formulas are
-/// applied to discs (Hertz's law is a 3D result; 2D scenes use it as a model).
+/// The history holds 6 values per contact: `xi` and the rolling displacement, both in the
+/// contact plane; the rolling part needs a scene with [`crate::Scene::set_rotation`]. In
+/// 2D the same formulas are applied to discs (Hertz's law is a 3D result; 2D scenes use it as a model).
 ///
 /// ```
 /// use simkit_dem::{HertzMindlin, Solid};
@@ -183,8 +182,7 @@ impl ContactLaw for HertzMindlin {
     type Coeff<T: Real> = HertzCoefficients<T>;
     type Gpu = [f32; 8];
     const NAME: &'static str = "hertz-mindlin";
-    /// Not on the GPU yet: the GPU backend refuses laws with a history.
-    const WGSL: &'static str = "";
+    const WGSL: &'static str = simkit_backend::wgsl!("hertz_mindlin.wgsl");
     const BUILT_IN: bool = true;
     const HISTORY: usize = Springs::<f64>::HISTORY;
 

@@ -77,12 +77,21 @@ impl<T: Real, const D: usize> ContactForce<T, D> {
 ///   and checkpoints, and, when a contact is listed the other way round (`j` first), hands
 ///   them over through [`swap_history`](ContactLaw::swap_history).
 /// - The WGSL twin declares `struct DemCoeff` (the layout of [`ContactLaw::Gpu`]) and
-///   `fn dem_contact_force(c: DemCoeff, m_ij: f32, delta: f32, n: vec3<f32>, v_rel:
-///   vec3<f32>, v_n: f32, friction: bool) -> vec3<f32>`.
+///   `fn dem_contact_force(c: DemCoeff, k: DemContact, h: ptr<function, DemHistory>,
+///   friction: bool) -> DemForce`, the twin of [`force`](ContactLaw::force) in `f32`. The
+///   GPU force kernel puts [`LAW_PRELUDE_WGSL`] before it: `DemContact` (the twin of
+///   [`Contact`], 3-vectors with `z = 0` in 2D), `DemForce` (of [`ContactForce`]),
+///   `DemHistory` (`array<f32, 7>`: a law keeps at most 7 values per contact on the GPU)
+///   and the helpers a law may call (`dem_spring_dashpot`, `dem_contact_point_velocity`,
+///   `dem_coulomb_spring`, `dem_springs_add`, twins of [`crate::normal_force`],
+///   [`crate::coulomb_spring`] and the springs of the history laws).
 ///
-/// Laws with a history run on the CPU backend of [`Dem`](crate::Dem); the GPU backend and
-/// [`DistributedDem`](crate::DistributedDem) refuse them (and rotating scenes) with
-/// [`simkit_backend::Error::Unsupported`] until they carry per-contact state.
+/// Both backends of [`Dem`](crate::Dem) run every law: the CPU backend keeps a law's history
+/// per contact of its lists, the GPU backend per particle and contact partner
+/// (`docs/dem.md`, "Contact history on the GPU").
+/// [`DistributedDem`](crate::DistributedDem) refuses laws with a history (and rotating
+/// scenes) with [`simkit_backend::Error::Unsupported`] until its ranks carry per-contact
+/// state.
 pub trait ContactLaw:
     Copy + Debug + PartialEq + Send + Sync + Serialize + DeserializeOwned + 'static
 {
@@ -162,3 +171,11 @@ pub trait ContactLaw:
     /// `r_eff` and overlap `delta` (the normal spring's).
     fn elastic_energy<T: Real>(c: &Self::Coeff<T>, m_ij: T, r_eff: T, delta: T) -> T;
 }
+
+/// The WGSL the GPU force kernel puts before a law's [`ContactLaw::WGSL`]: the structs
+/// `DemContact`, `DemForce`, the alias `DemHistory` and the helper functions of the
+/// built-in laws (see the trait's contract). Prepend it to test a law's WGSL on its own.
+pub const LAW_PRELUDE_WGSL: &str = concat!(
+    include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders/law.wgsl")),
+    include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders/spin.wgsl")),
+);

@@ -129,12 +129,12 @@ pub use diagnostics::MAX_INITIAL_OVERLAP;
 pub use distributed::DistributedDem;
 pub use hertz::{HertzCoefficients, HertzMindlin, Solid, hertz_contact_time};
 pub use input::{Dim, Material, Particle, Scene, Vibration, Wall, WallShape, pair_index};
-pub use law::{Contact, ContactForce, ContactLaw};
+pub use law::{Contact, ContactForce, ContactLaw, LAW_PRELUDE_WGSL};
 pub use sim::{Dem, Forces};
 pub use simkit_backend::particles::State;
 pub use simkit_backend::{
     Backend, Distributed, Error, Precision, Real, Restart, Result, Simulation,
 };
-pub use spin::{coulomb_spring, moment_of_inertia};
+pub use spin::{contact_point_velocity, coulomb_spring, moment_of_inertia};
 pub use units::Units;
 pub use walls::{cylinder_overlap, cylinder_surface_velocity, plane_overlap, wall_motion};

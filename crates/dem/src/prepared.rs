@@ -402,4 +402,49 @@ impl<L: ContactLaw> Prepared<L> {
             None => (0.0, 0.0),
         }
     }
+
+    /// Checks the rotation and history columns of a checkpoint against the scene: 9
+    /// rotation values per particle in a rotating scene (none otherwise), the law's count
+    /// of history values per contact, contacts between a particle and another particle or a
+    /// wall, every value finite.
+    ///
+    /// Errors: [`simkit_backend::Error::Checkpoint`] naming what does not fit.
+    pub(crate) fn check_saved_extras(&self, s: &simkit_backend::particles::Dynamics) -> Result<()> {
+        let (n, h) = (self.n, L::HISTORY);
+        let bad = |what: String| {
+            simkit_backend::Error::checkpoint(format!(
+                "{what}; the file does not belong to this scene"
+            ))
+        };
+        let spin = if self.rotation { 9 * n } else { 0 };
+        if s.spin.len() != spin {
+            return Err(bad(format!(
+                "{} rotation values, expected {spin}",
+                s.spin.len()
+            )));
+        }
+        let partners = n + self.walls.len();
+        if s.contacts.len().checked_mul(h) != Some(s.history.len())
+            || (h == 0 && !s.contacts.is_empty())
+        {
+            return Err(bad(format!(
+                "{} history values for {} contacts of a law with {h} per contact",
+                s.history.len(),
+                s.contacts.len()
+            )));
+        }
+        if let Some(c) = s
+            .contacts
+            .iter()
+            .find(|c| c[0] as usize >= n || c[1] as usize >= partners || c[0] == c[1])
+        {
+            return Err(bad(format!("contact {c:?} with {n} particles")));
+        }
+        if let Some(x) = s.spin.iter().chain(&s.history).find(|x| !x.is_finite()) {
+            return Err(simkit_backend::Error::checkpoint(format!(
+                "a stored rotation or history value is {x}; the file is corrupt"
+            )));
+        }
+        Ok(())
+    }
 }

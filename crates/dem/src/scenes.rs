@@ -8,7 +8,9 @@ use simkit_backend::Result;
 use crate::{ContactLaw, Dim, LinearHistory, Material, Particle, Scene, Units, Wall};
 
 mod piles;
-pub use piles::{DrumParams, HeapParams, column_heap, rotating_drum, surface_angle};
+pub use piles::{
+    DrumParams, Flank, HeapParams, column_heap, heap_flank, rotating_drum, surface_angle,
+};
 
 /// Parameters of the 2D vibrated bed (source chapter 1) in physical units.
 #[derive(Clone, Copy, Debug, PartialEq)]

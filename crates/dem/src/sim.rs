@@ -121,17 +121,6 @@ impl<L: ContactLaw> Dem<L> {
         let prep = Prepared::new(&scene, config, single)?;
         diagnostics::check_initial_overlaps(&prep)?;
         #[cfg(feature = "gpu")]
-        if backend.is_gpu() && (scene.rotation() || L::HISTORY > 0) {
-            return Err(Error::Unsupported(format!(
-                "the GPU backend does not yet integrate rotation or keep per-contact history \
-                 (scene rotation: {}, law '{}' keeps {} values per contact); use \
-                 Backend::Cpu",
-                scene.rotation(),
-                L::NAME,
-                L::HISTORY
-            )));
-        }
-        #[cfg(feature = "gpu")]
         if backend.is_gpu() && config.integrator != Integrator::VelocityVerlet {
             return Err(Error::Unsupported(
                 "the GPU backend integrates with velocity Verlet only; use \

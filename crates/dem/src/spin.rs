@@ -41,8 +41,11 @@ fn dot<T: Real>(a: &[T], b: &[T]) -> T {
 /// `v_i - v_j - (r_i w_i + r_j w_j) x n`, with `v_rel = v_i - v_j`. Against a wall pass
 /// `r_j = 0` (the wall does not spin). The lever arm is the full radius, as in
 /// Cundall & Strack (1979).
+///
+/// WGSL twin: `dem_contact_point_velocity(v_rel, n, r_i, w_i, r_j, w_j)` in
+/// `shaders/spin.wgsl` (3-vectors).
 #[inline(always)]
-pub(crate) fn contact_point_velocity<T: Real, const D: usize>(
+pub fn contact_point_velocity<T: Real, const D: usize>(
     v_rel: &[T; D],
     n: &[T; D],
     r_i: T,
@@ -65,6 +68,9 @@ pub(crate) fn contact_point_velocity<T: Real, const D: usize>(
 /// Shared by the tangential spring (`v` the tangential velocity of the contact point) and
 /// the rolling spring (`v` the rolling velocity `R* (w_i - w_j) x n`) of
 /// [`crate::HertzMindlin`].
+///
+/// WGSL twin: `dem_coulomb_spring(xi, n, v, dt, k, gamma, cap)` in `shaders/spin.wgsl`
+/// (`xi` a pointer to a 3-vector), checked through the laws that call it.
 #[inline(always)]
 pub fn coulomb_spring<T: Real>(
     xi: &mut [T],

@@ -28,8 +28,8 @@ impl ContactLaw for Elastic {
     const NAME: &'static str = "elastic";
     const WGSL: &'static str = "
 struct DemCoeff { omega2: f32 }
-fn dem_contact_force(c: DemCoeff, m_ij: f32, delta: f32, n: vec3<f32>, v_rel: vec3<f32>, v_n: f32, friction: bool) -> vec3<f32> {
-    return (m_ij * (c.omega2 * delta)) * n;
+fn dem_contact_force(c: DemCoeff, k: DemContact, h: ptr<function, DemHistory>, friction: bool) -> DemForce {
+    return DemForce((k.m_ij * (c.omega2 * k.delta)) * k.n, vec3<f32>(0.0));
 }";
 
     fn validate(&self, what: &str) -> Result<()> {
@@ -168,12 +168,21 @@ fn the_user_law_wgsl_matches_its_rust_function() {
         .collect();
     let gpu: Vec<[f32; 4]> = eval_wgsl(
         &ctx,
-        &["struct Case { a: vec4<f32>, b: vec4<f32> }", Elastic::WGSL],
+        &[
+            "struct Case { a: vec4<f32>, b: vec4<f32> }",
+            simkit_dem::LAW_PRELUDE_WGSL,
+            Elastic::WGSL,
+            // The law's force without a history (a pointer argument needs a variable).
+            "fn force_of(c: DemCoeff, k: DemContact) -> vec3<f32> {
+                var h: DemHistory;
+                return dem_contact_force(c, k, &h, false).force;
+            }",
+        ],
         "Case",
         "vec4<f32>",
         &format!(
-            "vec4<f32>(dem_contact_force(DemCoeff({:?}), x.a.y, x.a.x, \
-             vec3<f32>(x.a.z, x.a.w, 0.0), vec3<f32>(0.0), 0.0, false), 0.0)",
+            "vec4<f32>(force_of(DemCoeff({:?}), DemContact(vec3<f32>(x.a.z, x.a.w, 0.0), \
+             x.a.x, vec3<f32>(0.0), 0.0, vec3<f32>(0.0), x.a.y, 0.25, 1e-3)), 0.0)",
             c.omega2
         ),
         &cases,

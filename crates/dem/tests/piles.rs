@@ -2,8 +2,10 @@
 //! floor comes to rest with sloping flanks, and a rotating drum keeps a sloping surface.
 
 use simkit_backend::{Backend, Result, Simulation};
-use simkit_dem::scenes::{DrumParams, HeapParams, column_heap, rotating_drum, surface_angle};
-use simkit_dem::{Config, Dem, LinearHistory};
+use simkit_dem::scenes::{
+    DrumParams, HeapParams, column_heap, heap_flank, rotating_drum, surface_angle,
+};
+use simkit_dem::{Config, Dem, Dim, LinearHistory};
 
 /// The 2D heap of `n` discs from a column 24 wide under `LinearHistory` (`e = 0.5`,
 /// `t_c = 0.03`, `mu = 0.5`, rolling resistance `mu_r`) after 40 time units: the flank
@@ -22,16 +24,7 @@ fn heap(mu_r: f64) -> Result<(f64, f64)> {
     let mut sim = Dem::new(scene, &Config::default(), Backend::Cpu)?;
     sim.step((40.0 / sim.dt()) as u32)?;
     let s = sim.state()?;
-    let grains: Vec<(f64, f64)> = s
-        .positions
-        .iter()
-        .zip(&radii)
-        .map(|(x, r)| (x[0].abs(), x[1] + r))
-        .collect();
-    let mut reach: Vec<f64> = grains.iter().map(|g| g.0).collect();
-    reach.sort_by(f64::total_cmp);
-    let toe = reach[(0.95 * (reach.len() - 1) as f64) as usize];
-    let angle = -surface_angle(&grains, 0.15 * toe, 0.85 * toe, 1.0)?;
+    let angle = heap_flank(Dim::Two, &s.positions, &radii)?.angle;
     let d = sim.diagnostics()?;
     Ok((angle, (d.kinetic + d.rotational) / p.n as f64))
 }

@@ -297,3 +297,59 @@ pub fn surface_angle(grains: &[(f64, f64)], from: f64, to: f64, bin: f64) -> Res
     });
     Ok((sxy / sxx).atan().to_degrees())
 }
+
+/// One flank of a heap ([`heap_flank`]): its angle in degrees (positive: falling away from
+/// the axis), the abscissae between which it was fitted, and the grains' tops as
+/// `(distance from the axis, height)`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Flank {
+    /// Flank angle in degrees.
+    pub angle: f64,
+    /// Start of the fit (15 % of the toe's distance from the axis).
+    pub from: f64,
+    /// End of the fit (85 % of the toe's distance).
+    pub to: f64,
+    /// Every grain's `(distance from the axis, top)` (its centre's height plus its radius).
+    pub grains: Vec<(f64, f64)>,
+}
+
+/// The flank angle of a heap built about the vertical axis through `x = 0` (`x = y = 0` in
+/// 3D), as [`column_heap`] builds it: each grain's distance from the axis and its top,
+/// the toe at the distance 95 % of the grains stay within, and [`surface_angle`] fitted
+/// from 15 % to 85 % of the toe (clear of the crest's rounding and the toe's scattered
+/// grains).
+///
+/// Errors: `positions` and `radii` of different lengths or empty, and those of
+/// [`surface_angle`].
+pub fn heap_flank(dim: Dim, positions: &[[f64; 3]], radii: &[f64]) -> Result<Flank> {
+    if positions.len() != radii.len() || positions.is_empty() {
+        return Err(Error::invalid(
+            "heap grains",
+            format!("{} positions, {} radii", positions.len(), radii.len()),
+            "must be as many positions as radii, at least one",
+        ));
+    }
+    let up = dim.vertical();
+    let grains: Vec<(f64, f64)> = positions
+        .iter()
+        .zip(radii)
+        .map(|(p, r)| {
+            let away = match dim {
+                Dim::Two => p[0].abs(),
+                Dim::Three => p[0].hypot(p[1]),
+            };
+            (away, p[up] + r)
+        })
+        .collect();
+    let mut reach: Vec<f64> = grains.iter().map(|g| g.0).collect();
+    reach.sort_by(f64::total_cmp);
+    let toe = reach[(0.95 * (reach.len() - 1) as f64) as usize];
+    let (from, to) = (0.15 * toe, 0.85 * toe);
+    let angle = -surface_angle(&grains, from, to, 1.0)?;
+    Ok(Flank {
+        angle,
+        from,
+        to,
+        grains,
+    })
+}
