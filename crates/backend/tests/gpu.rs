@@ -251,6 +251,43 @@ fn oversize_buffer_is_refused_with_the_limit_named() {
 }
 
 #[test]
+fn oversize_staging_and_uniform_buffers_are_errors_not_panics() {
+    // Before: Staging::new multiplied the length unchecked and both created their buffers
+    // outside an error scope, so the device's refusal was wgpu's panic.
+    let Some(ctx) = gpu_or_skip("oversize_staging_and_uniform_buffers_are_errors_not_panics")
+    else {
+        return;
+    };
+    for len in [usize::MAX / 2, (ctx.max_storage_bytes() / 4 + 1) as usize] {
+        let err = simkit_backend::gpu::Staging::<u32>::new(&ctx, len)
+            .err()
+            .expect("refused");
+        assert!(
+            matches!(
+                err,
+                Error::BufferTooLarge { .. } | Error::InvalidParameter { .. }
+            ),
+            "{err}"
+        );
+    }
+    // A 128 KiB value: over every adapter's uniform-binding limit we know (64 KiB).
+    let value = [[7u32; 4096]; 8];
+    let limit = ctx.limits().max_uniform_buffer_binding_size;
+    println!("max_uniform_buffer_binding_size {limit}");
+    if (limit as usize) < size_of_val(&value) {
+        let err = simkit_backend::gpu::Uniform::new(&ctx, "huge params", &value)
+            .err()
+            .expect("refused");
+        assert!(
+            err.to_string().contains("max_uniform_buffer_binding_size"),
+            "{err}"
+        );
+    }
+    // A small one is fine.
+    assert!(simkit_backend::gpu::Uniform::new(&ctx, "small", &[1u32; 4]).is_ok());
+}
+
+#[test]
 fn shader_errors_are_errors_not_panics() {
     let Some(ctx) = gpu_or_skip("shader_errors_are_errors_not_panics") else {
         return;
@@ -372,4 +409,29 @@ fn a_drifted_mirror_is_caught() {
         });
         assert!(caught.is_err(), "{drifted}");
     }
+}
+
+#[test]
+fn a_wait_longer_than_the_limit_is_an_error_naming_it() {
+    // Before: `wait` blocked without a limit, so a hung device hung the caller.
+    let Some(ctx) = gpu_or_skip("a_wait_longer_than_the_limit_is_an_error_naming_it") else {
+        return;
+    };
+    assert_eq!(ctx.wait_limit(), simkit_backend::gpu::DEFAULT_WAIT_LIMIT);
+    let len = (ctx.max_storage_bytes().min(1 << 28) / 4) as usize;
+    let a = GpuBuffer::<u32>::zeroed(&ctx, "big", len).unwrap();
+    let b = GpuBuffer::<u32>::zeroed(&ctx, "copy", len).unwrap();
+    let hurried = ctx
+        .clone()
+        .with_wait_limit(std::time::Duration::from_nanos(1));
+    // Work that takes far longer than a nanosecond: 16 copies of the buffer.
+    let mut encoder = ctx.encoder("copies");
+    for _ in 0..16 {
+        encoder.copy_buffer_to_buffer(a.raw(), 0, b.raw(), 0, (len * 4) as u64);
+    }
+    ctx.submit(encoder);
+    let err = hurried.wait().expect_err("a nanosecond is too short");
+    assert!(err.to_string().contains("did not finish"), "{err}");
+    // The device is fine: the default limit waits for the work.
+    ctx.wait().unwrap();
 }

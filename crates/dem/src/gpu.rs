@@ -370,7 +370,7 @@ impl<L: ContactLaw> GpuEngine<L> {
             _pad0: 0,
             _pad1: 0,
         };
-        let params = Uniform::new(ctx, "dem params", &pv);
+        let params = Uniform::new(ctx, "dem params", &pv)?;
         let cells = cell_list(ctx, &prep, &pos)?;
         let GpuCellBuffers {
             grid,
@@ -456,7 +456,7 @@ impl<L: ContactLaw> GpuEngine<L> {
             begin: 0,
             pad: 0,
         };
-        let check_params = Uniform::new(ctx, "dem check params", &check_host);
+        let check_params = Uniform::new(ctx, "dem check params", &check_host)?;
         let evidence = GpuBuffer::<[u32; 4]>::zeroed(ctx, "dem check evidence", n)?;
         let first = GpuBuffer::<u32>::zeroed(ctx, "dem check first", 1)?;
         let alarm = GpuBuffer::<u32>::zeroed(ctx, "dem check alarm", 1)?;

@@ -123,7 +123,7 @@ impl GpuLattice {
             force_seed: config.seed ^ FORCE_STREAM,
             threshold: force_threshold(config.body_force),
         };
-        let uniform = Uniform::new(ctx, "fhp params", &gp);
+        let uniform = Uniform::new(ctx, "fhp params", &gp)?;
         let counter = GpuBuffer::from_slice(ctx, "fhp step counter", &[0u32])?;
         let flags = f64::from(config.flags());
         let full = f64::from(u8::from(config.rules == RuleSet::Full));

@@ -115,7 +115,7 @@ impl GpuBlock {
             step: 0,
             pad: [0; 3],
         };
-        let params = Uniform::new(ctx, "fhp block params", &gp);
+        let params = Uniform::new(ctx, "fhp block params", &gp)?;
         let step_kernel = Kernel::new(
             ctx,
             &KernelDesc {
@@ -171,7 +171,7 @@ impl GpuBlock {
             unpack_kernel,
             params,
             gp,
-            edge_staging: Staging::new(ctx, edge_idx.len()),
+            edge_staging: Staging::new(ctx, edge_idx.len())?,
             edge_idx,
             ghost_idx,
             edge_vals,

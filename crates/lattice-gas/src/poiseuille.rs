@@ -48,7 +48,8 @@ impl PoiseuilleChannel {
     /// and averaged over `16000 (H / 64)^2` steps each (at least 4000), sampled every 20
     /// steps.
     pub fn new(width: usize, height: usize, density: f64, force: f64) -> Self {
-        let relax = (16_000 * height.saturating_mul(height) / (64 * 64)).clamp(4000, 1 << 30);
+        let relax =
+            (height.saturating_mul(height).saturating_mul(16_000) / (64 * 64)).clamp(4000, 1 << 30);
         Self {
             width,
             height,
@@ -108,7 +109,7 @@ impl PoiseuilleChannel {
         // 2. The channel.
         let mut lattice = Lattice::new(w, h)?;
         lattice.add_wall_rows();
-        lattice.fill_random(d, self.seed + 1)?;
+        lattice.fill_random(d, self.seed.wrapping_add(1))?;
         let channel = Config {
             periodic_y: false,
             ..config

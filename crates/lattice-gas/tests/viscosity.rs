@@ -93,3 +93,13 @@ fn poiseuille_profile_gives_the_fhp_viscosity() {
     assert!((-0.01..0.06).contains(&local), "local {local}");
     assert!(rest > local + 0.05, "at rest {rest}, local {local}");
 }
+
+#[test]
+fn channel_defaults_and_seeds_do_not_overflow() {
+    // 16 000 H^2 overflowed usize before the H^2 / 4096 scaling for H = 2^30 (the product
+    // wrapped to 0 in release and gave the 4000-step floor instead of the 2^30 cap).
+    let c = PoiseuilleChannel::new(64, 1 << 30, 0.3, 0.01);
+    assert_eq!((c.relax, c.average), (1 << 30, 1 << 30));
+    let c = PoiseuilleChannel::new(64, usize::MAX, 0.3, 0.01);
+    assert_eq!(c.relax, 1 << 30);
+}

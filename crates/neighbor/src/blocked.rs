@@ -653,11 +653,12 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
         #[cfg(target_arch = "x86_64")]
         {
             let popcnt = std::arch::is_x86_feature_detected!("popcnt");
-            if popcnt && std::arch::is_x86_feature_detected!("avx512f") {
-                // SAFETY: the CPU supports AVX-512F and POPCNT (checked above).
+            let avx2 = std::arch::is_x86_feature_detected!("avx2");
+            if popcnt && avx2 && std::arch::is_x86_feature_detected!("avx512f") {
+                // SAFETY: the CPU supports AVX-512F, AVX2 and POPCNT (checked above).
                 return unsafe { self.build_block_per_cell_avx512(b, pos, coords, windowed) };
             }
-            if popcnt && std::arch::is_x86_feature_detected!("avx2") {
+            if popcnt && avx2 {
                 // SAFETY: the CPU supports AVX2 and POPCNT (checked above).
                 return unsafe { self.build_block_per_cell_avx2(b, pos, coords, windowed) };
             }
@@ -665,9 +666,10 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
         self.build_block_per_cell::<PORTABLE>(b, pos, coords, windowed)
     }
 
-    /// [`build_block_per_cell`](Self::build_block_per_cell) with AVX-512F (and POPCNT).
+    /// [`build_block_per_cell`](Self::build_block_per_cell) with AVX-512F (and AVX2 and
+    /// POPCNT, which its hit stores use).
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f,popcnt")]
+    #[target_feature(enable = "avx512f,avx2,popcnt")]
     fn build_block_per_cell_avx512(
         &self,
         b: &mut HalfListBlock<T, D>,
@@ -864,7 +866,13 @@ fn scan_into<const D: usize, const SHIFTED: bool, const ISA: u8>(
     from: usize,
     to: usize,
 ) {
-    debug_assert!(from < to && to + CHUNK <= coords[0].len());
+    // The bounds the unsafe scan relies on, checked in every build (one comparison per
+    // candidate cell, against tens of distance tests).
+    assert!(
+        from < to && (0..D).all(|d| to + CHUNK <= coords[d].len()),
+        "scan_into: candidates {from}..{to} with columns of {} (padding {CHUNK})",
+        coords[0].len()
+    );
     out.reserve(to - from + STORE_SLACK);
     let len = out.len();
     // SAFETY: `scan` writes below `to - from + STORE_SLACK` entries past `len`, room reserved
@@ -1062,9 +1070,10 @@ unsafe fn scan_avx2<const D: usize, const SHIFTED: bool>(
 /// register, the hits stored with [`compress_store`].
 ///
 /// # Safety
-/// As [`scan`], on a CPU with AVX-512F and POPCNT.
+/// As [`scan`], on a CPU with AVX-512F, AVX2 and POPCNT (it stores the hits with the AVX2
+/// [`compress_store`]: AVX-512F does not imply AVX2 as a CPU feature bit).
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,popcnt")]
+#[target_feature(enable = "avx512f,avx2,popcnt")]
 #[inline]
 unsafe fn scan_avx512<const D: usize, const SHIFTED: bool>(
     coords: &[Vec<f64>; D],
@@ -1099,8 +1108,8 @@ unsafe fn scan_avx512<const D: usize, const SHIFTED: bool>(
     };
     let (mut n, mut j) = (0, from);
     while j + 8 <= to {
-        // SAFETY: n <= j - from, so dst[n..n + 8] lies within the caller's room; AVX-512F
-        // implies AVX2 (and the caller's CPU has POPCNT).
+        // SAFETY: n <= j - from, so dst[n..n + 8] lies within the caller's room; the CPU
+        // has AVX2 and POPCNT (this function's contract).
         n = unsafe { compress_store(step(j), j, dst, n) };
         j += 8;
     }
@@ -1231,9 +1240,10 @@ mod tests {
                 #[cfg(target_arch = "x86_64")]
                 AVX512
                     if std::arch::is_x86_feature_detected!("avx512f")
+                        && std::arch::is_x86_feature_detected!("avx2")
                         && std::arch::is_x86_feature_detected!("popcnt") =>
                 {
-                    // SAFETY: the CPU supports AVX-512F (checked above).
+                    // SAFETY: the CPU supports AVX-512F, AVX2 and POPCNT (checked above).
                     unsafe { list.build_block_per_cell_avx512(b, pos, &coords, windowed) }
                 }
                 _ => return None,

@@ -254,7 +254,7 @@ impl<const D: usize> GpuCellList<D> {
         }
         let params_value = GpuGridParams::new(grid, n as u32)?;
         let max_per_cell = Self::max_per_cell(ctx);
-        let params = Uniform::new(ctx, "neighbor grid", &params_value);
+        let params = Uniform::new(ctx, "neighbor grid", &params_value)?;
         let m = n.max(1);
         let nc = grid.n_cells();
         let wrapped = GpuBuffer::zeroed(ctx, "neighbor wrapped", m)?;
@@ -715,8 +715,8 @@ impl GpuNeighborList {
     /// Downloads the list (entries of each particle sorted ascending).
     pub fn download(&self, ctx: &GpuContext) -> Result<NeighborLists> {
         let mut encoder = ctx.encoder("neighbor list download");
-        let off = self.offsets.encode_download(ctx, &mut encoder);
-        let nb = self.neighbors.encode_download(ctx, &mut encoder);
+        let off = self.offsets.encode_download(ctx, &mut encoder)?;
+        let nb = self.neighbors.encode_download(ctx, &mut encoder)?;
         ctx.submit(encoder);
         let offsets: Vec<usize> = off.read(ctx)?.into_iter().map(|o| o as usize).collect();
         let mut neighbors = nb.read(ctx)?;

@@ -141,6 +141,7 @@ impl<const D: usize> SortedCells<D> {
     }
 
     /// Sorts `positions` into cells (wrapping periodic axes, validating every coordinate).
+    /// A build that fails changes nothing: queries answer for the last successful build.
     ///
     /// Parallel on the rayon pool: the cell assignment, then a two-pass counting sort over
     /// contiguous chunks of particles (each chunk counts its particles per cell; a prefix
@@ -158,6 +159,17 @@ impl<const D: usize> SortedCells<D> {
             ));
         }
         let g = &self.grid;
+        // Every coordinate is checked before anything is changed: a failed build leaves the
+        // list as the last successful one made it.
+        positions
+            .par_chunks(WRAP_BLOCK)
+            .enumerate()
+            .try_for_each(|(b, ps)| {
+                for (k, &p) in ps.iter().enumerate() {
+                    g.wrap(b * WRAP_BLOCK + k, p)?;
+                }
+                Ok::<(), Error>(())
+            })?;
         self.wrapped.resize(n, [0.0; D]);
         self.cell_of.resize(n, 0);
         // Blocks of particles per task, a plain loop inside (no per-particle closure call).

@@ -810,3 +810,36 @@ fn far_periodic_coordinates_wrap_exactly_and_huge_offsets_are_errors() {
         assert!(e.to_string().contains("cutoff^2"), "{e}");
     }
 }
+
+#[test]
+fn a_failed_sorted_build_leaves_the_last_one_intact() {
+    // Before the fix a failed build resized the wrapped positions and cell indices and left
+    // the rest: with fewer particles a query panicked out of bounds, with more it answered
+    // with wrong neighbours.
+    let grid = CellGrid::new([0.0; 2], [8.0; 2], [true; 2], 1.0).unwrap();
+    let at = |k: usize| [(k as f64 * 0.37) % 8.0, (k as f64 * 0.61) % 8.0];
+    let positions: Vec<[f64; 2]> = (0..40).map(at).collect();
+    let mut sorted = SortedCells::new(&grid);
+    sorted.build(&positions).unwrap();
+    let pairs = |s: &SortedCells<2>| {
+        let mut v = Vec::new();
+        s.for_each_pair(|i, j, _, r2| v.push((i.min(j), i.max(j), r2.to_bits())));
+        v.sort_unstable();
+        v
+    };
+    let before = pairs(&sorted);
+    assert!(!before.is_empty());
+    for len in [20, 60] {
+        let mut bad: Vec<[f64; 2]> = (0..len).map(at).collect();
+        bad[len - 1][1] = f64::NAN;
+        let err = sorted.build(&bad).unwrap_err();
+        assert!(err.to_string().contains("must be finite"), "{err}");
+        assert_eq!(sorted.len(), 40);
+        assert_eq!(pairs(&sorted), before, "after a failed build of {len}");
+        let mut near = Vec::new();
+        sorted
+            .for_each_neighbor_of(39, |j, _, _| near.push(j))
+            .unwrap();
+        assert!(near.iter().all(|&j| j < 40));
+    }
+}

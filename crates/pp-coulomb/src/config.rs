@@ -33,17 +33,29 @@ pub enum ForceLaw {
 }
 
 impl ForceLaw {
-    /// Checks the parameter (finite and > 0).
+    /// Checks the parameter: finite and > 0, with a square the kernels can hold (a normal,
+    /// finite `f64`: a softening of 1e-170 would square to 0 and run the singular law).
     pub fn validate(&self) -> Result<()> {
-        match *self {
-            ForceLaw::Exact => Ok(()),
-            ForceLaw::Exclusion { radius } => {
-                require_positive("exclusion radius", radius).map(|_| ())
-            }
-            ForceLaw::Plummer { epsilon } => {
-                require_positive("softening epsilon", epsilon).map(|_| ())
-            }
+        let (name, v) = match *self {
+            ForceLaw::Exact => return Ok(()),
+            ForceLaw::Exclusion { radius } => ("exclusion radius", radius),
+            ForceLaw::Plummer { epsilon } => ("softening epsilon", epsilon),
+        };
+        require_positive(name, v)?;
+        let square = v * v;
+        if !(square.is_finite() && square >= f64::MIN_POSITIVE) {
+            return Err(Error::invalid(
+                name,
+                format!("{v:e}"),
+                format!(
+                    "its square {square:e} is not a normal f64; use a value between {:e} and \
+                     {:e}",
+                    f64::MIN_POSITIVE.sqrt(),
+                    f64::MAX.sqrt()
+                ),
+            ));
         }
+        Ok(())
     }
 
     /// The kernel parameter: `radius^2`, `epsilon^2`, or 0 for the exact law.

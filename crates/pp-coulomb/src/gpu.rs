@@ -421,7 +421,7 @@ impl<T: Real> GpuEngine<T> {
                 (self.npad / WG) as u64,
             )?;
         }
-        let download = self.partials.encode_download(&self.ctx, &mut encoder);
+        let download = self.partials.encode_download(&self.ctx, &mut encoder)?;
         self.ctx.submit(encoder);
         let partials = download.read(&self.ctx)?;
         let (mut kinetic, mut potential) = (0.0, 0.0);
@@ -564,8 +564,8 @@ impl<T: Real> Engine for GpuEngine<T> {
 
     fn state(&mut self) -> Result<PositionsVelocities> {
         let mut encoder = self.ctx.encoder("pp-coulomb state");
-        let x = self.pos[self.cur].encode_download(&self.ctx, &mut encoder);
-        let v = self.vel.encode_download(&self.ctx, &mut encoder);
+        let x = self.pos[self.cur].encode_download(&self.ctx, &mut encoder)?;
+        let v = self.vel.encode_download(&self.ctx, &mut encoder)?;
         self.ctx.submit(encoder);
         let x = x.read(&self.ctx)?;
         let v = v.read(&self.ctx)?;

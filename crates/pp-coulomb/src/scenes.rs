@@ -10,8 +10,18 @@ use crate::units::{Normalised, PhysicalInputs, normalise};
 /// The source's plasma in normalised units: `inputs.particles` electrons (or the species
 /// given by `inputs`) uniform in the box, Maxwellian at the thermal speed with zero mean,
 /// and the exclusion law with radius = Debye length.
+///
+/// Errors: inputs [`normalise`] refuses, a Debye length the law refuses
+/// ([`ForceLaw::validate`]: its square must be a normal `f64`), those of
+/// [`Particles::fill`].
 pub fn plasma_box(inputs: &PhysicalInputs, seed: u64) -> Result<(Particles, ForceLaw, Normalised)> {
     let u = normalise(inputs)?;
+    let law = ForceLaw::Exclusion {
+        radius: u.debye_length,
+    };
+    // A Debye length the kernels cannot square (e.g. 1e-248 in normalised units) is refused
+    // before the particles are made.
+    law.validate()?;
     let mut p = Particles::new();
     let s = p.add_species(Species::new("electron", u.charge, u.mass))?;
     let cube = Region::Cube {
@@ -22,9 +32,6 @@ pub fn plasma_box(inputs: &PhysicalInputs, seed: u64) -> Result<(Particles, Forc
         thermal_speed: u.thermal_speed,
     };
     p.fill(s, inputs.particles, cube, v, seed)?;
-    let law = ForceLaw::Exclusion {
-        radius: u.debye_length,
-    };
     Ok((p, law, u))
 }
 

@@ -114,6 +114,28 @@ fn bad_input_is_a_clear_error() {
 }
 
 #[test]
+fn a_softening_whose_square_is_not_a_normal_f64_is_refused() {
+    // Before: epsilon = 1e-170 passed (it is > 0) and squared to 0, running the singular
+    // law; 1e200 squared to infinity and zeroed every force.
+    let p = plasma(10, 5);
+    for (law, value) in [
+        (ForceLaw::Plummer { epsilon: 1e-170 }, "1e-170"),
+        (ForceLaw::Plummer { epsilon: 1e200 }, "1e200"),
+        (ForceLaw::Exclusion { radius: 1e-160 }, "1e-160"),
+    ] {
+        let e = PpCoulomb::new(p.clone(), &Config::new(0.1, law), Backend::Cpu).unwrap_err();
+        let text = e.to_string();
+        assert!(
+            text.contains(value) && text.contains("is not a normal f64"),
+            "{text}"
+        );
+    }
+    // The smallest softening allowed runs.
+    let law = ForceLaw::Plummer { epsilon: 1.5e-154 };
+    assert!(PpCoulomb::new(p, &Config::new(0.1, law), Backend::Cpu).is_ok());
+}
+
+#[test]
 fn fill_refuses_a_huge_count_before_allocating() {
     let mut p = Particles::new();
     let e = p.add_species(Species::new("e", -1.0, 1.0)).unwrap();

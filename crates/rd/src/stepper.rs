@@ -197,6 +197,34 @@ pub(crate) fn check_model<T: Real, M: Model>(model: &M, grid: &Grid<T>) -> Resul
             format!("the {} model needs {}", model.name(), model.species()),
         ));
     }
+    // The coefficient fields, whatever the model's own validation checked: the backends
+    // pad them as `nx x ny` planes.
+    let cells = grid.nx() * grid.ny();
+    for (k, c) in model.coefficients().iter().enumerate() {
+        if c.len() != cells {
+            return Err(Error::invalid(
+                format!("{} model: coefficient field {k} length", model.name()),
+                c.len(),
+                format!(
+                    "must equal nx * ny = {} * {} = {cells} (one value per cell, row-major)",
+                    grid.nx(),
+                    grid.ny()
+                ),
+            ));
+        }
+        if let Some(i) = c.iter().position(|v| !v.is_finite()) {
+            return Err(Error::invalid(
+                format!(
+                    "{} model: coefficient field {k} at cell ({}, {})",
+                    model.name(),
+                    i % grid.nx(),
+                    i / grid.nx()
+                ),
+                c[i],
+                "every value must be finite",
+            ));
+        }
+    }
     // Fields may have been edited through `Grid::field_mut`: re-check them.
     for s in 0..grid.species() {
         if let Some(k) = grid.field(s).iter().position(|v| !v.to_f64().is_finite()) {

@@ -593,3 +593,64 @@ fn uniform_checks_the_size_before_allocating() {
         .to_string();
     assert!(e.contains("grid size: 0 x 5"), "{e}");
 }
+
+/// The colony model of a `4 x 4` grid under a validation that does not check its
+/// coefficient field's size (as a user's own model might).
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+struct Lenient(Colony);
+
+impl simkit_rd::Model for Lenient {
+    fn name(&self) -> &'static str {
+        "lenient"
+    }
+    fn species(&self) -> usize {
+        self.0.species()
+    }
+    fn validate(&self, _nx: usize, _ny: usize) -> simkit_backend::Result<()> {
+        Ok(())
+    }
+    fn coefficients(&self) -> &[Vec<f64>] {
+        self.0.coefficients()
+    }
+    fn max_diffusivity<T: simkit_rd::Real>(&self, grid: &Grid<T>) -> f64 {
+        self.0.max_diffusivity(grid)
+    }
+    fn field_dependent_diffusivity(&self) -> bool {
+        self.0.field_dependent_diffusivity()
+    }
+    fn max_cell_diffusivity<T: simkit_rd::Real>(&self, s: &[&[T]], c: &[&[T]]) -> f64 {
+        self.0.max_cell_diffusivity(s, c)
+    }
+    fn update_row<T: simkit_rd::Real>(
+        &self,
+        input: &simkit_rd::RowIn<'_, T>,
+        dt: f64,
+        inv_h2: f64,
+        out: &mut [&mut [T]],
+        average: bool,
+    ) {
+        self.0.update_row(input, dt, inv_h2, out, average);
+    }
+    fn wgsl(&self) -> &'static str {
+        self.0.wgsl()
+    }
+    fn gpu_params(&self) -> Vec<f64> {
+        self.0.gpu_params()
+    }
+}
+
+#[test]
+fn a_model_coefficient_field_of_the_wrong_size_is_refused() {
+    // Before: a model whose own validation missed it panicked while padding the field.
+    let model = Lenient(Colony::new(0.5, 4, 4, vec![1.0; 16]).unwrap());
+    let grid = Grid::uniform(8, 8, 1.0, Boundaries::no_flux(), 2, 0.5).unwrap();
+    for backend in backends("a_model_coefficient_field_of_the_wrong_size_is_refused") {
+        let config = Config::new(Stepping::euler(0.01));
+        match Rd::new(grid.clone(), model.clone(), &config, backend) {
+            Err(Error::InvalidParameter { name, .. }) => {
+                assert!(name.contains("coefficient field 0 length"), "{name}")
+            }
+            other => panic!("expected InvalidParameter, got {:?}", other.err()),
+        }
+    }
+}

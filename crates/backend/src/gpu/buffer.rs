@@ -138,21 +138,23 @@ impl<T: Pod> GpuBuffer<T> {
     /// Copies the whole buffer back to the host (staging buffer, map, wait).
     pub fn download(&self, ctx: &GpuContext) -> Result<Vec<T>> {
         let mut encoder = ctx.encoder("download");
-        let staging = self.encode_download(ctx, &mut encoder);
+        let staging = self.encode_download(ctx, &mut encoder)?;
         ctx.submit(encoder);
         staging.read(ctx)
     }
 
     /// Records a copy of this buffer into a new staging buffer on `encoder`; read it with
     /// [`Staging::read`] after submitting. Lets several downloads share one submission.
+    ///
+    /// Errors: those of [`Staging::new`].
     pub fn encode_download(
         &self,
         ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
-    ) -> Staging<T> {
-        let staging = Staging::new(ctx, self.len);
+    ) -> Result<Staging<T>> {
+        let staging = Staging::new(ctx, self.len)?;
         self.record_copy(encoder, &staging.buffer);
-        staging
+        Ok(staging)
     }
 
     /// Records a copy of this buffer into `staging` (made for this buffer's length, e.g.
@@ -220,19 +222,27 @@ pub struct Staging<T: Pod> {
 impl<T: Pod> Staging<T> {
     /// A host-readable buffer for `len` values of `T`, to be filled by
     /// [`GpuBuffer::encode_copy_to`] and read by [`Staging::read_kept`] as often as needed.
-    pub fn new(ctx: &GpuContext, len: usize) -> Self {
-        let bytes = (len * size_of::<T>()) as u64;
-        let buffer = ctx.device().create_buffer(&wgpu::BufferDescriptor {
-            label: Some("staging"),
-            size: padded(bytes),
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        Self {
+    ///
+    /// Errors: a size over the device's limits (checked before allocating), or an
+    /// allocation the device refuses ([`Error::Gpu`]).
+    pub fn new(ctx: &GpuContext, len: usize) -> Result<Self> {
+        let bytes = check_storage_size::<T>(ctx, "staging", len)?;
+        let buffer = ctx.checked(
+            &format!("allocating a staging buffer ({bytes} bytes)"),
+            || {
+                ctx.device().create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("staging"),
+                    size: padded(bytes),
+                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                })
+            },
+        )?;
+        Ok(Self {
             buffer,
             len,
             _marker: PhantomData,
-        }
+        })
     }
 
     /// Waits for the copy and returns the values.
@@ -276,20 +286,35 @@ pub struct Uniform<T: Pod> {
 
 impl<T: Pod> Uniform<T> {
     /// A uniform buffer initialised with `value`.
-    pub fn new(ctx: &GpuContext, label: &str, value: &T) -> Self {
+    ///
+    /// Errors: a value larger than the device's uniform-binding limit, or an allocation or
+    /// write the device refuses ([`Error::Gpu`], captured in an error scope instead of
+    /// wgpu's default panic).
+    pub fn new(ctx: &GpuContext, label: &str, value: &T) -> Result<Self> {
         let bytes = bytemuck::bytes_of(value);
-        let buffer = ctx.device().create_buffer(&wgpu::BufferDescriptor {
-            label: Some(label),
-            size: padded(bytes.len() as u64).next_multiple_of(16),
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let u = Self {
-            buffer,
-            _marker: PhantomData,
-        };
-        u.set(ctx, value);
-        u
+        let size = padded(bytes.len() as u64).next_multiple_of(16);
+        let limit = ctx.limits().max_uniform_buffer_binding_size;
+        if size > limit {
+            return Err(Error::BufferTooLarge {
+                label: label.to_string(),
+                bytes: size,
+                limit_name: "max_uniform_buffer_binding_size",
+                limit,
+            });
+        }
+        ctx.checked(&format!("creating uniform buffer '{label}'"), || {
+            let u = Self {
+                buffer: ctx.device().create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size,
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                }),
+                _marker: PhantomData,
+            };
+            u.set(ctx, value);
+            u
+        })
     }
 
     /// Overwrites the value (takes effect for work submitted afterwards).

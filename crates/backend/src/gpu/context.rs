@@ -72,7 +72,14 @@ fn note(slot: &Mutex<Option<String>>, message: String) {
 #[derive(Clone)]
 pub struct GpuContext {
     inner: Arc<Inner>,
+    /// The longest [`GpuContext::wait`] waits for the device.
+    wait_limit: std::time::Duration,
 }
+
+/// How long [`GpuContext::wait`] waits for the device by default: 10 minutes, far beyond
+/// any one submission of simkit's (a recorded stretch of steps) on a working device, and
+/// short enough that a hung device ends a run with an error instead of blocking it forever.
+pub const DEFAULT_WAIT_LIMIT: std::time::Duration = std::time::Duration::from_secs(600);
 
 impl std::fmt::Debug for GpuContext {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -247,7 +254,21 @@ impl GpuContext {
                 features,
                 faults,
             }),
+            wait_limit: DEFAULT_WAIT_LIMIT,
         })
+    }
+
+    /// The same device with another limit on [`GpuContext::wait`] (the handle is shared;
+    /// the limit is this copy's).
+    pub fn with_wait_limit(mut self, limit: std::time::Duration) -> Self {
+        self.wait_limit = limit;
+        self
+    }
+
+    /// The longest [`GpuContext::wait`] waits ([`DEFAULT_WAIT_LIMIT`] unless set with
+    /// [`GpuContext::with_wait_limit`]).
+    pub fn wait_limit(&self) -> std::time::Duration {
+        self.wait_limit
     }
 
     /// The wgpu device.
@@ -350,18 +371,30 @@ impl GpuContext {
         }
     }
 
-    /// Blocks until all submitted work has finished; errors as [`GpuContext::health`].
+    /// Blocks until all submitted work has finished, at most [`GpuContext::wait_limit`];
+    /// errors as [`GpuContext::health`], and [`Error::Gpu`] naming the limit when the device
+    /// has not finished by then (a hung device, or work far longer than the limit: raise it
+    /// with [`GpuContext::with_wait_limit`]).
     pub fn wait(&self) -> Result<()> {
         self.health()?;
+        let name = &self.inner.info.name;
         self.inner
             .device
-            .poll(wgpu::PollType::wait_indefinitely())
+            .poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: Some(self.wait_limit),
+            })
             .map(|_| ())
-            .map_err(|e| {
-                Error::Gpu(format!(
-                    "waiting for the device on adapter '{}' failed: {e}",
-                    self.inner.info.name
-                ))
+            .map_err(|e| match e {
+                wgpu::PollError::Timeout => Error::Gpu(format!(
+                    "the device on adapter '{name}' did not finish its work within {:?} \
+                     (GpuContext::wait_limit): it may be hung; raise the limit with \
+                     GpuContext::with_wait_limit if the work is that long",
+                    self.wait_limit
+                )),
+                e => Error::Gpu(format!(
+                    "waiting for the device on adapter '{name}' failed: {e}"
+                )),
             })?;
         self.health()
     }

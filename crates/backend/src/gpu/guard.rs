@@ -180,7 +180,7 @@ impl GpuGuard {
                     count: words,
                     pad: 0,
                 },
-            );
+            )?;
             let keep_bind = keep.bind(
                 ctx,
                 &[
@@ -204,7 +204,7 @@ impl GpuGuard {
                     count: values,
                     pad: 0,
                 },
-            );
+            )?;
             let check_bind = match w.check {
                 Some(_) if values > 0 => Some((
                     check.bind(

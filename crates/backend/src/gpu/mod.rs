@@ -18,7 +18,9 @@ mod kernel;
 pub mod scan;
 
 pub use buffer::{GpuBuffer, Staging, Uniform, check_storage_size};
-pub use context::{ADAPTER_ENV, AdapterSummary, GpuContext, LLVMPIPE_LOOP_LIMIT};
+pub use context::{
+    ADAPTER_ENV, AdapterSummary, DEFAULT_WAIT_LIMIT, GpuContext, LLVMPIPE_LOOP_LIMIT,
+};
 pub use guard::{GUARD_WGSL, GpuGuard, GuardReport, GuardedRun, Watch};
 pub use kernel::{DISPATCH_WGSL, Kernel, KernelDesc, record_pass, run_pass, workgroup_grid};
 pub use scan::{GpuScan, ScanPlan};

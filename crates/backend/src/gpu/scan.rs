@@ -79,7 +79,7 @@ impl GpuScan {
                     n: n as u32,
                     pad: [0; 3],
                 },
-            );
+            )?;
             let input = levels.last().map_or(data, |l| &l.sums);
             let resources = [input.binding(), sums.binding(), params.binding()];
             let scan_bind = self.blocks.bind(ctx, &resources)?;

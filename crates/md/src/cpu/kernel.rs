@@ -100,8 +100,11 @@ pub(crate) struct Inputs<'a, T: Real, const D: usize, L: PairLaw> {
 /// is set (`ew` is left as it is otherwise; the forces are the same bits either way).
 ///
 /// # Safety
-/// Every partner `j` of `nb` must satisfy `j < pos.len()` and `j < nb.start() +
-/// local.len()` (`local.len() >= nb.reach() - nb.start()`), and `nb.end() <= pos.len()`.
+/// Every partner `j` of `nb` must satisfy `nb.start() <= j`, `j < pos.len()`,
+/// `j < inp.species.len()` and `j < nb.start() + local.len()` (`local.len() >= nb.reach() -
+/// nb.start()`), and `nb.end() <= pos.len()`: the kernel reads `pos[j]` and `species[j]` and
+/// writes `local[j - nb.start()]` unchecked. A half list built over these positions (one
+/// species per position) satisfies all of them.
 pub(crate) unsafe fn block_forces<T: Real, const D: usize, L: PairLaw>(
     kernel: Kernel,
     inp: &Inputs<'_, T, D, L>,
@@ -346,7 +349,7 @@ unsafe fn chunk_forces<
     let mut cs = [c0; C];
     if !SINGLE {
         for (l, &j) in idx[..cnt].iter().enumerate() {
-            // SAFETY: `j < pos.len() == species.len()` (the caller's guarantee).
+            // SAFETY: `j < species.len()` (the caller's guarantee).
             cs[l] = row[unsafe { *species.get_unchecked(j as usize) } as usize];
         }
     }

@@ -307,7 +307,7 @@ impl<L: PairLaw> GpuEngine<L> {
             })
             .collect();
         let species_info = GpuBuffer::from_slice(ctx, "md species", &species_info)?;
-        let uniform = Uniform::new(ctx, "md params", &params);
+        let uniform = Uniform::new(ctx, "md params", &params)?;
         let cells = cell_list(ctx, system, &pos, n)?;
         // The device step counter keying the thermostat's random numbers (mod 2^32).
         let tick_buf = GpuBuffer::from_slice(ctx, "md tick", &[steps as u32])?;
