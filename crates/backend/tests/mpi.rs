@@ -2,7 +2,8 @@
 //! to 3 with and without periodic axes (every ghost cell, corners included, checked against
 //! the global field), gather to rank 0, the reductions and the broadcast from rank 0, and
 //! the particle domain (owners, ghosts against every image within the halo, refresh,
-//! migration). Built only with the `mpi` feature; the test launches its own binary under `mpirun` (skipped with a message when
+//! migration), and a bad input on one rank of a halo exchange or a gather (an error on
+//! every rank, not a hang). Built only with the `mpi` feature; the test launches its own binary under `mpirun` (skipped with a message when
 //! `mpirun` is missing, unless `SIMKIT_REQUIRE_MPI=1`).
 #![cfg(feature = "mpi")]
 
@@ -117,7 +118,41 @@ fn child(comm: &Comm) -> Result<usize, String> {
     // Rank 0 without data: an error on every rank, not a hang.
     let none = if rank == 0 { None } else { Some(vec![1.0f64]) };
     assert!(comm.broadcast_from_root(none).is_err());
+    one_bad_rank(comm);
     Ok(1)
+}
+
+/// A bad input on exactly one rank (the last) of a halo exchange and of a gather: every rank
+/// returns an error at once (before, the others waited forever for its messages), the
+/// others naming the failing rank with its message; the next collective call works.
+fn one_bad_rank(comm: &Comm) {
+    let (rank, size) = (comm.rank(), comm.size());
+    let bad = size - 1;
+    let d = CartDecomposition::new([13, 11], size, [true, true]).expect("decomposition");
+    let [nx, ny] = d.block(rank).len;
+    let len = (nx + 2) * (ny + 2) * 2 - usize::from(rank == bad);
+    let mut f = vec![0.0f64; len];
+    let err = d
+        .exchange_halo(comm, &mut f, 1)
+        .expect_err("one rank's fields are short");
+    let text = err.to_string();
+    assert!(
+        text.contains("length of the padded fields"),
+        "rank {rank}: {text}"
+    );
+    if rank != bad {
+        assert!(text.contains(&format!("rank {bad}")), "rank {rank}: {text}");
+    }
+    let local = vec![1.0f64; nx * ny + usize::from(rank == bad)];
+    let err = d
+        .gather(comm, &local)
+        .expect_err("one rank's block is long");
+    assert!(
+        err.to_string().contains("length of the local fields"),
+        "rank {rank}: {err}"
+    );
+    // Nothing is left half-sent: the communicator still works.
+    assert_eq!(comm.all_sum(1.0).unwrap(), size as f64);
 }
 
 #[test]

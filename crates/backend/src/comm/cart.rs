@@ -215,7 +215,8 @@ impl CartDecomposition {
     ///
     /// Errors: a communicator of another size, `depth == 0`, a `planes` length that is not
     /// a whole number of padded fields, or a block thinner than `depth` along an axis that
-    /// exchanges.
+    /// exchanges, on any rank: every rank returns the error (the others name the rank that
+    /// failed and carry its message).
     pub fn exchange_halo<T: Pod>(&self, comm: &Comm, planes: &mut [T], depth: usize) -> Result<()> {
         self.check_comm(comm)?;
         let rank = comm.rank();
@@ -223,34 +224,41 @@ impl CartDecomposition {
         let nb = self.neighbors(rank);
         let [nx, ny] = b.len;
         let d = depth;
-        if d == 0 {
-            return Err(Error::invalid("halo depth", 0, "must be >= 1"));
-        }
         let (w, hgt) = (nx + 2 * d, ny + 2 * d);
         let plane = w * hgt;
-        if planes.is_empty() || !planes.len().is_multiple_of(plane) {
-            return Err(Error::invalid(
-                "length of the padded fields",
-                planes.len(),
-                format!("must be a positive multiple of ({nx} + 2*{d}) x ({ny} + 2*{d}) = {plane}"),
-            ));
-        }
-        let count = planes.len() / plane;
-        for (axis, len, has) in [
-            (0, nx, nb.west.is_some() || nb.east.is_some()),
-            (1, ny, nb.south.is_some() || nb.north.is_some()),
-        ] {
-            if has && len < d {
+        // Every rank checks its own block and fields; the outcome is agreed before any
+        // message moves, so a bad input on one rank is an error on every rank.
+        let checked = (|| {
+            if d == 0 {
+                return Err(Error::invalid("halo depth", 0, "must be >= 1"));
+            }
+            if planes.is_empty() || !planes.len().is_multiple_of(plane) {
                 return Err(Error::invalid(
-                    format!("block of rank {rank} along axis {axis}"),
-                    len,
+                    "length of the padded fields",
+                    planes.len(),
                     format!(
-                        "a halo of depth {d} needs blocks of at least {d} cells; use fewer \
-                         ranks or a shallower halo"
+                        "must be a positive multiple of ({nx} + 2*{d}) x ({ny} + 2*{d}) = {plane}"
                     ),
                 ));
             }
-        }
+            for (axis, len, has) in [
+                (0, nx, nb.west.is_some() || nb.east.is_some()),
+                (1, ny, nb.south.is_some() || nb.north.is_some()),
+            ] {
+                if has && len < d {
+                    return Err(Error::invalid(
+                        format!("block of rank {rank} along axis {axis}"),
+                        len,
+                        format!(
+                            "a halo of depth {d} needs blocks of at least {d} cells; use \
+                             fewer ranks or a shallower halo"
+                        ),
+                    ));
+                }
+            }
+            Ok(planes.len() / plane)
+        })();
+        let count = comm.agree(checked)?;
         // Along x: columns `c0..c0 + d` of rows d..d + ny of every plane.
         let cols = |f: &[T], c0: usize| -> Vec<T> {
             let mut out = Vec::with_capacity(count * ny * d);
@@ -327,7 +335,7 @@ impl CartDecomposition {
     /// `len_x x len_y` without ghosts, concatenated); `None` on the other ranks. Collective.
     ///
     /// Errors: a communicator of another size, a `local` that is not a whole number of this
-    /// rank's blocks, or ranks that disagree on the number of fields.
+    /// rank's blocks, or ranks that disagree on the number of fields, on every rank.
     pub fn gather<T: Pod>(&self, comm: &Comm, local: &[T]) -> Result<Option<Vec<T>>> {
         self.check_comm(comm)?;
         let cells = |r: usize| {
@@ -335,15 +343,29 @@ impl CartDecomposition {
             b.len[0] * b.len[1]
         };
         let mine = cells(comm.rank());
-        if local.is_empty() || !local.len().is_multiple_of(mine) {
-            return Err(Error::invalid(
+        let checked = if local.is_empty() || !local.len().is_multiple_of(mine) {
+            Err(Error::invalid(
                 "length of the local fields",
                 local.len(),
                 format!("must be a positive multiple of this rank's block ({mine} cells)"),
-            ));
-        }
-        let count = local.len() / mine;
-        let Some(parts) = comm.gather_to_root(local)? else {
+            ))
+        } else {
+            Ok(local.len() / mine)
+        };
+        let count = comm.agree(checked)?;
+        // Rank 0 checks what arrived; its verdict is agreed too (the others have nothing
+        // to check but must not go on when rank 0 fails).
+        let gathered = comm.gather_to_root(local)?;
+        comm.agree(self.assemble(gathered, count))
+    }
+
+    /// Rank 0's global fields from the gathered blocks (`None` elsewhere).
+    fn assemble<T: Pod>(
+        &self,
+        gathered: Option<Vec<Vec<T>>>,
+        count: usize,
+    ) -> Result<Option<Vec<T>>> {
+        let Some(parts) = gathered else {
             return Ok(None);
         };
         let [gx, gy] = self.global;

@@ -324,20 +324,40 @@ impl Comm {
     }
 
     /// `local` on every rank if it is `Ok` on every rank; else this rank's error, or on the
-    /// ranks that had none an error naming the first rank that failed, so that no rank goes
-    /// on to wait for the others in a collective call (e.g. after validating inputs that
-    /// every rank checks on its own). Collective.
+    /// ranks that had none an error naming the first rank that failed and carrying its
+    /// message, so that no rank goes on to wait for the others in a collective call (e.g.
+    /// after validating inputs that every rank checks on its own). Collective: the rule for
+    /// every check that can fail inside a collective operation (one all-gather of a byte
+    /// when every rank passes; two more, of the message lengths and the messages, when one
+    /// fails).
     pub fn agree<T>(&self, local: Result<T>) -> Result<T> {
         let failed = self.all_gather(&[u8::from(local.is_err())])?;
-        match (local, failed.iter().position(|f| *f == 1)) {
-            (Err(e), _) => Err(e),
-            (Ok(_), Some(r)) => Err(Error::invalid(
+        let Some(r) = failed.iter().position(|f| *f == 1) else {
+            return local;
+        };
+        // The first failing rank's message, on every rank (each passes its own, padded to
+        // the longest: all_gather needs equal lengths).
+        let mine = match &local {
+            Err(e) => e.to_string().into_bytes(),
+            Ok(_) => Vec::new(),
+        };
+        let lens = self.all_gather(&[mine.len() as u64])?;
+        let longest = lens.iter().copied().max().unwrap_or(0) as usize;
+        let mut padded = mine;
+        padded.resize(longest, 0);
+        let all = self.all_gather(&padded)?;
+        let theirs = &all[r * longest..r * longest + lens[r] as usize];
+        match local {
+            Err(e) => Err(e),
+            Ok(_) => Err(Error::invalid(
                 format!("the inputs of rank {r}"),
                 "rejected there",
-                "see that rank's error; every rank must pass the same particles and \
-                 configuration (or checkpoint)",
+                format!(
+                    "rank {r} reported: {}; every rank must pass the same particles and \
+                     configuration (or checkpoint)",
+                    String::from_utf8_lossy(theirs)
+                ),
             )),
-            (Ok(v), None) => Ok(v),
         }
     }
 
