@@ -122,8 +122,8 @@ fn child(comm: &Comm) -> Result<usize, String> {
     Ok(1)
 }
 
-/// A bad input on exactly one rank (the last) of a halo exchange and of a gather: every rank
-/// returns an error at once (before, the others waited forever for its messages), the
+/// A bad input on exactly one rank (the last) of a halo exchange and of a gather, and a
+/// failed check on rank 0 of an indexed gather: every rank returns an error at once (before, the others waited forever for its messages), the
 /// others naming the failing rank with its message; the next collective call works.
 fn one_bad_rank(comm: &Comm) {
     let (rank, size) = (comm.rank(), comm.size());
@@ -149,6 +149,16 @@ fn one_bad_rank(comm: &Comm) {
         .expect_err("one rank's block is long");
     assert!(
         err.to_string().contains("length of the local fields"),
+        "rank {rank}: {err}"
+    );
+    // Particles that are not each held once (every rank claims particle 0): rank 0 finds
+    // it, and every rank returns the error (before, only rank 0 did).
+    let mine = [[0.0f64, rank as f64]];
+    let err = comm
+        .gather_indexed(&mine, size)
+        .expect_err("particle 0 on every rank");
+    assert!(
+        err.to_string().contains("gathered particles"),
         "rank {rank}: {err}"
     );
     // Nothing is left half-sent: the communicator still works.

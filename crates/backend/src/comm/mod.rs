@@ -430,9 +430,11 @@ impl Comm {
                 if let (true, Some(d)) = (self.is_root(), &data) {
                     bytes.copy_from_slice(bytemuck::cast_slice(d));
                 }
-                // (OpenMPI refuses an empty buffer's dangling pointer: nothing to send.)
-                if n > 0 {
-                    root.broadcast_into(&mut bytes[..]);
+                // In pieces of at most 1 GiB: MPI counts are 32-bit, so one broadcast of
+                // 2 GiB or more would fail. (OpenMPI refuses an empty buffer's dangling
+                // pointer: nothing to send then.)
+                for piece in bytes.chunks_mut(1 << 30) {
+                    root.broadcast_into(piece);
                 }
                 Ok(from_bytes(&bytes))
             }
@@ -473,8 +475,8 @@ impl Comm {
     /// element 0 of a record is the particle's global index, `0..total`) on rank 0 in
     /// global order: `Some` there, `None` on the other ranks. Collective.
     ///
-    /// Errors (on rank 0): the ranks together do not hold each of the `total` particles
-    /// exactly once.
+    /// Errors (on every rank: rank 0's check is agreed): the ranks together do not hold
+    /// each of the `total` particles exactly once, or a message rank 0 cannot read.
     pub fn gather_indexed<const K: usize>(
         &self,
         mine: &[[f64; K]],
@@ -483,19 +485,22 @@ impl Comm {
     where
         [f64; K]: Pod,
     {
-        let Some(parts) = self.gather_to_root(mine)? else {
-            return Ok(None);
-        };
-        let mut rows: Vec<[f64; K]> = parts.into_iter().flatten().collect();
-        rows.sort_by(|a, b| a[0].total_cmp(&b[0]));
-        if rows.len() != total || rows.iter().enumerate().any(|(k, r)| r[0] != k as f64) {
-            return Err(Error::invalid(
-                "gathered particles",
-                rows.len(),
-                format!("the ranks must own each of the {total} particles exactly once"),
-            ));
-        }
-        Ok(Some(rows))
+        let checked = self.gather_to_root(mine).and_then(|parts| {
+            let Some(parts) = parts else {
+                return Ok(None);
+            };
+            let mut rows: Vec<[f64; K]> = parts.into_iter().flatten().collect();
+            rows.sort_by(|a, b| a[0].total_cmp(&b[0]));
+            if rows.len() != total || rows.iter().enumerate().any(|(k, r)| r[0] != k as f64) {
+                return Err(Error::invalid(
+                    "gathered particles",
+                    rows.len(),
+                    format!("the ranks must own each of the {total} particles exactly once"),
+                ));
+            }
+            Ok(Some(rows))
+        });
+        self.agree(checked)
     }
 
     /// Every rank's `send` (any length per rank) on rank 0, in rank order: `Some` there,
