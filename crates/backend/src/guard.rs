@@ -34,8 +34,11 @@ pub const DEFAULT_CHECK_EVERY: u32 = 100;
 /// Splits the `steps` steps that follow step `done` into stretches that end on multiples of
 /// `every` (counted from step 0) and at `done + steps`; `every = 0` gives one stretch.
 /// Yields nothing for `steps = 0`.
+///
+/// Overflow-safe: the stretches stop at `u64::MAX` (a run refuses a step count that would
+/// pass it before stepping, [`end_step`]).
 pub fn chunks(done: u64, steps: u32, every: u32) -> impl Iterator<Item = u32> {
-    let end = done + u64::from(steps);
+    let end = done.saturating_add(u64::from(steps));
     let mut at = done;
     std::iter::from_fn(move || {
         if at >= end {
@@ -45,7 +48,10 @@ pub fn chunks(done: u64, steps: u32, every: u32) -> impl Iterator<Item = u32> {
             end
         } else {
             let every = u64::from(every);
-            ((at / every + 1) * every).min(end)
+            // The next multiple of `every`, or the end where that multiple is past u64::MAX.
+            (at / every + 1)
+                .checked_mul(every)
+                .map_or(end, |m| m.min(end))
         };
         let n = (next - at) as u32;
         at = next;
@@ -271,6 +277,26 @@ mod tests {
             self.log.push(format!("between {}", self.steps));
             Ok(())
         }
+    }
+
+    #[test]
+    fn a_step_count_that_would_overflow_is_refused_before_stepping() {
+        // A run resumed from a checkpoint whose step count is near u64::MAX: `step(10)`
+        // is an error naming the steps, and nothing is advanced or kept.
+        let mut t = Toy {
+            steps: u64::MAX - 5,
+            kept: 0,
+            bad: u64::MAX,
+            log: Vec::new(),
+        };
+        let e = run_guarded(&mut t, 10, 100).unwrap_err();
+        assert!(e.to_string().contains("steps"), "{e}");
+        assert_eq!(t.steps, u64::MAX - 5);
+        assert!(t.log.is_empty(), "{:?}", t.log);
+        // The stretches never overflow either: they stop at u64::MAX (before, the next
+        // multiple of `every` wrapped past it and the iterator never ended in release).
+        assert_eq!(chunks(u64::MAX - 5, 5, 100).collect::<Vec<_>>(), vec![5]);
+        assert_eq!(chunks(u64::MAX - 5, 10, 100).sum::<u32>(), 5);
     }
 
     #[test]
