@@ -582,7 +582,8 @@ fn load_history<L: ContactLaw>(s: &Dynamics, slots: usize, out: &mut [u32]) -> R
         let a = a as usize;
         if used[a] == slots {
             return Err(Error::checkpoint(format!(
-                "particle {a} has more than {slots} contacts with a history, the most the GPU                  backend keeps; resume this checkpoint on the CPU"
+                "particle {a} has more than {slots} contacts with a history, the most the GPU \
+                 backend keeps; resume this checkpoint on the CPU"
             )));
         }
         let at = (a * slots + used[a]) * SLOT_WORDS;

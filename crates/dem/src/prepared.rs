@@ -260,7 +260,8 @@ impl<L: ContactLaw> Prepared<L> {
         in_range("dt", dt, limit, precision)?;
         if scene.rotation() && config.integrator != Integrator::VelocityVerlet {
             return Err(Error::Unsupported(
-                "a rotating scene (Scene::set_rotation) integrates with velocity Verlet only;                  use Integrator::VelocityVerlet"
+                "a rotating scene (Scene::set_rotation) integrates with velocity Verlet only; \
+                 use Integrator::VelocityVerlet"
                     .into(),
             ));
         }
