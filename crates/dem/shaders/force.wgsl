@@ -1,8 +1,8 @@
 // Contact forces by gathering over the full shell of neighbour cells (one invocation per
 // particle, writing only its own acceleration), walls, gravity, and the second half kick.
 // acc.w receives the deepest overlap of the particle's contacts over the smaller radius
-// (against a wall: its radius), which the blow-up check (check.wgsl) reads, or -1 when the
-// particle has more contacts than its history slots hold.
+// (against a wall: its radius), which the blow-up check (check.wgsl) reads; a particle with
+// more contacts than its history slots hold is noted in clock[1].
 // Variants (override constants, chosen once): FRICTION, INIT (initial accelerations only),
 // ROTATION (torques, angular accelerations and the angular half kick), SLOTS (history slots
 // per particle; 0 for a law without history).
@@ -225,7 +225,6 @@ fn dem_force(
         hist[slots.write + slots.used * 8u] = 0u;
     }
     if (overflow) {
-        deepest = -1.0;
         atomicMax(&clock[1], i + 1u);
     }
     let a = f / mi;

@@ -576,7 +576,8 @@ fn the_contact_force_matches_its_wgsl_twin() {
 
 /// Input record of the history-law harness: coefficients (`a`, `b`), the contact (`c`:
 /// normal, overlap; `d`: velocity, normal velocity; `e`: relative spin, reduced mass; `f`:
-/// effective radius, time step, friction flag) and the history before (`g`, `h`).
+/// effective radius, time step, friction flag, index of the law) and the history before
+/// (`g`, `h`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct Case8 {
@@ -623,7 +624,7 @@ fn history_law_errors<L: ContactLaw<Gpu = [f32; 8]>>(
 ) -> ([f64; 3], [usize; 2]) {
     let mut cases = Vec::new();
     let mut key = 0u32;
-    for law in laws {
+    for (index, law) in laws.iter().enumerate() {
         let g = L::gpu(&law.coefficients::<f32>());
         for &delta in deltas {
             for scale in [0.0f32, 1e-5, 1e-4, 1e-3, 1e-2] {
@@ -641,7 +642,7 @@ fn history_law_errors<L: ContactLaw<Gpu = [f32; 8]>>(
                         c: [n[0], n[1], n[2], delta],
                         d: [v[0], v[1], v[2], v_n],
                         e: [u(6), u(7), u(8), 0.5 + u(9)],
-                        f: [0.25 + 0.2 * u(10), 1e-3, friction, 0.0],
+                        f: [0.25 + 0.2 * u(10), 1e-3, friction, index as f32],
                         g: [scale * u(11), scale * u(12), scale * u(13), scale * u(14)],
                         h: [scale * u(15), scale * u(16), 0.0, 0.0],
                     });
@@ -663,11 +664,7 @@ fn history_law_errors<L: ContactLaw<Gpu = [f32; 8]>>(
     let mut counts = [0usize; 2];
     for (x, out) in cases.iter().zip(&gpu) {
         let coeff: Vec<f32> = x.a.iter().chain(&x.b).copied().collect();
-        let law = laws
-            .iter()
-            .find(|l| L::gpu(&l.coefficients::<f32>())[..] == coeff[..])
-            .unwrap();
-        let c = law.coefficients::<f32>();
+        let c = laws[x.f[3] as usize].coefficients::<f32>();
         let contact = Contact {
             m_ij: x.e[3],
             delta: x.c[3],
