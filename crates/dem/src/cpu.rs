@@ -24,7 +24,7 @@ use simkit_backend::{Real, Result};
 use simkit_neighbor::{BlockedHalfList, HalfListBlock, wrap_periodic};
 
 use crate::prepared::Prepared;
-use crate::spin::{contact_point_velocity, cross, to3};
+use crate::spin::{contact_point_velocity, cross, open_spin, to3};
 use crate::{
     Contact, ContactLaw, Integrator, State, cylinder_overlap, cylinder_surface_velocity,
     pair_index, plane_overlap, reduced_mass,
@@ -1254,12 +1254,7 @@ impl<const D: usize, T: Real, L: ContactLaw> CpuEngine<D, T, L> {
     fn open_rotation(&mut self) {
         let h = T::from_f64(0.5 * self.prep.dt);
         let p = &mut self.p;
-        let open = |((w, wp), a): ((&mut [T; 3], &mut [T; 3]), &[T; 3])| {
-            for d in 0..3 {
-                w[d] += a[d] * h;
-                wp[d] = w[d] + a[d] * h;
-            }
-        };
+        let open = |((w, wp), a): ((&mut [T; 3], &mut [T; 3]), &[T; 3])| open_spin(w, wp, a, h);
         if self.parallel {
             p.omega
                 .par_iter_mut()

@@ -19,17 +19,46 @@ use crate::cpu::{
 use crate::engine::model_name;
 use crate::prepared::Prepared;
 use crate::sim::{decode, encode};
+use crate::spin::open_spin;
 use crate::{Config, ContactLaw, Diagnostics, Integrator, Material, Scene, State, diagnostics};
+
+mod contacts;
+
+use contacts::RankHistory;
 
 /// Owned particles per rayon task of the per-particle passes.
 const CHUNK: usize = 1024;
 
-/// The shared column of [`RankParticles`] (owned and ghosts): the velocities the dashpots
-/// read, predicted at the force time.
+/// The shared columns of [`RankParticles`] (owned and ghosts): the velocities the dashpots
+/// read, predicted at the force time, and (rotating scenes) the angular velocities
+/// predicted at the force time.
 const AUX: usize = 0;
-/// The owned columns: velocities and accelerations.
+const SPIN_P: usize = 1;
+/// The owned columns: velocities and accelerations, and (rotating scenes) angular
+/// velocities and angular accelerations. An angular 3-vector is held in a `D`-column: as
+/// it is in 3D, its z component first in 2D ([`to_column`]).
 const VEL: usize = 0;
 const ACC: usize = 1;
+const SPIN: usize = 2;
+const ALPHA: usize = 3;
+
+/// An angular 3-vector in a `D`-column (2D: `[w_z, 0]`).
+fn to_column<const D: usize>(w: [f64; 3]) -> [f64; D] {
+    std::array::from_fn(|d| match (D, d) {
+        (3, _) => w[d],
+        (_, 0) => w[2],
+        _ => 0.0,
+    })
+}
+
+/// The angular 3-vector of a `D`-column (the inverse of [`to_column`]).
+fn from_column<const D: usize>(c: &[f64; D]) -> [f64; 3] {
+    if D == 3 {
+        std::array::from_fn(|d| c[d])
+    } else {
+        [0.0, 0.0, c[0]]
+    }
+}
 
 /// Granular DEM over the ranks of a [`Comm`] (CPU, `f64`, velocity Verlet): spatial
 /// decomposition with ghost particles, results independent of the rank count.
@@ -55,6 +84,19 @@ const ACC: usize = 1;
 /// with the reactions of its half list: the two agree to rounding at first (about 1e-15
 /// relative per step), and as any two codes that round differently they part like the
 /// trajectories of a chaotic system over long runs, with the same statistics.
+///
+/// **Rotation and contact history** run as in [`crate::Dem`]: a rotating scene integrates
+/// the angular velocities with the translation's velocity Verlet scheme (the angular
+/// velocity predicted at the force time travels to the ghosts with the predicted velocity),
+/// and a law that keeps a history ([`ContactLaw::HISTORY`], at most 12 values here) keeps
+/// it per contact *from each end*: every owned particle holds its own copy of the history
+/// of each of its contacts (the partner named by its scene index, walls included), advanced
+/// by its own force evaluation, so that no copy depends on which rank holds the partner.
+/// The two copies of a pair are mirror images (the law's
+/// [`swap_history`](ContactLaw::swap_history) of each other). A copy travels with its
+/// particle when the particle migrates, comes back with the blow-up guard's rollback, and
+/// goes into checkpoints (both copies of every pair; [`crate::Dem`] resumes them, and a
+/// [`crate::Dem`] checkpoint, which holds one copy per pair, gives both ends theirs).
 ///
 /// Position Verlet, `f32` and the GPU are not offered here (use [`crate::Dem`]).
 ///
@@ -195,7 +237,12 @@ impl<L: ContactLaw> Simulation for DistributedDem<L> {
     /// on rank 0 and sent to every rank. Collective.
     fn state(&mut self) -> Result<State> {
         let species = by_dim!(self.run.engine(), e => e.prep.species.clone());
-        self.run.state(&species)
+        let mut state = self.run.state(&species)?;
+        let comm = self.run.comm();
+        let spins = by_dim!(self.run.engine(), e => e.gather_spins(comm));
+        let spins = comm.share_from_root(spins)?;
+        state.angular_velocities = spins.chunks_exact(3).map(|w| [w[0], w[1], w[2]]).collect();
+        Ok(state)
     }
 
     fn steps_done(&self) -> u64 {
@@ -269,16 +316,8 @@ fn prepare<L: ContactLaw>(scene: &Scene<L>, config: &Config) -> Result<Prepared<
                 .into(),
         ));
     }
-    if scene.rotation() || L::HISTORY > 0 {
-        return Err(Error::Unsupported(format!(
-            "DistributedDem does not yet carry rotation or per-contact history across \
-             ranks (scene rotation: {}, law '{}' keeps {} values per contact); run the scene \
-             with Dem on the CPU backend",
-            scene.rotation(),
-            L::NAME,
-            L::HISTORY
-        )));
-    }
+    // Refused before the scene is prepared: the law's history must fit a record.
+    RankHistory::new(L::HISTORY, 0, 0)?;
     let prep = Prepared::new(scene, config, false)?;
     diagnostics::check_initial_overlaps(&prep)?;
     Ok(prep)
@@ -286,26 +325,34 @@ fn prepare<L: ContactLaw>(scene: &Scene<L>, config: &Config) -> Result<Prepared<
 
 /// What a blow-up check found on a rank, as the ranks exchange it: `[kind, id, a, b, c]`
 /// with kind 0 (non-finite position: a = axis, b = value), 1 (non-finite velocity), 2
-/// (outside the box: a = axis, b = coordinate), 3 (overlap: a = ratio, b = 0 for a particle
-/// or 1 for a wall, c = its index), 4 (nothing).
-const NOTHING: Finding = [4.0, 0.0, 0.0, 0.0, 0.0];
+/// (non-finite angular velocity), 3 (outside the box: a = axis, b = coordinate), 4
+/// (overlap: a = ratio, b = 0 for a particle or 1 for a wall, c = its index), 5 (nothing).
+const NOTHING: Finding = [5.0, 0.0, 0.0, 0.0, 0.0];
+/// The overlap kind of a [`Finding`].
+const OVERLAP: f64 = 4.0;
 
-/// This rank's part of the run in dimension `D`: its particles ([`RankParticles`]) and
-/// the contact law's inputs.
+/// This rank's part of the run in dimension `D`: its particles ([`RankParticles`]), their
+/// contact history ([`RankHistory`]) and the contact law's inputs.
 struct Engine<const D: usize, L: ContactLaw> {
     prep: Prepared<L>,
     p: RankParticles<D, ()>,
+    history: RankHistory,
     time: f64,
     started: bool,
     steps: u64,
     /// The clock of the guard's copy: time, started, steps.
     kept: (f64, bool, u64),
-    /// Radius, mass and species of every local entry (owned, then ghosts), and `1 / m` of
-    /// the owned particles, from the scene by global index after every list build.
+    /// Radius, mass and species of every local entry (owned, then ghosts), and `1 / m` and
+    /// `1 / I` (rotating scenes) of the owned particles, from the scene by global index
+    /// after every list build.
     radius: Vec<f64>,
     mass: Vec<f64>,
     species: Vec<u32>,
     inv_mass: Vec<f64>,
+    inv_inertia: Vec<f64>,
+    /// Rotating scenes: the predicted angular velocities of every local entry as
+    /// 3-vectors (from the shared column, before each force pass).
+    omega_p: Vec<[f64; 3]>,
     coeff: Vec<L::Coeff<f64>>,
     walls: Vec<WallT<f64, L::Coeff<f64>>>,
     gravity: [f64; D],
@@ -344,8 +391,16 @@ where
             std::array::from_fn(|d| prep.periodic[d]),
         );
         let list = GhostedList::new(domain, periodic_z, range)?;
+        let spin = usize::from(prep.rotation);
         Ok(Self {
-            p: RankParticles::new(list, (lo, len, periodic), vec![(); prep.n], 1, 2)?,
+            p: RankParticles::new(
+                list,
+                (lo, len, periodic),
+                vec![(); prep.n],
+                1 + spin,
+                2 + 2 * spin,
+            )?,
+            history: RankHistory::new(L::HISTORY, prep.walls.len(), prep.n)?,
             time: 0.0,
             started: false,
             steps: 0,
@@ -354,6 +409,8 @@ where
             mass: Vec::new(),
             species: Vec::new(),
             inv_mass: Vec::new(),
+            inv_inertia: Vec::new(),
+            omega_p: Vec::new(),
             coeff: prep.pairs.iter().map(L::coefficients).collect(),
             walls: walls_of::<f64, D, L>(&prep),
             gravity,
@@ -366,16 +423,18 @@ where
         })
     }
 
-    /// The scene's radius, mass and species of every local entry (after a list build).
+    /// The scene's radius, mass and species of every local entry, and the inverse masses
+    /// and moments of inertia of the owned particles (after a list build).
     fn sync(&mut self) {
         let (p, ids) = (&self.prep, self.p.id());
         self.radius = ids.iter().map(|&i| p.radius[i as usize]).collect();
         self.mass = ids.iter().map(|&i| p.mass[i as usize]).collect();
         self.species = ids.iter().map(|&i| p.species[i as usize]).collect();
-        self.inv_mass = self.mass[..self.p.owned()]
-            .iter()
-            .map(|m| 1.0 / m)
-            .collect();
+        let owned = &ids[..self.p.owned()];
+        self.inv_mass = owned.iter().map(|&i| 1.0 / p.mass[i as usize]).collect();
+        if p.rotation {
+            self.inv_inertia = owned.iter().map(|&i| 1.0 / p.inertia[i as usize]).collect();
+        }
     }
 
     /// The initial state: every rank takes the scene's particles in its region.
@@ -385,19 +444,23 @@ where
             .p
             .start(comm, |i| std::array::from_fn(|d| prep.positions[i][d]));
         for (k, &i) in mine.iter().enumerate() {
-            let v = std::array::from_fn(|d| self.prep.velocities[i][d]);
+            let v = std::array::from_fn(|d| prep.velocities[i][d]);
             self.p.set(false, VEL, k, v);
+            if prep.rotation {
+                self.p.set(false, SPIN, k, to_column(prep.omega[i]));
+            }
         }
-        self.p.rebuild(comm)?;
-        self.sync();
-        Ok(())
+        self.rebuild(comm)
     }
 
     /// A checkpointed state: every rank takes the particles whose list-build position lies
-    /// in its region (where the run that wrote it had them).
+    /// in its region (where the run that wrote it had them), with their angular velocities
+    /// and the history of their contacts (a pair stored once, as [`crate::Dem`] stores it,
+    /// gives the other end its mirror image).
     fn load(&mut self, comm: &Comm, s: &Dynamics) -> Result<()> {
         let n = self.prep.n;
         s.check(n, D, &["pos", "vel", "acc", "aux", "reference"])?;
+        self.prep.check_saved_extras(s)?;
         let at = |v: &[f64], k: usize| -> [f64; D] { Dynamics::at(v, k) };
         let mine = self
             .p
@@ -407,30 +470,71 @@ where
             self.p.set(false, VEL, k, at(&s.vel, slot));
             self.p.set(false, ACC, k, at(&s.acc, slot));
             self.p.set(true, AUX, k, at(&s.aux, slot));
+            if self.prep.rotation {
+                let w = |c: usize| to_column(std::array::from_fn(|d| s.spin[9 * slot + c + d]));
+                self.p.set(false, SPIN, k, w(0));
+                self.p.set(false, ALPHA, k, w(3));
+                self.p.set(true, SPIN_P, k, w(6));
+            }
         }
         (self.time, self.started, self.steps) = (s.time, s.started, s.steps);
         self.p.relist(comm)?;
         self.sync();
+        let h = L::HISTORY;
+        let index: std::collections::HashMap<[u32; 2], usize> = s
+            .contacts
+            .iter()
+            .enumerate()
+            .map(|(k, &key)| (key, k))
+            .collect();
+        let n = n as u32;
+        self.history.assign(&self.p, |i, partner, out| {
+            let value = |k: usize| &s.history[k * h..(k + 1) * h];
+            if let Some(&k) = index.get(&[i, partner]) {
+                out.copy_from_slice(value(k));
+            } else if let Some(&k) = (partner < n).then(|| index.get(&[partner, i])).flatten() {
+                out.copy_from_slice(value(k));
+                L::swap_history(out);
+            }
+        });
         Ok(())
     }
 
-    /// A list build with migration ([`RankParticles::rebuild`]).
+    /// A list build with migration ([`RankParticles::rebuild`]); the contact history
+    /// travels with its particles.
     fn rebuild(&mut self, comm: &Comm) -> Result<()> {
+        let moved = if self.history.on() {
+            let records = self.history.records(&self.p);
+            self.p
+                .list()
+                .domain()
+                .migrate(comm, records, |r| [r[2], r[3]])?
+        } else {
+            Vec::new()
+        };
         self.p.rebuild(comm)?;
         self.sync();
+        self.history.assign_records(&self.p, &moved);
         Ok(())
     }
-    /// Forces at the current time from the positions and predicted velocities into
-    /// `acc` (as accelerations).
+
+    /// Forces and torques at the current time from the positions and predicted
+    /// velocities into `acc` and `alpha` (as accelerations), advancing the contact history.
     fn forces(&mut self) {
-        if self.prep.friction {
-            self.forces_variant::<true>();
-        } else {
-            self.forces_variant::<false>();
+        if self.prep.rotation {
+            let w = self.p.shared(SPIN_P);
+            self.omega_p.clear();
+            self.omega_p.extend(w.iter().map(from_column));
+        }
+        match (self.prep.friction, self.prep.rotation) {
+            (true, true) => self.forces_variant::<true, true>(),
+            (true, false) => self.forces_variant::<true, false>(),
+            (false, true) => self.forces_variant::<false, true>(),
+            (false, false) => self.forces_variant::<false, false>(),
         }
     }
 
-    fn forces_variant<const FRICTION: bool>(&mut self) {
+    fn forces_variant<const FRICTION: bool, const ROT: bool>(&mut self) {
         let (zw, vw) = self.prep.wall_motion(self.time);
         let parts = self.p.parts();
         let inp = ForceInput {
@@ -439,7 +543,7 @@ where
             radius: &self.radius,
             mass: &self.mass,
             species: &self.species,
-            omega: &[],
+            omega: &self.omega_p,
             dt: self.prep.dt,
             n_species: self.prep.n_species,
             coeff: &self.coeff,
@@ -454,42 +558,52 @@ where
             cut2: self.cut2,
             block: usize::MAX,
         };
-        let (list, inv_mass) = (parts.list, &self.inv_mass);
-        parts.cols[ACC]
+        let (list, inv_mass, inv_inertia) = (parts.list, &self.inv_mass, &self.inv_inertia);
+        let (vel_acc, spins) = parts.cols.split_at_mut(SPIN);
+        let count = parts.owned.div_ceil(CHUNK);
+        // Without rotation there are no torques: an empty slice per chunk.
+        let alpha: Vec<&mut [[f64; D]]> = match spins.get_mut(ALPHA - SPIN) {
+            Some(a) => a.chunks_mut(CHUNK).collect(),
+            None => (0..count).map(|_| Default::default()).collect(),
+        };
+        let hist = self.history.chunks(parts.owned, CHUNK);
+        vel_acc[ACC]
             .par_chunks_mut(CHUNK)
+            .zip(alpha)
+            .zip(hist)
             .enumerate()
-            .for_each(|(c, acc)| {
+            .for_each(|(c, ((acc, alpha), mut hist))| {
                 for (k, a) in acc.iter_mut().enumerate() {
                     let i = c * CHUNK + k;
                     let mut f = [0.0; D];
+                    let mut t = [0.0; 3];
                     for (f, g) in f.iter_mut().zip(inp.gravity) {
                         *f += g * inp.mass[i];
                     }
-                    for w in inp.walls {
-                        let mut torque = [0.0; 3];
-                        wall_force::<f64, D, L, FRICTION, false>(
-                            &inp,
-                            w,
-                            i,
-                            &mut [],
-                            &mut f,
-                            &mut torque,
-                        );
+                    for (w, wall) in inp.walls.iter().enumerate() {
+                        let hw = hist.wall(k, w);
+                        wall_force::<f64, D, L, FRICTION, ROT>(&inp, wall, i, hw, &mut f, &mut t);
                     }
                     let xi = inp.pos[i];
-                    for &j in list.partners(i) {
+                    for (e, &j) in list.partners(i).iter().enumerate() {
                         let j = j as usize;
                         let sep: [f64; D] = std::array::from_fn(|d| xi[d] - inp.pos[j][d]);
-                        let fp =
-                            contact_force::<f64, D, L, FRICTION, false>(&inp, i, j, sep, &mut []);
+                        let hp = hist.pair(k, e);
+                        let fp = contact_force::<f64, D, L, FRICTION, ROT>(&inp, i, j, sep, hp);
                         if let Some(fp) = fp {
                             for (f, x) in f.iter_mut().zip(fp.f) {
                                 *f += x;
+                            }
+                            for (t, x) in t.iter_mut().zip(fp.t_i) {
+                                *t += x;
                             }
                         }
                     }
                     for d in 0..D {
                         a[d] = f[d] * inv_mass[i];
+                    }
+                    if ROT {
+                        alpha[k] = to_column(t.map(|x| x * inv_inertia[i]));
                     }
                 }
             });
@@ -500,10 +614,14 @@ where
         if steps == 0 {
             return Ok(());
         }
+        let rotation = self.prep.rotation;
         if !self.started {
             let parts = self.p.parts();
             let n = parts.owned;
             parts.shared[AUX][..n].copy_from_slice(&parts.cols[VEL]);
+            if rotation {
+                parts.shared[SPIN_P][..n].copy_from_slice(&parts.cols[SPIN]);
+            }
             self.p.refresh(comm)?;
             self.forces();
             self.started = true;
@@ -515,13 +633,21 @@ where
             let max2 = {
                 let parts = self.p.parts();
                 let n = parts.owned;
-                let (pos, aux) = (&mut parts.pos[..n], &mut parts.shared[AUX][..n]);
-                let [vel, acc] = parts.cols else {
+                let (pos, shared) = (&mut parts.pos[..n], &mut *parts.shared);
+                let [vel, acc, spins @ ..] = &mut *parts.cols else {
                     unreachable!("dem's columns")
                 };
+                if let [w, alpha] = spins {
+                    open_spin(
+                        w.as_flattened_mut(),
+                        &mut shared[SPIN_P].as_flattened_mut()[..n * D],
+                        alpha.as_flattened(),
+                        h,
+                    );
+                }
                 pos.par_chunks_mut(CHUNK)
                     .zip(vel.par_chunks_mut(CHUNK))
-                    .zip(aux.par_chunks_mut(CHUNK))
+                    .zip(shared[AUX][..n].par_chunks_mut(CHUNK))
                     .zip(acc.par_chunks(CHUNK))
                     .zip(parts.reference.par_chunks(CHUNK))
                     .map(|((((x, v), vp), a), r)| {
@@ -544,37 +670,35 @@ where
                 self.p.refresh(comm)?;
             }
             self.forces();
-            let [vel, acc] = self.p.parts().cols else {
+            let [vel, acc, spins @ ..] = &mut *self.p.parts().cols else {
                 unreachable!("dem's columns")
             };
-            vel.par_chunks_mut(CHUNK)
-                .zip(acc.par_chunks(CHUNK))
-                .for_each(|(v, a)| {
-                    for (v, a) in v.iter_mut().zip(a) {
-                        for d in 0..D {
-                            v[d] += a[d] * h;
-                        }
-                    }
-                });
+            kick(vel, acc, h);
+            if let [w, alpha] = spins {
+                kick(w, alpha, h);
+            }
         }
         Ok(())
     }
 
-    /// This rank's first finding: non-finite position, non-finite velocity, a particle
-    /// outside the box by more than its radius (each the smallest scene index of its
-    /// kind), the deepest contact over `max_overlap`.
+    /// This rank's first finding: non-finite position, velocity or angular velocity, a
+    /// particle outside the box by more than its radius (each the smallest scene index of
+    /// its kind), the deepest contact over `max_overlap`.
     fn check(&self) -> Finding {
         let (p, n) = (&self.p, self.p.owned());
         let (pos, id) = (p.pos(), p.id());
         let mut found = NOTHING;
-        for (kind, v) in [(0.0, &pos[..n]), (1.0, p.col(VEL))] {
+        let spin: &[[f64; D]] = if self.prep.rotation { p.col(SPIN) } else { &[] };
+        for (kind, v) in [(0.0, &pos[..n]), (1.0, p.col(VEL)), (2.0, spin)] {
             for (k, x) in v.iter().enumerate() {
                 if let Some(d) = (0..D).find(|&d| !x[d].is_finite()) {
-                    found = worse(found, [kind, f64::from(id[k]), d as f64, x[d], 0.0]);
+                    // An angular velocity names its axis (2D: z).
+                    let axis = if kind == 2.0 && D == 2 { 2 } else { d };
+                    found = worse(found, [kind, f64::from(id[k]), axis as f64, x[d], 0.0]);
                 }
             }
         }
-        if found[0] < 4.0 {
+        if found[0] < NOTHING[0] {
             return found;
         }
         for d in (0..D).filter(|&d| !self.periodic[d]) {
@@ -583,11 +707,11 @@ where
             for (k, x) in pos[..n].iter().enumerate() {
                 let r = self.radius[k];
                 if x[d] < lo - r || x[d] > hi + r {
-                    found = worse(found, [2.0, f64::from(id[k]), d as f64, x[d], 0.0]);
+                    found = worse(found, [3.0, f64::from(id[k]), d as f64, x[d], 0.0]);
                 }
             }
         }
-        if found[0] < 4.0 || !self.prep.max_overlap.is_finite() {
+        if found[0] < NOTHING[0] || !self.prep.max_overlap.is_finite() {
             return found;
         }
         let (zw, _) = self.prep.wall_motion(self.time);
@@ -601,7 +725,7 @@ where
                 let rj = self.radius[j];
                 let ratio = (ri + rj - r2.sqrt()) / ri.min(rj);
                 if ratio > self.prep.max_overlap {
-                    found = worse(found, [3.0, me, ratio, 0.0, f64::from(id[j])]);
+                    found = worse(found, [OVERLAP, me, ratio, 0.0, f64::from(id[j])]);
                 }
             }
             let mut x = xi;
@@ -610,7 +734,7 @@ where
                 let at = if wt.wrap { x } else { xi };
                 let ratio = pw.overlap(&at, ri, zw, vert) / ri;
                 if ratio > self.prep.max_overlap {
-                    found = worse(found, [3.0, me, ratio, 1.0, w as f64]);
+                    found = worse(found, [OVERLAP, me, ratio, 1.0, w as f64]);
                 }
             }
         }
@@ -622,14 +746,14 @@ where
         let (kind, id) = (f[0] as usize, f[1] as usize);
         let p = &self.prep;
         match kind {
-            0 | 1 => {
-                let name = if kind == 0 { "position" } else { "velocity" };
+            0..=2 => {
+                let name = ["position", "velocity", "angular velocity"][kind];
                 (
                     format!("particle {id}: {name} {} = {}", AXES[f[2] as usize], f[3]),
                     p.non_finite_cause(),
                 )
             }
-            2 => {
+            3 => {
                 let d = f[2] as usize;
                 let (lo, hi) = (p.lo[d], p.lo[d] + p.len[d]);
                 (
@@ -660,10 +784,14 @@ where
     }
 
     /// Every particle's record on rank 0 in scene order (`None` elsewhere): position as the
-    /// run holds it, velocity, acceleration, predicted velocity, list-build position.
+    /// run holds it, velocity, acceleration, predicted velocity, list-build position
+    /// (`D` values each at 0, 3, 6, 9, 12 after the index), then in a rotating scene the
+    /// angular velocity, angular acceleration and predicted angular velocity (3 values each
+    /// at 15, 18, 21).
     fn gather(&self, comm: &Comm) -> Result<Option<Vec<[f64; RECORD]>>> {
         let p = &self.p;
         let (vel, acc, aux) = (p.col(VEL), p.col(ACC), p.shared(AUX));
+        let rotation = self.prep.rotation;
         p.gather(comm, |k| {
             let mut r = [0.0; RECORD - 1];
             for (o, v) in [
@@ -675,9 +803,70 @@ where
             ] {
                 r[o..o + D].copy_from_slice(v);
             }
+            if rotation {
+                for (o, v) in [
+                    (15, &p.col(SPIN)[k]),
+                    (18, &p.col(ALPHA)[k]),
+                    (21, &p.shared(SPIN_P)[k]),
+                ] {
+                    r[o..o + 3].copy_from_slice(&from_column(v));
+                }
+            }
             r
         })
     }
+
+    /// Every particle's angular velocity on rank 0 in scene order (`None` elsewhere; empty
+    /// without rotation).
+    fn gather_spins(&self, comm: &Comm) -> Result<Option<Vec<f64>>> {
+        if !self.prep.rotation {
+            return Ok(Some(Vec::new()));
+        }
+        let p = &self.p;
+        let rows = p.gather(comm, |k| {
+            let mut r = [0.0; RECORD - 1];
+            r[..3].copy_from_slice(&from_column(&p.col(SPIN)[k]));
+            r
+        })?;
+        Ok(rows.map(|rows| rows.iter().flat_map(|r| [r[1], r[2], r[3]]).collect()))
+    }
+
+    /// Every contact history of the run on rank 0 (`None` elsewhere), both copies of each
+    /// pair, sorted by `(particle, partner)` (the same on any rank count).
+    fn gather_history(&self, comm: &Comm) -> Result<Option<Contacts>> {
+        let h = L::HISTORY;
+        if h == 0 {
+            return Ok(Some(Default::default()));
+        }
+        let parts = comm.gather_to_root(&self.history.records(&self.p))?;
+        Ok(parts.map(|parts| {
+            let mut all: Vec<_> = parts.into_iter().flatten().collect();
+            all.sort_by_key(|r| (r[0] as u32, r[1] as u32));
+            let keys = all.iter().map(|r| [r[0] as u32, r[1] as u32]).collect();
+            let values = all
+                .iter()
+                .flat_map(|r| r[4..4 + h].iter().copied())
+                .collect();
+            (keys, values)
+        }))
+    }
+}
+
+/// Contact keys `(particle, partner)` and their history values, as a checkpoint stores them.
+type Contacts = (Vec<[u32; 2]>, Vec<f64>);
+
+/// The closing half kick `v += a dt / 2` (`h = dt / 2`) of owned particles' velocities or
+/// angular velocities.
+fn kick<const D: usize>(v: &mut [[f64; D]], a: &[[f64; D]], h: f64) {
+    v.par_chunks_mut(CHUNK)
+        .zip(a.par_chunks(CHUNK))
+        .for_each(|(v, a)| {
+            for (v, a) in v.iter_mut().zip(a) {
+                for d in 0..D {
+                    v[d] += a[d] * h;
+                }
+            }
+        });
 }
 
 /// The finding to report of two: the lower kind; within non-finite values and escapes the
@@ -686,7 +875,7 @@ fn worse(a: Finding, b: Finding) -> Finding {
     if b[0] != a[0] {
         return if b[0] < a[0] { b } else { a };
     }
-    if a[0] == 3.0 {
+    if a[0] == OVERLAP {
         if b[2] > a[2] || (b[2] == a[2] && b[1] < a[1]) {
             return b;
         }
@@ -713,6 +902,7 @@ where
     fn keep(&mut self) -> Result<()> {
         let e = &mut *self.e;
         e.p.keep();
+        e.history.keep(&e.p);
         e.kept = (e.time, e.started, e.steps);
         Ok(())
     }
@@ -739,6 +929,7 @@ where
         let e = &mut *self.e;
         e.p.restore(self.comm)?;
         e.sync();
+        e.history.restore(&e.p);
         (e.time, e.started, e.steps) = e.kept;
         Ok(())
     }
@@ -788,7 +979,9 @@ where
 
     fn gather_dynamics(&self, comm: &Comm) -> Result<Option<Dynamics>> {
         let rows = self.gather(comm)?;
-        Ok(rows.map(|rows| {
+        let history = self.gather_history(comm)?;
+        let rotation = self.prep.rotation;
+        Ok(rows.zip(history).map(|(rows, (contacts, history))| {
             let column = |o: usize| -> Vec<f64> {
                 rows.iter()
                     .flat_map(|r| r[o..o + D].iter().copied())
@@ -805,7 +998,15 @@ where
                 acc: column(7),
                 aux: column(10),
                 reference: column(13),
-                ..Dynamics::default()
+                spin: if rotation {
+                    rows.iter()
+                        .flat_map(|r| r[16..25].iter().copied())
+                        .collect()
+                } else {
+                    Vec::new()
+                },
+                contacts,
+                history,
             }
         }))
     }

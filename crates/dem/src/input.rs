@@ -352,8 +352,8 @@ impl<L: ContactLaw> Scene<L> {
     /// Verlet scheme of the translation (half kick, predicted angular velocity at the force
     /// time, second half kick, as LAMMPS `fix nve/sphere`), with the moment of inertia of a
     /// solid disc or sphere ([`crate::moment_of_inertia`]). Off by default: a scene without
-    /// it pays nothing for rotation. CPU backend of [`crate::Dem`] only (the GPU backend
-    /// and [`crate::DistributedDem`] refuse it); velocity Verlet only.
+    /// it pays nothing for rotation. Both backends of [`crate::Dem`] and
+    /// [`crate::DistributedDem`]; velocity Verlet only.
     pub fn set_rotation(&mut self, on: bool) -> &mut Self {
         self.rotation = on;
         self

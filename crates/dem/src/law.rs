@@ -89,9 +89,8 @@ impl<T: Real, const D: usize> ContactForce<T, D> {
 /// Both backends of [`Dem`](crate::Dem) run every law: the CPU backend keeps a law's history
 /// per contact of its lists, the GPU backend per particle and contact partner
 /// (`docs/dem.md`, "Contact history on the GPU").
-/// [`DistributedDem`](crate::DistributedDem) refuses laws with a history (and rotating
-/// scenes) with [`simkit_backend::Error::Unsupported`] until its ranks carry per-contact
-/// state.
+/// [`DistributedDem`](crate::DistributedDem) keeps it per particle and partner too, and
+/// migrates it with the particles (at most 12 values per contact there).
 pub trait ContactLaw:
     Copy + Debug + PartialEq + Send + Sync + Serialize + DeserializeOwned + 'static
 {

@@ -14,6 +14,17 @@ pub fn moment_of_inertia(dim: Dim, m: f64, r: f64) -> f64 {
     }
 }
 
+/// The opening half kick of a velocity Verlet step for the rotation: `w += alpha dt / 2`,
+/// then the angular velocity predicted at the force time, `w_p = w + alpha dt / 2` (the
+/// translation's scheme), component by component; `h = dt / 2`.
+#[inline(always)]
+pub(crate) fn open_spin<T: Real>(w: &mut [T], w_p: &mut [T], alpha: &[T], h: T) {
+    for ((w, wp), &a) in w.iter_mut().zip(w_p.iter_mut()).zip(alpha) {
+        *w += a * h;
+        *wp = *w + a * h;
+    }
+}
+
 /// A `D`-vector as a 3-vector (`z = 0` in 2D).
 #[inline(always)]
 pub(crate) fn to3<T: Real, const D: usize>(v: &[T; D]) -> [T; 3] {

@@ -40,7 +40,7 @@ fn ranks_2_3_4_match_one_process_bit_for_bit() {
     check_on_ranks(
         "ranks_2_3_4_match_one_process_bit_for_bit",
         &[2, 3, 4],
-        26,
+        38,
         cases,
     );
 }

@@ -10,7 +10,7 @@ use simkit_backend::{Error, Result};
 use crate::GhostedList;
 
 /// Values in a [`Record`]: the global index, the position and the per-particle columns.
-pub const RECORD: usize = 16;
+pub const RECORD: usize = 32;
 
 /// A particle as it travels between ranks (migration, gathers in global order): its global
 /// index, then its position and columns, `D` values each (see [`RankParticles`]); unused
@@ -103,7 +103,7 @@ where
     /// len)` with `periodic` axes, for a run whose particles have the constants `table`,
     /// with `shared` shared and `cols` owned columns.
     ///
-    /// Errors: more columns than a [`Record`] holds (`1 + D (1 + shared + cols) <= 16`).
+    /// Errors: more columns than a [`Record`] holds (`1 + D (1 + shared + cols) <= 32`).
     pub fn new(
         list: GhostedList<D>,
         box_: ([f64; D], [f64; D], [bool; D]),
@@ -526,7 +526,7 @@ mod tests {
         let domain = ParticleDomain::new([0.0; 2], [8.0; 2], [true; 2], 1.2, None, 1).unwrap();
         let list = GhostedList::<3>::new(domain, None, 1.2).unwrap();
         assert!(
-            RankParticles::<3, u32>::new(list, ([0.0; 3], [8.0; 3], [true; 3]), vec![], 1, 4)
+            RankParticles::<3, u32>::new(list, ([0.0; 3], [8.0; 3], [true; 3]), vec![], 3, 7)
                 .is_err()
         );
     }

@@ -6,17 +6,37 @@
 use simkit_backend::Distributed;
 use simkit_backend::comm::Comm;
 use simkit_backend::{Error, Simulation};
-use simkit_dem::scenes::{BedParams, granular_box, vibrating_bed};
-use simkit_dem::{Config, Dim, DistributedDem, Material, Particle, Scene, State};
+use simkit_dem::scenes::{BedParams, granular_box, granular_box_history, vibrating_bed};
+use simkit_dem::{
+    Config, ContactLaw, Dim, DistributedDem, HertzMindlin, Material, Particle, Scene, Solid, State,
+};
 
 /// A periodic gas of `n_side^D` grains of radius 0.5 on a lattice of spacing `spacing`,
 /// masses 1 and 2, pseudo-random velocities of about `speed`, Coulomb friction.
 pub fn gas(dim: Dim, n_side: usize, spacing: f64, speed: f64) -> Scene {
+    let m = Material::new(0.8, 0.05).with_friction(0.4, 20.0);
+    gas_with(dim, n_side, spacing, speed, m)
+}
+
+/// [`gas`] of rotating grains in contact law `law`.
+pub fn rough_gas<L: ContactLaw>(
+    dim: Dim,
+    n_side: usize,
+    spacing: f64,
+    speed: f64,
+    law: L,
+) -> Scene<L> {
+    let mut s = gas_with(dim, n_side, spacing, speed, law);
+    s.set_rotation(true);
+    s
+}
+
+/// [`gas`] with contact law `law`.
+fn gas_with<L: ContactLaw>(dim: Dim, n_side: usize, spacing: f64, speed: f64, law: L) -> Scene<L> {
     let l = n_side as f64 * spacing;
     let three = dim == Dim::Three;
     let hi = [l, l, if three { l } else { 0.0 }];
-    let m = Material::new(0.8, 0.05).with_friction(0.4, 20.0);
-    let mut s = Scene::new(dim, [0.0; 3], hi, m).unwrap();
+    let mut s = Scene::new(dim, [0.0; 3], hi, law).unwrap();
     s.set_periodic([true; 3]);
     let nz = if three { n_side } else { 1 };
     let mut k = 0u32;
@@ -48,7 +68,7 @@ pub fn gas(dim: Dim, n_side: usize, spacing: f64, speed: f64) -> Scene {
 /// a vibrating floor, friction), periodic 2D and 3D gases (particles crossing the periodic
 /// faces and the region borders), and the 3D pile on a floor of the LAMMPS deck (periodic
 /// x and y).
-pub fn cases() -> Vec<(&'static str, Scene, Config, u32)> {
+pub fn cases() -> Vec<Case<Material>> {
     let bed = BedParams {
         n: 240,
         width: 24,
@@ -78,11 +98,48 @@ pub fn cases() -> Vec<(&'static str, Scene, Config, u32)> {
     ]
 }
 
-/// The bits of positions and velocities (so -0.0 differs from 0.0).
+/// A case: its name, scene, settings and step count.
+pub type Case<L> = (&'static str, Scene<L>, Config, u32);
+
+/// Hertz–Mindlin with sliding and rolling friction (`E = 1e5`, `nu = 0.3`, `e = 0.7`,
+/// `mu = 0.4`, rolling `mu_r = 0.05`).
+pub fn rough_law() -> HertzMindlin {
+    let solid = Solid::new(1e5, 0.3);
+    HertzMindlin::new(solid, solid, 0.7, 0.4)
+        .unwrap()
+        .with_rolling(0.05, 2000.0, 20.0)
+}
+
+/// The cases with rotation and contact history: a rough periodic 2D gas (Hertz–Mindlin with
+/// rolling resistance) and the 3D box of the LAMMPS comparison with `hooke/history`
+/// physics (a floor, periodic sides).
+pub fn history_cases() -> (Case<HertzMindlin>, Case<simkit_dem::LinearHistory>) {
+    let box_config = Config {
+        dt: Some(1e-4),
+        ..Config::default()
+    };
+    (
+        (
+            "rough 2D gas (Hertz–Mindlin, rolling)",
+            rough_gas(Dim::Two, 16, 1.1, 3.0, rough_law()),
+            Config::default(),
+            600,
+        ),
+        (
+            "3D box with history (hooke/history)",
+            granular_box_history(8, 8, 3, 5).unwrap(),
+            box_config,
+            400,
+        ),
+    )
+}
+
+/// The bits of positions, velocities and angular velocities (so -0.0 differs from 0.0).
 pub fn state_bits(s: &State) -> Vec<u64> {
     s.positions
         .iter()
         .chain(&s.velocities)
+        .chain(&s.angular_velocities)
         .flatten()
         .chain([&s.time])
         .map(|c| c.to_bits())
@@ -109,68 +166,84 @@ fn err(e: Error) -> String {
 pub fn check_all(comm: &Comm) -> Result<usize, String> {
     let mut checks = 0;
     for (name, scene, config, steps) in cases() {
-        let serial = Comm::serial();
-        let mut one = DistributedDem::new(scene.clone(), &config, serial.clone()).map_err(err)?;
-        let mut many = DistributedDem::new(scene.clone(), &config, comm.clone()).map_err(err)?;
-        let half = steps / 2;
-        one.step(half).map_err(err)?;
-        many.step(half).map_err(err)?;
-        let s1 = one.state().map_err(err)?;
-        let sm = many.state().map_err(err)?;
-        same(
-            state_bits(&s1),
-            state_bits(&sm),
-            &format!("{name}: state after {half} steps"),
-        )?;
-        let c1 = one.checkpoint().map_err(err)?;
-        same(
-            &c1,
-            &many.checkpoint().map_err(err)?,
-            &format!("{name}: checkpoint"),
-        )?;
-        // Swap: the one-process checkpoint goes on on `comm`, and `comm`'s on one process.
-        let mut many_resumed =
-            DistributedDem::<Material>::resume(&c1, comm.clone()).map_err(err)?;
-        let mut one_resumed = DistributedDem::<Material>::resume(&c1, serial).map_err(err)?;
-        for sim in [&mut one, &mut many, &mut many_resumed, &mut one_resumed] {
-            sim.step(steps - half).map_err(err)?;
-        }
-        let want = state_bits(&one.state().map_err(err)?);
-        same(
-            &want,
-            &state_bits(&many.state().map_err(err)?),
-            &format!("{name}: state after {steps} steps"),
-        )?;
-        same(
-            &want,
-            &state_bits(&many_resumed.state().map_err(err)?),
-            &format!("{name}: state after a resume on {} ranks", comm.size()),
-        )?;
-        same(
-            &want,
-            &state_bits(&one_resumed.state().map_err(err)?),
-            &format!("{name}: state after a resume on one process"),
-        )?;
-        let (d1, dm) = (
-            one.diagnostics().map_err(err)?,
-            many.diagnostics().map_err(err)?,
-        );
-        same(
-            format!("{d1:?}"),
-            format!("{dm:?}"),
-            &format!("{name}: diagnostics"),
-        )?;
-        // Every rank owns its share: the owned counts add up to all particles.
-        let owned = comm.all_sum(many.owned() as f64).map_err(err)?;
-        same(
-            owned,
-            scene.particles().len() as f64,
-            &format!("{name}: owned total"),
-        )?;
-        checks += 6;
+        checks += check_case(comm, name, scene, config, steps)?;
     }
+    let (rough, boxed) = history_cases();
+    checks += check_case(comm, rough.0, rough.1, rough.2, rough.3)?;
+    checks += check_case(comm, boxed.0, boxed.1, boxed.2, boxed.3)?;
     checks += blow_up(comm)?;
     Ok(checks)
+}
+
+/// One case of [`check_all`]: 6 checks.
+fn check_case<L: ContactLaw>(
+    comm: &Comm,
+    name: &str,
+    scene: Scene<L>,
+    config: Config,
+    steps: u32,
+) -> Result<usize, String> {
+    let serial = Comm::serial();
+    let mut one = DistributedDem::new(scene.clone(), &config, serial.clone()).map_err(err)?;
+    let mut many = DistributedDem::new(scene.clone(), &config, comm.clone()).map_err(err)?;
+    let half = steps / 2;
+    one.step(half).map_err(err)?;
+    many.step(half).map_err(err)?;
+    let s1 = one.state().map_err(err)?;
+    let sm = many.state().map_err(err)?;
+    same(
+        state_bits(&s1),
+        state_bits(&sm),
+        &format!("{name}: state after {half} steps"),
+    )?;
+    if scene.rotation() && !s1.angular_velocities.iter().flatten().any(|&w| w != 0.0) {
+        return Err(format!("{name}: nothing spins after {half} steps"));
+    }
+    let c1 = one.checkpoint().map_err(err)?;
+    same(
+        &c1,
+        &many.checkpoint().map_err(err)?,
+        &format!("{name}: checkpoint"),
+    )?;
+    // Swap: the one-process checkpoint goes on on `comm`, and `comm`'s on one process.
+    let mut many_resumed = DistributedDem::<L>::resume(&c1, comm.clone()).map_err(err)?;
+    let mut one_resumed = DistributedDem::<L>::resume(&c1, serial).map_err(err)?;
+    for sim in [&mut one, &mut many, &mut many_resumed, &mut one_resumed] {
+        sim.step(steps - half).map_err(err)?;
+    }
+    let want = state_bits(&one.state().map_err(err)?);
+    same(
+        &want,
+        &state_bits(&many.state().map_err(err)?),
+        &format!("{name}: state after {steps} steps"),
+    )?;
+    same(
+        &want,
+        &state_bits(&many_resumed.state().map_err(err)?),
+        &format!("{name}: state after a resume on {} ranks", comm.size()),
+    )?;
+    same(
+        &want,
+        &state_bits(&one_resumed.state().map_err(err)?),
+        &format!("{name}: state after a resume on one process"),
+    )?;
+    let (d1, dm) = (
+        one.diagnostics().map_err(err)?,
+        many.diagnostics().map_err(err)?,
+    );
+    same(
+        format!("{d1:?}"),
+        format!("{dm:?}"),
+        &format!("{name}: diagnostics"),
+    )?;
+    // Every rank owns its share: the owned counts add up to all particles.
+    let owned = comm.all_sum(many.owned() as f64).map_err(err)?;
+    same(
+        owned,
+        scene.particles().len() as f64,
+        &format!("{name}: owned total"),
+    )?;
+    Ok(6)
 }
 
 /// Two grains thrown at each other far too fast for their contact time: the overlap check
