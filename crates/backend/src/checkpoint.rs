@@ -169,7 +169,7 @@ pub fn header(bytes: &[u8]) -> Result<Header> {
     split(bytes, IN_MEMORY).map(|(h, _)| h)
 }
 
-fn split<'a>(bytes: &'a [u8], source: &str) -> Result<(Header, &'a [u8])> {
+pub(crate) fn split<'a>(bytes: &'a [u8], source: &str) -> Result<(Header, &'a [u8])> {
     let fail = |reason: String| Error::Checkpoint {
         source_name: source.to_string(),
         reason,

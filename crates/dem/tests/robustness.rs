@@ -6,11 +6,18 @@
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use proptest::prelude::*;
-use simkit_backend::testing::robust::{self, awkward_f64, clear};
-use simkit_backend::{Backend, Error, Restart, Simulation};
-use simkit_dem::{Config, Dem, Dim, Material, Particle, Scene, Wall};
+use simkit_backend::comm::Comm;
+use simkit_backend::testing::robust::{self, LargestAllocation, awkward_f64, clear};
+use simkit_backend::{Backend, Distributed, Error, Restart, Simulation};
+use simkit_dem::{
+    Config, Dem, Dim, DistributedDem, HertzMindlin, Material, Particle, Scene, Solid, Wall,
+};
 
 const SEED: [u8; 32] = *b"simkit-dem robustness seed 2024!";
+
+/// Records the largest allocation (the checkpoint fuzzing checks it).
+#[global_allocator]
+static ALLOC: LargestAllocation = LargestAllocation::new();
 
 /// Mostly sensible positive values, sometimes anything.
 fn pos_num() -> impl Strategy<Value = f64> {
@@ -302,6 +309,51 @@ fn checkpoint_decode_of_garbage_never_panics() {
             }
             Ok(())
         },
+    );
+}
+
+#[test]
+fn resealed_checkpoints_never_panic_nor_allocate_past_their_size() {
+    // A rotating scene with a history law, walls and contacts, so that every part of the
+    // payload (spins, contact keys, history) is there to be changed; 10^4 variants past the
+    // checksum, each resumed by Dem (and stepped) and by DistributedDem.
+    let law = HertzMindlin::new(Solid::new(1e5, 0.3), Solid::new(1e5, 0.3), 0.6, 0.4)
+        .unwrap()
+        .with_rolling(0.05, 2000.0, 20.0);
+    let mut scene = Scene::new(Dim::Three, [0.0; 3], [3.0, 3.0, 4.0], law).unwrap();
+    scene
+        .set_gravity(1.0)
+        .unwrap()
+        .set_rotation(true)
+        .add_box_walls(law, false)
+        .unwrap();
+    for k in 0..8 {
+        let p = [
+            0.8 + (k % 2) as f64 * 1.05,
+            0.8 + (k / 2 % 2) as f64 * 1.05,
+            0.6 + (k / 4) as f64 * 1.02,
+        ];
+        scene.add_particle(Particle::new(p, 0.5, 1.0)).unwrap();
+    }
+    let mut sim = Dem::new(scene, &Config::default(), Backend::Cpu).unwrap();
+    sim.step(4000).unwrap();
+    let bytes = sim.checkpoint().unwrap();
+    assert!(sim.diagnostics().unwrap().contacts > 0);
+    // What the file justifies: its own size many times over, and the fixed cost of an
+    // engine (cell grid, rayon) of a few MiB.
+    let limit = |len: usize| (64 * len).max(8 << 20);
+    let resumed = robust::fuzz_checkpoints(&SEED, 10_000, &bytes, &ALLOC, limit, |b| {
+        if let Ok(mut d) = DistributedDem::<HertzMindlin>::resume(b, Comm::serial()) {
+            let _ = d.step(2);
+            d.checkpoint()?;
+        }
+        let mut dem = Dem::<HertzMindlin>::resume(b, Backend::Cpu)?;
+        let _ = dem.step(2);
+        Ok(())
+    });
+    println!(
+        "{resumed} of 10000 resealed checkpoints ({} bytes) resumed",
+        bytes.len()
     );
 }
 

@@ -8,6 +8,11 @@ use simkit_backend::testing::robust::{self, awkward_usize};
 
 /// The seed of every property in this file.
 const SEED: u64 = 0x5eed_1a77;
+
+/// Records the largest allocation (the checkpoint fuzzing checks it).
+#[global_allocator]
+static ALLOC: simkit_backend::testing::robust::LargestAllocation =
+    simkit_backend::testing::robust::LargestAllocation::new();
 use simkit_backend::{Backend, Error, Restart, Simulation};
 use simkit_lattice_gas::BlockField;
 use simkit_lattice_gas::ShearWave;
@@ -214,4 +219,32 @@ proptest! {
             prop_assert!(is_clear(&e));
         }
     }
+}
+
+#[test]
+fn resealed_checkpoints_never_panic_nor_allocate_past_their_size() {
+    // 10^4 variants of a checkpoint past the checksum, each resumed by LatticeGas (and
+    // stepped) and by DistributedLatticeGas.
+    let mut lattice = Lattice::new(32, 8).unwrap();
+    lattice.fill_random(0.3, 1).unwrap();
+    let mut sim = LatticeGas::new(lattice, &Config::default(), Backend::Cpu).unwrap();
+    sim.step(2).unwrap();
+    let bytes = sim.checkpoint().unwrap();
+    let limit = |len: usize| (64 * len).max(8 << 20);
+    let seed = [0x5e; 32];
+    let resumed = robust::fuzz_checkpoints(&seed, 10_000, &bytes, &ALLOC, limit, |b| {
+        use simkit_backend::Distributed;
+        let comm = simkit_backend::comm::Comm::serial();
+        if let Ok(mut d) = simkit_lattice_gas::DistributedLatticeGas::resume(b, comm) {
+            let _ = d.step(2);
+            d.checkpoint()?;
+        }
+        let mut lg = LatticeGas::resume(b, Backend::Cpu)?;
+        let _ = lg.step(2);
+        Ok(())
+    });
+    println!(
+        "{resumed} of 10000 resealed checkpoints ({} bytes) resumed",
+        bytes.len()
+    );
 }

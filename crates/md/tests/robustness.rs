@@ -19,6 +19,11 @@ use simkit_md::{
 
 const SEED: [u8; 32] = *b"simkit-md robustness seed 2026!!";
 
+/// Records the largest allocation (the checkpoint fuzzing checks it).
+#[global_allocator]
+static ALLOC: simkit_backend::testing::robust::LargestAllocation =
+    simkit_backend::testing::robust::LargestAllocation::new();
+
 /// Mostly sensible positive values, sometimes anything.
 fn pos_num(lo: f64, hi: f64) -> impl Strategy<Value = f64> {
     prop_oneof![3 => lo..hi, 1 => awkward_f64()]
@@ -522,5 +527,37 @@ fn lattices_refuse_bad_sizes_before_allocating() {
             }
             Ok(())
         },
+    );
+}
+
+#[test]
+fn resealed_checkpoints_never_panic_nor_allocate_past_their_size() {
+    // 10^4 variants of a checkpoint past the checksum, each resumed by Md (and stepped) and
+    // by DistributedMd.
+    let sys = scenes::fcc_lattice(
+        [3; 3],
+        0.3,
+        1.0,
+        PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5)).unwrap(),
+        &[0],
+        1,
+    )
+    .unwrap();
+    let mut md = Md::new(sys, &Config::default(), Backend::Cpu).unwrap();
+    md.step(5).unwrap();
+    let bytes = md.checkpoint().unwrap();
+    let limit = |len: usize| (64 * len).max(8 << 20);
+    let resumed = robust::fuzz_checkpoints(&SEED, 10_000, &bytes, &ALLOC, limit, |b| {
+        if let Ok(mut d) = DistributedMd::<LennardJones>::resume(b, Comm::serial()) {
+            let _ = d.step(2);
+            d.checkpoint()?;
+        }
+        let mut md = Md::<LennardJones>::resume(b, Backend::Cpu)?;
+        let _ = md.step(2);
+        Ok(())
+    });
+    println!(
+        "{resumed} of 10000 resealed checkpoints ({} bytes) resumed",
+        bytes.len()
     );
 }

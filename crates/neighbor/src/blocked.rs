@@ -281,20 +281,7 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
         // The cell offsets are allocated here, before any position is seen: their number
         // is bounded whatever the particle count.
         let limit = n.saturating_mul(8).saturating_add(4096).min(MAX_CELLS) as f64;
-        let mut width = range;
-        let (cells, total) = loop {
-            let mut cells = [1usize; D];
-            let mut total = 1.0f64;
-            for d in 0..D {
-                let c = (len[d] / width).floor().max(1.0);
-                total *= c;
-                cells[d] = c as usize;
-            }
-            if total <= limit {
-                break (cells, total);
-            }
-            width *= 1.25;
-        };
+        let (cells, total) = crate::grid::fit_cells(&len, range, limit);
         let block_size = Self::block_size_for(n);
         let count = n.div_ceil(block_size).max(1);
         let blocks = (0..count)

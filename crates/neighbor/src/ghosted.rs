@@ -243,7 +243,10 @@ where
         }
         let range = self.range;
         let lengths: [f64; D] = std::array::from_fn(|d| (hi[d] - lo[d]) + range);
-        let grid = CellGrid::new(lo, lengths, [false; D], range)?;
+        // Cells over where the entries are, at most 8 per entry (plus a few): a particle
+        // flung far away (a blown-up run) widens the cells instead of costing gigabytes.
+        let limit = x.len().saturating_mul(8).saturating_add(4096);
+        let grid = CellGrid::new_sparse(lo, lengths, [false; D], range, limit)?;
         let mut cells = SortedCells::new(&grid);
         cells.build(x)?;
         let ids = &self.ids;

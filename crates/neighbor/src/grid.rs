@@ -20,6 +20,25 @@ const MIN_CUTOFF: f64 = 1.4916681462400413e-154;
 /// The largest cutoff [`CellGrid::new`] accepts (its square is finite).
 const MAX_CUTOFF: f64 = 1.3407807929942596e154;
 
+/// Cells per axis over `lengths` at least `width` wide (`max(1, floor(L / width))`), the
+/// width raised by 25 % at a time until there are at most `limit`, and their total.
+pub(crate) fn fit_cells<const D: usize>(
+    lengths: &[f64; D],
+    width: f64,
+    limit: f64,
+) -> ([usize; D], f64) {
+    let mut width = width;
+    loop {
+        let cells: [f64; D] = std::array::from_fn(|d| (lengths[d] / width).floor().max(1.0));
+        let total = cells.iter().product::<f64>();
+        if total <= limit || cells.iter().all(|&c| c == 1.0) {
+            // An f64 count past `usize::MAX` saturates; the caller refuses it first.
+            return (cells.map(|c| c as usize), total);
+        }
+        width *= 1.25;
+    }
+}
+
 /// What to do with a position outside the box along a non-periodic axis.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum OutOfBox {
@@ -70,6 +89,33 @@ impl<const D: usize> CellGrid<D> {
         periodic: [bool; D],
         cutoff: f64,
     ) -> Result<Self> {
+        Self::build(origin, lengths, periodic, cutoff, None)
+    }
+
+    /// A grid as [`CellGrid::new`] with at most `limit` cells (never more than
+    /// [`MAX_CELLS`]): where cells the cutoff wide would be more, they are widened (25 % at a
+    /// time) until they fit. The cutoff, hence the pairs reported, is the same; wider cells
+    /// only cost distance checks. For boxes that are sparse, or that only bound where the
+    /// particles happen to be (one far-flung particle must not cost gigabytes of cells).
+    ///
+    /// Errors: those of [`CellGrid::new`] but the cell count.
+    pub fn new_sparse(
+        origin: [f64; D],
+        lengths: [f64; D],
+        periodic: [bool; D],
+        cutoff: f64,
+        limit: usize,
+    ) -> Result<Self> {
+        Self::build(origin, lengths, periodic, cutoff, Some(limit))
+    }
+
+    fn build(
+        origin: [f64; D],
+        lengths: [f64; D],
+        periodic: [bool; D],
+        cutoff: f64,
+        limit: Option<usize>,
+    ) -> Result<Self> {
         if D != 2 && D != 3 {
             return Err(Error::Unsupported(format!(
                 "CellGrid<{D}>: only 2D and 3D grids exist; use CellGrid<2> or CellGrid<3>"
@@ -110,25 +156,19 @@ impl<const D: usize> CellGrid<D> {
                 ),
             ));
         }
-        let mut cells = [1usize; D];
-        let mut total: f64 = 1.0;
-        for d in 0..D {
-            let n = (lengths[d] / (cutoff * (1.0 + CELL_MARGIN)))
-                .floor()
-                .max(1.0);
-            total *= n;
-            if total > MAX_CELLS as f64 {
-                return Err(Error::invalid(
-                    "cell count",
-                    format!("{total:e} cells or more"),
-                    format!(
-                        "the box {lengths:?} with cutoff {cutoff} needs more than {MAX_CELLS} \
-                         cells; use a larger cutoff (cells are at least the cutoff wide) or a \
-                         smaller box"
-                    ),
-                ));
-            }
-            cells[d] = n as usize;
+        let width = cutoff * (1.0 + CELL_MARGIN);
+        let fit = limit.map_or(f64::INFINITY, |l| l.min(MAX_CELLS) as f64);
+        let (cells, total) = fit_cells(&lengths, width, fit);
+        if total > MAX_CELLS as f64 {
+            return Err(Error::invalid(
+                "cell count",
+                format!("{total:e} cells"),
+                format!(
+                    "the box {lengths:?} with cutoff {cutoff} needs more than {MAX_CELLS} \
+                     cells; use a larger cutoff (cells are at least the cutoff wide) or a \
+                     smaller box"
+                ),
+            ));
         }
         let cell_size = std::array::from_fn(|d| lengths[d] / cells[d] as f64);
         let inv_cell = std::array::from_fn(|d| cells[d] as f64 / lengths[d]);

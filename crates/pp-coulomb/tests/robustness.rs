@@ -19,6 +19,11 @@ use simkit_pp_coulomb::{
 
 const SEED: [u8; 32] = *b"simkit-pp-coulomb-robustness-01!";
 
+/// Records the largest allocation (the checkpoint fuzzing checks it).
+#[global_allocator]
+static ALLOC: simkit_backend::testing::robust::LargestAllocation =
+    simkit_backend::testing::robust::LargestAllocation::new();
+
 /// Counts: empty, small, and sizes past every limit.
 fn count() -> impl Strategy<Value = usize> {
     prop_oneof![
@@ -538,4 +543,30 @@ fn gpu_accepts_and_refuses_like_the_cpu() {
             (a, b) => panic!("CPU {:?} vs GPU {:?}", a.err(), b.err()),
         }
     }
+}
+
+#[test]
+fn resealed_checkpoints_never_panic_nor_allocate_past_their_size() {
+    // 10^4 variants of a checkpoint past the checksum, each resumed by PpCoulomb (and
+    // stepped) and by DistributedCoulomb.
+    let p = cold_sphere(40, 1.0, 3).unwrap();
+    let mut sim = PpCoulomb::new(p, &Config::new(0.05, ForceLaw::Exact), Backend::Cpu).unwrap();
+    sim.step(3).unwrap();
+    let bytes = sim.checkpoint().unwrap();
+    let limit = |len: usize| (64 * len).max(8 << 20);
+    let resumed = robust::fuzz_checkpoints(&SEED, 10_000, &bytes, &ALLOC, limit, |b| {
+        use simkit_backend::Distributed;
+        let comm = simkit_backend::comm::Comm::serial();
+        if let Ok(mut d) = simkit_pp_coulomb::DistributedCoulomb::resume(b, comm) {
+            let _ = d.step(2);
+            d.checkpoint()?;
+        }
+        let mut pp = PpCoulomb::resume(b, Backend::Cpu)?;
+        let _ = pp.step(2);
+        Ok(())
+    });
+    println!(
+        "{resumed} of 10000 resealed checkpoints ({} bytes) resumed",
+        bytes.len()
+    );
 }

@@ -16,6 +16,11 @@ use simkit_rd::{
 
 const SEED: [u8; 32] = *b"simkit-rd robustness, fixed seed";
 
+/// Records the largest allocation (the checkpoint fuzzing checks it).
+#[global_allocator]
+static ALLOC: simkit_backend::testing::robust::LargestAllocation =
+    simkit_backend::testing::robust::LargestAllocation::new();
+
 /// Mostly a valid value from `valid`, sometimes a wild one.
 fn mostly(valid: impl Strategy<Value = f64> + 'static) -> BoxedStrategy<f64> {
     prop_oneof![4 => valid, 1 => awkward_f64()].boxed()
@@ -513,4 +518,37 @@ fn checkpoint_decode_of_garbage() {
             },
         )
         .unwrap();
+}
+
+#[test]
+fn resealed_checkpoints_never_panic_nor_allocate_past_their_size() {
+    // 10^4 variants of a checkpoint past the checksum, each resumed by Rd (and stepped) and
+    // by DistributedRd.
+    let grid = simkit_rd::scenes::gray_scott_square::<f32>(6, 1.0, 2, 1).unwrap();
+    let model = GrayScott::new(1.0, 0.5, 0.04, 0.06).unwrap();
+    let mut sim = Rd::new(
+        grid,
+        model,
+        &Config::new(Stepping::euler(0.2)),
+        Backend::Cpu,
+    )
+    .unwrap();
+    sim.step(5).unwrap();
+    let bytes = sim.checkpoint().unwrap();
+    let limit = |len: usize| (64 * len).max(8 << 20);
+    let resumed = robust::fuzz_checkpoints(&SEED, 10_000, &bytes, &ALLOC, limit, |b| {
+        use simkit_backend::Distributed;
+        let comm = simkit_backend::comm::Comm::serial();
+        if let Ok(mut d) = simkit_rd::DistributedRd::<f32, GrayScott>::resume(b, comm) {
+            let _ = d.step(2);
+            d.checkpoint()?;
+        }
+        let mut rd = Rd::<f32, GrayScott>::resume(b, Backend::Cpu)?;
+        let _ = rd.step(2);
+        Ok(())
+    });
+    println!(
+        "{resumed} of 10000 resealed checkpoints ({} bytes) resumed",
+        bytes.len()
+    );
 }

@@ -112,3 +112,185 @@ pub fn clear(e: &Error) -> Result<(), TestCaseError> {
     prop_assert!(s.len() > 20 && s.len() < 4000, "unclear error: {s:?}");
     Ok(())
 }
+
+/// Checkpoints made from the valid checkpoint `bytes` by changing its payload (bytes
+/// overwritten, inserted or removed, a cut, a stretch copied over another, a huge length
+/// prefix, or a random payload) and sealing it again with a correct length and checksum:
+/// each gets past the container's checks to the crate's payload decoder and validation,
+/// where a plain corruption would stop at the checksum.
+///
+/// # Panics
+/// When `bytes` is not a valid checkpoint.
+pub fn resealed(bytes: &[u8]) -> BoxedStrategy<Vec<u8>> {
+    let (_, payload) = crate::checkpoint::split(bytes, "<fuzz>").expect("a valid checkpoint");
+    let at = payload.as_ptr() as usize - bytes.as_ptr() as usize;
+    // The header up to the payload length, and the payload.
+    let (head, payload) = (bytes[..at - 8].to_vec(), payload.to_vec());
+    let n = payload.len().max(1);
+    let changed = prop_oneof![
+        4 => prop::collection::vec((any::<usize>(), any::<u8>()), 1..8).prop_map({
+            let p = payload.clone();
+            move |writes| {
+                let mut p = p.clone();
+                for (i, b) in writes {
+                    if let Some(x) = p.get_mut(i % n) {
+                        *x = b;
+                    }
+                }
+                p
+            }
+        }),
+        1 => any::<usize>().prop_map({
+            let p = payload.clone();
+            move |cut| p[..cut % n].to_vec()
+        }),
+        1 => (any::<usize>(), prop::collection::vec(any::<u8>(), 1..16)).prop_map({
+            let p = payload.clone();
+            move |(i, extra)| {
+                let mut p = p.clone();
+                let i = i % n;
+                p.splice(i.min(p.len())..i.min(p.len()), extra);
+                p
+            }
+        }),
+        1 => (any::<usize>(), 1usize..64).prop_map({
+            let p = payload.clone();
+            move |(i, len)| {
+                let mut p = p.clone();
+                let i = (i % n).min(p.len());
+                p.drain(i..(i + len).min(p.len()));
+                p
+            }
+        }),
+        1 => (any::<usize>(), any::<usize>(), 1usize..64).prop_map({
+            let p = payload.clone();
+            move |(from, to, len)| {
+                let mut p = p.clone();
+                let (from, to) = (from % n, to % n);
+                let len = len.min(p.len().saturating_sub(from)).min(p.len().saturating_sub(to));
+                p.copy_within(from..from + len, to);
+                p
+            }
+        }),
+        2 => (any::<usize>(), 1usize..10).prop_map({
+            let p = payload.clone();
+            move |(i, width)| {
+                // A varint of `width` bytes near its largest value: a huge count or length.
+                let mut p = p.clone();
+                let i = i % n;
+                for k in 0..width {
+                    if let Some(x) = p.get_mut(i + k) {
+                        *x = if k + 1 == width { 0x01 } else { 0xff };
+                    }
+                }
+                p
+            }
+        }),
+        1 => prop::collection::vec(any::<u8>(), 0..256),
+    ];
+    changed
+        .prop_map(move |p| {
+            let mut out = head.clone();
+            out.extend_from_slice(&(p.len() as u64).to_le_bytes());
+            out.extend_from_slice(&p);
+            let crc = crc32fast::hash(&out);
+            out.extend_from_slice(&crc.to_le_bytes());
+            out
+        })
+        .boxed()
+}
+
+/// A global allocator that records the largest single allocation (install it in a test
+/// binary with `#[global_allocator] static ALLOC: LargestAllocation =
+/// LargestAllocation::new();`), to check that a reader allocates no more than its input
+/// justifies.
+#[derive(Debug)]
+pub struct LargestAllocation {
+    largest: std::sync::atomic::AtomicUsize,
+}
+
+impl LargestAllocation {
+    /// Nothing recorded yet.
+    pub const fn new() -> Self {
+        Self {
+            largest: std::sync::atomic::AtomicUsize::new(0),
+        }
+    }
+
+    /// The largest single allocation (bytes) since the last call, and starts again.
+    pub fn take(&self) -> usize {
+        self.largest.swap(0, std::sync::atomic::Ordering::Relaxed)
+    }
+}
+
+impl Default for LargestAllocation {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+// SAFETY: every call is passed on unchanged to the system allocator; the only addition is
+// an atomic maximum of the requested sizes.
+unsafe impl std::alloc::GlobalAlloc for LargestAllocation {
+    unsafe fn alloc(&self, layout: std::alloc::Layout) -> *mut u8 {
+        self.largest
+            .fetch_max(layout.size(), std::sync::atomic::Ordering::Relaxed);
+        // SAFETY: the caller's contract for `layout` is passed on.
+        unsafe { std::alloc::System.alloc(layout) }
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: std::alloc::Layout) {
+        // SAFETY: `ptr` came from `System.alloc` with this `layout`.
+        unsafe { std::alloc::System.dealloc(ptr, layout) }
+    }
+
+    unsafe fn alloc_zeroed(&self, layout: std::alloc::Layout) -> *mut u8 {
+        self.largest
+            .fetch_max(layout.size(), std::sync::atomic::Ordering::Relaxed);
+        // SAFETY: as `alloc`.
+        unsafe { std::alloc::System.alloc_zeroed(layout) }
+    }
+
+    unsafe fn realloc(&self, ptr: *mut u8, layout: std::alloc::Layout, new: usize) -> *mut u8 {
+        self.largest
+            .fetch_max(new, std::sync::atomic::Ordering::Relaxed);
+        // SAFETY: `ptr` came from this allocator (the system's) with `layout`.
+        unsafe { std::alloc::System.realloc(ptr, layout, new) }
+    }
+}
+
+/// Resumes each of `cases` [`resealed`] variants of the checkpoint `bytes` with `resume`
+/// (which may also step the run it gets), from the fixed `seed`: every case must return
+/// `Ok` or a clear `Err`, never panic, and allocate at most `limit(file length)` bytes at
+/// once (read from `alloc`). Returns how many resumed.
+///
+/// # Panics
+/// With proptest's report of the first failing case.
+pub fn fuzz_checkpoints(
+    seed: &[u8; 32],
+    cases: u32,
+    bytes: &[u8],
+    alloc: &LargestAllocation,
+    limit: impl Fn(usize) -> usize,
+    resume: impl Fn(&[u8]) -> crate::Result<()>,
+) -> usize {
+    let resumed = std::sync::atomic::AtomicUsize::new(0);
+    run(seed, cases, resealed(bytes), |file| {
+        alloc.take();
+        let out = resume(&file);
+        let largest = alloc.take();
+        match out {
+            Ok(()) => {
+                resumed.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            }
+            Err(e) => clear(&e)?,
+        }
+        prop_assert!(
+            largest <= limit(file.len()),
+            "a {}-byte checkpoint made an allocation of {largest} bytes",
+            file.len()
+        );
+        Ok(())
+    });
+    resumed.into_inner()
+}
