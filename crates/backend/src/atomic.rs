@@ -3,7 +3,9 @@
 //! Data is written to a temporary file in the target's directory (`.name.tmp-<pid>-<n>`),
 //! flushed and synced, then renamed over the target. A reader therefore sees either the old
 //! file or the complete new one, never a half-written file, and a failed write leaves the
-//! previous file untouched and no temporary file behind.
+//! previous file untouched and no temporary file behind. A writer killed before it
+//! committed leaves its temporary file; the next write to the same target removes it (on
+//! Linux, once that process is gone).
 
 use std::fs::{self, File, OpenOptions};
 use std::io::{self, BufWriter, Write};
@@ -21,6 +23,10 @@ pub fn io_error(path: &Path, e: &io::Error) -> Error {
         io::ErrorKind::PermissionDenied => "; check that the directory is writable",
         io::ErrorKind::NotFound => "; check that the path is valid",
         io::ErrorKind::StorageFull => "; free some disk space",
+        io::ErrorKind::FileTooLarge => {
+            "; the file-size limit was reached (ulimit -f, or the file system's): raise it or \
+             write elsewhere"
+        }
         _ => "",
     };
     Error::Io {
@@ -62,9 +68,12 @@ impl AtomicFile {
         };
         fs::create_dir_all(&parent).map_err(|e| io_error(&parent, &e))?;
         let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-        let mut tmp_name = std::ffi::OsString::from(".");
-        tmp_name.push(name);
-        tmp_name.push(format!(".tmp-{}-{n}", std::process::id()));
+        let mut prefix = std::ffi::OsString::from(".");
+        prefix.push(name);
+        prefix.push(".tmp-");
+        remove_stale(&parent, &prefix);
+        let mut tmp_name = prefix;
+        tmp_name.push(format!("{}-{n}", std::process::id()));
         let tmp = parent.join(tmp_name);
         let file = OpenOptions::new()
             .write(true)
@@ -116,6 +125,32 @@ impl AtomicFile {
                 let _ = fs::remove_file(&self.tmp);
                 Err(io_error(&self.target, &e))
             }
+        }
+    }
+}
+
+/// Removes the temporary files `<prefix><pid>-<n>` in `dir` left by writers that died
+/// before they committed (killed, or out of power): those whose process is gone. Linux
+/// only (a process exists while `/proc/<pid>` does); best effort.
+fn remove_stale(dir: &Path, prefix: &std::ffi::OsStr) {
+    if !Path::new("/proc/self").exists() {
+        return;
+    }
+    let (Some(prefix), Ok(entries)) = (prefix.to_str(), fs::read_dir(dir)) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(pid) = name
+            .to_str()
+            .and_then(|n| n.strip_prefix(prefix))
+            .and_then(|rest| rest.split_once('-'))
+            .and_then(|(pid, _)| pid.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        if !Path::new(&format!("/proc/{pid}")).exists() {
+            let _ = fs::remove_file(entry.path());
         }
     }
 }

@@ -13,12 +13,21 @@ use simkit_dem::{Config, Dem, Dim, Integrator, Material, Particle, Precision, Sc
 /// A vibrated 2D bed of 40 discs with friction: the wall phase, list rebuilds and contacts
 /// all matter over a few hundred steps.
 fn bed() -> Scene {
+    discs(40, 8, [9.0, 12.0], true)
+}
+
+/// `n` discs with friction in rows of `per_row` in a closed box `[0, hi)` under gravity,
+/// its floor vibrating when `vibrating`.
+fn discs(n: usize, per_row: usize, hi: [f64; 2], vibrating: bool) -> Scene {
     let m = Material::new(0.8, 0.05).with_friction(0.4, 30.0);
-    let mut s = Scene::new(Dim::Two, [0.0; 3], [9.0, 12.0, 0.0], m).unwrap();
-    s.set_gravity(1.0).unwrap().set_vibration(0.3, 6.0).unwrap();
-    s.add_box_walls(m, true).unwrap();
-    for k in 0..40 {
-        let (x, y) = ((k % 8) as f64, (k / 8) as f64);
+    let mut s = Scene::new(Dim::Two, [0.0; 3], [hi[0], hi[1], 0.0], m).unwrap();
+    s.set_gravity(1.0).unwrap();
+    if vibrating {
+        s.set_vibration(0.3, 6.0).unwrap();
+    }
+    s.add_box_walls(m, vibrating).unwrap();
+    for k in 0..n {
+        let (x, y) = ((k % per_row) as f64, (k / per_row) as f64);
         let v = [0.3 * ((k % 5) as f64 - 2.0), 0.2 * ((k % 3) as f64), 0.0];
         s.add_particle(
             Particle::new([0.9 + 1.05 * x, 0.9 + 1.05 * y, 0.0], 0.5, 1.0).with_velocity(v),
@@ -159,4 +168,48 @@ fn bad_checkpoints_are_refused_clearly() {
             "backend that wrote it",
         );
     }
+}
+
+/// 400 discs in a closed box: a checkpoint of about 60 kB, so that a writer spends much of
+/// its time writing.
+fn big_bed() -> Scene {
+    discs(400, 20, [22.0, 30.0], false)
+}
+
+#[test]
+fn a_writer_killed_at_random_moments_leaves_a_whole_checkpoint() {
+    let make = || Dem::new(big_bed(), &Config::default(), Backend::Cpu);
+    let seen = simkit_backend::testing::faults::check_killed_writers(
+        "a_writer_killed_at_random_moments_leaves_a_whole_checkpoint",
+        60,
+        1,
+        make,
+    );
+    if std::env::var("SIMKIT_FAULT_CHILD").is_ok() {
+        return;
+    }
+    println!("{seen:?}");
+    assert_eq!(seen.kills, 60);
+    // The kills must land inside writes for the test to mean anything.
+    assert!(
+        seen.mid_write >= 1 && seen.with_checkpoint >= 30,
+        "{seen:?}"
+    );
+}
+
+#[test]
+fn a_full_disk_is_an_error_and_the_old_checkpoint_stays() {
+    let make = || Dem::new(big_bed(), &Config::default(), Backend::Cpu);
+    let message = simkit_backend::testing::faults::check_full_disk(
+        "a_full_disk_is_an_error_and_the_old_checkpoint_stays",
+        make,
+    );
+    if std::env::var("SIMKIT_FAULT_CHILD").is_ok() {
+        return;
+    }
+    println!("{message}");
+    assert!(
+        message.contains("run.ckpt") && message.contains("file-size limit"),
+        "{message}"
+    );
 }

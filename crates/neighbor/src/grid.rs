@@ -450,6 +450,32 @@ mod tests {
     }
 
     #[test]
+    fn sparse_grids_widen_their_cells_and_keep_the_pairs() {
+        // Two close pairs, one far away: cells a cutoff wide would be 4e10.
+        let x = [
+            [0.0, 0.0],
+            [0.5, 0.2],
+            [2e5 - 1.0, 2e5 - 1.0],
+            [2e5 - 1.3, 2e5 - 1.0],
+        ];
+        let strict = CellGrid::<2>::new([0.0; 2], [2e5; 2], [false; 2], 1.0);
+        assert!(strict.is_err());
+        let g = CellGrid::<2>::new_sparse([0.0; 2], [2e5; 2], [false; 2], 1.0, 4096).unwrap();
+        assert!(g.n_cells() <= 4096, "{}", g.n_cells());
+        assert_eq!(g.cutoff(), 1.0);
+        let mut cells = crate::SortedCells::new(&g);
+        cells.build(&x).unwrap();
+        let mut pairs = Vec::new();
+        cells.for_each_pair(|i, j, _, _| pairs.push((i.min(j), i.max(j))));
+        pairs.sort_unstable();
+        assert_eq!(pairs, [(0, 1), (2, 3)]);
+        // A box that fits: the same cells as `new`.
+        let a = CellGrid::<3>::new([0.0; 3], [10.0; 3], [true; 3], 1.0).unwrap();
+        let b = CellGrid::<3>::new_sparse([0.0; 3], [10.0; 3], [true; 3], 1.0, 4096).unwrap();
+        assert_eq!(a, b);
+    }
+
+    #[test]
     fn cells_are_at_least_the_cutoff() {
         let g = CellGrid::<3>::new([0.0; 3], [10.0, 7.5, 2.0], [true; 3], 2.5).unwrap();
         assert_eq!(g.cells_per_axis(), [3, 2, 1]);

@@ -10,6 +10,8 @@
 //! invocation per crate ([`conformance`]).
 
 pub mod conformance;
+#[cfg(unix)]
+pub mod faults;
 mod mpirun;
 #[cfg(feature = "proptest")]
 pub mod robust;
