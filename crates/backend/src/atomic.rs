@@ -16,6 +16,10 @@ use crate::{Error, Result};
 
 static COUNTER: AtomicU64 = AtomicU64::new(0);
 
+/// The hint for a path with a file where a directory should be.
+const NOT_A_DIRECTORY: &str =
+    "; a file stands where the path needs a directory: remove it or choose another path";
+
 /// Converts an I/O error on `path` into [`Error::Io`], adding a hint for the usual
 /// causes.
 pub fn io_error(path: &Path, e: &io::Error) -> Error {
@@ -23,6 +27,7 @@ pub fn io_error(path: &Path, e: &io::Error) -> Error {
         io::ErrorKind::PermissionDenied => "; check that the directory is writable",
         io::ErrorKind::NotFound => "; check that the path is valid",
         io::ErrorKind::StorageFull => "; free some disk space",
+        io::ErrorKind::NotADirectory => NOT_A_DIRECTORY,
         io::ErrorKind::FileTooLarge => {
             "; the file-size limit was reached (ulimit -f, or the file system's): raise it or \
              write elsewhere"
@@ -66,7 +71,14 @@ impl AtomicFile {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
             _ => PathBuf::from("."),
         };
-        fs::create_dir_all(&parent).map_err(|e| io_error(&parent, &e))?;
+        fs::create_dir_all(&parent).map_err(|e| match e.kind() {
+            // A file where a directory of the path should be.
+            io::ErrorKind::AlreadyExists => Error::Io {
+                path: parent.display().to_string(),
+                message: format!("{e}{NOT_A_DIRECTORY}"),
+            },
+            _ => io_error(&parent, &e),
+        })?;
         let n = COUNTER.fetch_add(1, Ordering::Relaxed);
         let mut prefix = std::ffi::OsString::from(".");
         prefix.push(name);

@@ -3,7 +3,7 @@
 //! the global field), gather to rank 0, the reductions and the broadcast from rank 0, and
 //! the particle domain (owners, ghosts against every image within the halo, refresh,
 //! migration), and a bad input on one rank of a halo exchange or a gather (an error on
-//! every rank, not a hang). Built only with the `mpi` feature; the test launches its own binary under `mpirun` (skipped with a message when
+//! every rank, not a hang), and a rank killed mid-run ending the job. Built only with the `mpi` feature; the test launches its own binary under `mpirun` (skipped with a message when
 //! `mpirun` is missing, unless `SIMKIT_REQUIRE_MPI=1`).
 #![cfg(feature = "mpi")]
 
@@ -299,4 +299,66 @@ fn domain_child(comm: &Comm) -> Result<usize, String> {
 #[test]
 fn particle_domain_across_ranks() {
     check_on_ranks("particle_domain_across_ranks", &[2, 3, 4], 4, domain_child);
+}
+
+/// Set in the ranks of `a_rank_killed_mid_run_ends_the_job`.
+const KILL_ENV: &str = "SIMKIT_KILLED_RANK_CHILD";
+
+#[test]
+fn a_rank_killed_mid_run_ends_the_job() {
+    // Under `mpirun -np 2`: both ranks exchange (all-reduce) in a loop; after 50 rounds the
+    // last rank kills itself (SIGKILL, no goodbye). The other must not wait forever: the
+    // job ends, with an error, well within the 60 s a hung collective would take here.
+    if std::env::var_os(KILL_ENV).is_some() {
+        let comm = Comm::mpi().expect("MPI");
+        let start = std::time::Instant::now();
+        for round in 0.. {
+            comm.all_max(f64::from(round)).expect("an exchange");
+            if round == 50 && comm.rank() == comm.size() - 1 {
+                let me = std::process::id().to_string();
+                let _ = std::process::Command::new("kill")
+                    .args(["-9", &me])
+                    .status();
+            }
+            if start.elapsed() > std::time::Duration::from_secs(120) {
+                // Never reached when the job ends as it must.
+                std::process::exit(0);
+            }
+        }
+        return;
+    }
+    let have = std::process::Command::new("mpirun")
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !have {
+        assert!(
+            std::env::var("SIMKIT_REQUIRE_MPI").as_deref() != Ok("1"),
+            "SIMKIT_REQUIRE_MPI=1 but `mpirun` is not on the PATH"
+        );
+        eprintln!("a_rank_killed_mid_run_ends_the_job: skipped, no `mpirun`");
+        return;
+    }
+    let exe = std::env::current_exe().expect("the test binary");
+    let start = std::time::Instant::now();
+    let out = std::process::Command::new("mpirun")
+        .args(["--allow-run-as-root", "--oversubscribe", "--timeout", "60"])
+        .args(["-np", "2"])
+        .arg(&exe)
+        .args([
+            "a_rank_killed_mid_run_ends_the_job",
+            "--exact",
+            "--nocapture",
+        ])
+        .env(KILL_ENV, "1")
+        .output()
+        .expect("starting mpirun");
+    let took = start.elapsed().as_secs_f64();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    println!("the job ended after {took:.1} s ({}): {stderr}", out.status);
+    assert!(
+        !out.status.success(),
+        "the job with a killed rank succeeded"
+    );
+    assert!(took < 30.0, "the job took {took:.1} s to end");
 }

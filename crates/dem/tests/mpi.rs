@@ -17,8 +17,11 @@ use simkit_dem::{Config, DistributedDem};
 
 /// The decomposed cases, then a bad input on the last rank only.
 fn cases(comm: &Comm) -> Result<usize, String> {
-    let n = decomposed::check_all(comm)?;
-    let (_, scene, _, _) = decomposed::cases().remove(1);
+    let mut n = decomposed::check_all(comm)?;
+    let (_, scene, config, _) = decomposed::cases().remove(1);
+    let run =
+        DistributedDem::new(scene.clone(), &config, comm.clone()).map_err(|e| e.to_string())?;
+    n += simkit_backend::testing::check_one_rank_faults(comm, run)?;
     let last = comm.size() - 1;
     let config = Config {
         skin: if comm.rank() == last { -1.0 } else { 0.1 },
@@ -40,7 +43,7 @@ fn ranks_2_3_4_match_one_process_bit_for_bit() {
     check_on_ranks(
         "ranks_2_3_4_match_one_process_bit_for_bit",
         &[2, 3, 4],
-        38,
+        41,
         cases,
     );
 }

@@ -4,7 +4,7 @@
 
 use simkit_backend::comm::Comm;
 use simkit_backend::testing::backends;
-use simkit_backend::{Backend, Error, Precision, Restart, Result, Simulation};
+use simkit_backend::{Backend, Precision, Restart, Result, Simulation};
 use simkit_dem::{
     Config, ContactLaw, Dem, Dim, DistributedDem, HertzMindlin, LinearHistory, Material, Particle,
     Scene, Solid, Wall, hertz_contact_time,
@@ -699,7 +699,8 @@ mod gpu {
         let err = gpu.step(10).expect_err("16 contacts on one disc");
         let text = err.to_string();
         assert!(
-            matches!(err, Error::BlowUp { .. }) && text.contains("particle 0 has more than 12"),
+            matches!(err, simkit_backend::Error::BlowUp { .. })
+                && text.contains("particle 0 has more than 12"),
             "{text}"
         );
         Ok(())

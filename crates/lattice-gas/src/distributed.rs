@@ -274,6 +274,7 @@ impl Simulation for DistributedLatticeGas {
     ///
     /// Errors: a step counter that would overflow, or a failed exchange.
     fn step(&mut self, steps: u32) -> Result<()> {
+        self.comm.agree_steps(steps)?;
         simkit_backend::guard::end_step(self.steps, steps)?;
         for _ in 0..steps {
             #[cfg(feature = "gpu")]

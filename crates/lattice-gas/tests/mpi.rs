@@ -10,17 +10,29 @@
 
 mod common;
 
-use simkit_backend::testing::check_on_ranks;
+use simkit_backend::comm::Comm;
+use simkit_backend::testing::{check_on_ranks, check_one_rank_faults};
 #[cfg(feature = "gpu")]
 use simkit_backend::testing::{is_mpi_child, shared_gpu};
+use simkit_lattice_gas::{Config, DistributedLatticeGas, Lattice};
+
+/// The cases of `tests/common`, then faults on one rank.
+fn cases(comm: &Comm) -> Result<usize, String> {
+    let n = common::check_all(comm)?;
+    let mut lattice = Lattice::new(64, 32).map_err(|e| e.to_string())?;
+    lattice.fill_random(0.3, 1).map_err(|e| e.to_string())?;
+    let run = DistributedLatticeGas::new(lattice, &Config::default(), comm.clone())
+        .map_err(|e| e.to_string())?;
+    Ok(n + check_one_rank_faults(comm, run)?)
+}
 
 #[test]
 fn ranks_2_3_4_match_one_process_bit_for_bit() {
     check_on_ranks(
         "ranks_2_3_4_match_one_process_bit_for_bit",
         &[2, 3, 4],
-        9,
-        common::check_all,
+        12,
+        cases,
     );
 }
 

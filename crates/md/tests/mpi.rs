@@ -18,8 +18,11 @@ use simkit_md::{Config, DistributedMd};
 
 /// The decomposed cases, then a bad input on the last rank only.
 fn cases(comm: &Comm) -> Result<usize, String> {
-    let n = decomposed::check_all(comm)?;
-    let (_, system, _, _) = decomposed::cases().remove(0);
+    let mut n = decomposed::check_all(comm)?;
+    let (_, system, config, _) = decomposed::cases().remove(0);
+    let run =
+        DistributedMd::new(system.clone(), &config, comm.clone()).map_err(|e| e.to_string())?;
+    n += simkit_backend::testing::check_one_rank_faults(comm, run)?;
     let last = comm.size() - 1;
     let config = Config {
         skin: if comm.rank() == last { -1.0 } else { 0.3 },
@@ -41,7 +44,7 @@ fn ranks_2_3_4_match_one_process_bit_for_bit() {
     check_on_ranks(
         "ranks_2_3_4_match_one_process_bit_for_bit",
         &[2, 3, 4],
-        30,
+        33,
         cases,
     );
 }

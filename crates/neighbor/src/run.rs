@@ -115,9 +115,11 @@ impl<A: RankRun, B: RankRun> DistributedRun<A, B> {
 
     /// Advances `steps` steps on every rank. Collective.
     ///
-    /// Errors: those of the model's guarded step, the same on every rank.
+    /// Errors: ranks that asked for different step counts; those of the model's guarded
+    /// step, the same on every rank.
     pub fn step(&mut self, steps: u32) -> Result<()> {
         let comm = &self.comm;
+        comm.agree_steps(steps)?;
         by_dim!(&mut self.engine, e => e.step(comm, steps))
     }
 

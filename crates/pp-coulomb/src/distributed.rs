@@ -284,6 +284,7 @@ impl Simulation for DistributedCoulomb {
     /// Advances `steps` steps with the blow-up checks of [`crate::PpCoulomb`] (same steps
     /// checked, same errors, same rollback, on every rank). Collective.
     fn step(&mut self, steps: u32) -> Result<()> {
+        self.comm.agree_steps(steps)?;
         let (engine, share) = (&mut self.engine, Ranks(&self.comm));
         self.run.step(
             steps,

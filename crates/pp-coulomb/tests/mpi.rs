@@ -18,8 +18,11 @@ use simkit_pp_coulomb::{Config, DistributedCoulomb, ForceLaw};
 
 /// The replicated cases, then inputs that differ between ranks.
 fn cases(comm: &Comm) -> Result<usize, String> {
-    let n = replicated::check_all(comm)?;
+    let mut n = replicated::check_all(comm)?;
     let c = Config::new(0.01, ForceLaw::Plummer { epsilon: 0.5 });
+    let run = DistributedCoulomb::new(replicated::plasma(1), &c, comm.clone())
+        .map_err(|e| e.to_string())?;
+    n += simkit_backend::testing::check_one_rank_faults(comm, run)?;
     // Rank 0 and the others fill the box with different seeds.
     let seed = if comm.is_root() { 1 } else { 2 };
     match DistributedCoulomb::new(replicated::plasma(seed), &c, comm.clone()) {
@@ -52,7 +55,7 @@ fn ranks_2_3_4_match_one_process_bit_for_bit() {
     check_on_ranks(
         "ranks_2_3_4_match_one_process_bit_for_bit",
         &[2, 3, 4],
-        14,
+        17,
         cases,
     );
 }

@@ -401,6 +401,7 @@ impl<T: Real, M: Model> Simulation for DistributedRd<T, M> {
     /// Advances `steps` steps with the checks of [`crate::Rd`] (same steps checked, same
     /// errors, same rollback), decided together by all ranks. Collective.
     fn step(&mut self, steps: u32) -> Result<()> {
+        self.comm.agree_steps(steps)?;
         simkit_backend::guard::end_step(self.steps, steps)?;
         if self.model.field_dependent_diffusivity() {
             let d = self.max_diffusivity()?;

@@ -376,6 +376,17 @@ impl Comm {
         }
     }
 
+    /// `Ok` when every rank asked for the same number of `steps` in a collective `step`
+    /// (ranks that asked for different counts would wait for each other forever); else the
+    /// error of [`Comm::check_same`] on every rank. Collective: one all-gather of a number.
+    pub fn agree_steps(&self, steps: u32) -> Result<()> {
+        self.check_same(
+            u64::from(steps),
+            "step count",
+            "every rank must call step(n) with the same n",
+        )
+    }
+
     /// `Ok` when every rank passed the same inputs: `encoded` (the inputs as a checkpoint
     /// stores them, with the state when resuming) hashed and compared across ranks; else
     /// the error of [`Comm::check_same`] naming `what`, on every rank. Collective.

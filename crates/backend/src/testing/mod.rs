@@ -19,7 +19,9 @@ pub mod robust;
 mod wgsl;
 #[cfg(feature = "mpi")]
 pub use mpirun::check_on_ranks;
-pub use mpirun::{MPI_CHILD_ENV, REQUIRE_MPI_ENV, is_mpi_child, mpirun_self};
+pub use mpirun::{
+    MPI_CHILD_ENV, REQUIRE_MPI_ENV, check_one_rank_faults, is_mpi_child, mpirun_self,
+};
 #[cfg(feature = "gpu")]
 pub use wgsl::{
     FieldOffset, WgslStruct, assert_mirrors, check_struct_size, eval_wgsl, eval_wgsl2, wgsl_struct,

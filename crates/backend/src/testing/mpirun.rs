@@ -105,3 +105,54 @@ pub fn check_on_ranks(
         );
     }
 }
+
+/// The faults on one rank that every `Distributed*` run must survive on `comm` (run it
+/// under `mpirun`, e.g. in `check_on_ranks`), each an error on every rank instead of a
+/// rank waiting forever: the last rank alone asks `step` for one step more, and rank 0
+/// alone is given a checkpoint path it cannot create (the others a good one); then the run
+/// must still step. `run` is a fresh run on `comm`. Returns the number of checks (3).
+///
+/// Errors: a description of the first check that failed.
+pub fn check_one_rank_faults<S: crate::Distributed>(
+    comm: &crate::comm::Comm,
+    mut run: S,
+) -> Result<usize, String> {
+    let last = comm.size() - 1;
+    let steps = if comm.rank() == last { 3 } else { 2 };
+    match run.step(steps) {
+        Err(e) if e.to_string().contains("step count") => {}
+        other => {
+            return Err(format!(
+                "step({steps}) on rank {} against step(2) elsewhere: expected a step-count \
+                 error on every rank, got {:?}",
+                comm.rank(),
+                other.map(|_| ())
+            ));
+        }
+    }
+    let dir = std::env::temp_dir().join(format!("simkit-one-rank-faults-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    // Under a regular file: no directory can be made there.
+    let blocker = dir.join(format!("file-of-rank-{}", comm.rank()));
+    std::fs::write(&blocker, b"not a directory").map_err(|e| e.to_string())?;
+    let path = if comm.is_root() {
+        blocker.join("run.ckpt")
+    } else {
+        dir.join("run.ckpt")
+    };
+    match run.write_checkpoint(&path) {
+        Err(crate::Error::Io { .. }) => {}
+        other => {
+            return Err(format!(
+                "a checkpoint path rank 0 cannot create: expected an I/O error on rank {}, \
+                 got {:?}",
+                comm.rank(),
+                other.map(|_| ())
+            ));
+        }
+    }
+    let _ = std::fs::remove_file(&blocker);
+    run.step(2)
+        .map_err(|e| format!("the run does not go on after the faults: {e}"))?;
+    Ok(3)
+}
