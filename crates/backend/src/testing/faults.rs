@@ -14,6 +14,9 @@ const FAULT_CHILD_ENV: &str = "SIMKIT_FAULT_CHILD";
 /// The checkpoint file of the helpers, in their directory.
 const FILE: &str = "run.ckpt";
 
+/// The file a writer of [`check_killed_writers`] makes once it starts writing.
+const ALIVE: &str = "alive";
+
 /// What [`check_killed_writers`] saw.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Kills {
@@ -88,6 +91,8 @@ pub fn check_killed_writers<S: Restart>(
             } else {
                 make().expect("building the run")
             };
+            // Tells the parent that the writing starts now.
+            std::fs::write(dir.join(ALIVE), b"").expect("the start marker");
             // Until killed (a minute at most, should the parent be gone).
             let start = Instant::now();
             while start.elapsed() < Duration::from_secs(60) {
@@ -103,6 +108,7 @@ pub fn check_killed_writers<S: Restart>(
     let exe = std::env::current_exe().expect("the test binary's path");
     let mut seen = Kills::default();
     for k in 0..kills {
+        let _ = std::fs::remove_file(dir.join(ALIVE));
         let mut child = Command::new(&exe)
             .args([test, "--exact", "--nocapture", "--test-threads=1"])
             .env(FAULT_CHILD_ENV, format!("write|{}", dir.display()))
@@ -110,8 +116,20 @@ pub fn check_killed_writers<S: Restart>(
             .stderr(Stdio::null())
             .spawn()
             .expect("starting the writer");
-        // 10 to 110 ms: past the start-up, into the stepping and writing.
-        let wait = 10.0 + 100.0 * f64::from(crate::rng::rng_uniform(0x6b11, k, 0));
+        // Once it writes (however slow its start on a loaded machine), 0 to 20 ms later: a
+        // few steps and writes in, at a random point of one of them.
+        let start = Instant::now();
+        while !dir.join(ALIVE).exists() {
+            if let Some(status) = child.try_wait().expect("polling the writer") {
+                panic!("writer {k} ended before it started writing: {status}");
+            }
+            assert!(
+                start.elapsed() < Duration::from_secs(60),
+                "writer {k} did not start writing within a minute"
+            );
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        let wait = 20.0 * f64::from(crate::rng::rng_uniform(0x6b11, k, 0));
         std::thread::sleep(Duration::from_secs_f64(wait * 1e-3));
         if let Some(status) = child.try_wait().expect("polling the writer") {
             panic!("writer {k} ended by itself before the kill: {status}");

@@ -10,6 +10,7 @@
 //! invocation per crate ([`conformance`]).
 
 pub mod conformance;
+mod decomposed;
 #[cfg(unix)]
 pub mod faults;
 mod mpirun;
@@ -17,6 +18,7 @@ mod mpirun;
 pub mod robust;
 #[cfg(feature = "gpu")]
 mod wgsl;
+pub use decomposed::check_decomposed;
 #[cfg(feature = "mpi")]
 pub use mpirun::check_on_ranks;
 pub use mpirun::{

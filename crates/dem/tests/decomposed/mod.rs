@@ -3,8 +3,8 @@
 //! of the one-process run (state, diagnostics and checkpoint bytes), checkpoints move
 //! between rank counts, and a blow-up stops every rank with the same error.
 
-use simkit_backend::Distributed;
 use simkit_backend::comm::Comm;
+use simkit_backend::testing::check_decomposed;
 use simkit_backend::{Error, Simulation};
 use simkit_dem::scenes::{BedParams, granular_box, granular_box_history, vibrating_bed};
 use simkit_dem::{
@@ -175,7 +175,8 @@ pub fn check_all(comm: &Comm) -> Result<usize, String> {
     Ok(checks)
 }
 
-/// One case of [`check_all`]: 6 checks.
+/// One case of [`check_all`] (`testing::check_decomposed`, then the diagnostics and the
+/// ownership): 6 checks.
 fn check_case<L: ContactLaw>(
     comm: &Comm,
     name: &str,
@@ -183,50 +184,13 @@ fn check_case<L: ContactLaw>(
     config: Config,
     steps: u32,
 ) -> Result<usize, String> {
-    let serial = Comm::serial();
-    let mut one = DistributedDem::new(scene.clone(), &config, serial.clone()).map_err(err)?;
-    let mut many = DistributedDem::new(scene.clone(), &config, comm.clone()).map_err(err)?;
-    let half = steps / 2;
-    one.step(half).map_err(err)?;
-    many.step(half).map_err(err)?;
-    let s1 = one.state().map_err(err)?;
-    let sm = many.state().map_err(err)?;
-    same(
-        state_bits(&s1),
-        state_bits(&sm),
-        &format!("{name}: state after {half} steps"),
-    )?;
-    if scene.rotation() && !s1.angular_velocities.iter().flatten().any(|&w| w != 0.0) {
-        return Err(format!("{name}: nothing spins after {half} steps"));
+    let make = |c: Comm| DistributedDem::new(scene.clone(), &config, c);
+    let same_state = |a: &State, b: &State, what: &str| same(state_bits(a), state_bits(b), what);
+    let (mut one, mut many) = check_decomposed(comm, name, steps, make, same_state)?;
+    let end = one.state().map_err(err)?;
+    if scene.rotation() && !end.angular_velocities.iter().flatten().any(|&w| w != 0.0) {
+        return Err(format!("{name}: nothing spins after {steps} steps"));
     }
-    let c1 = one.checkpoint().map_err(err)?;
-    same(
-        &c1,
-        &many.checkpoint().map_err(err)?,
-        &format!("{name}: checkpoint"),
-    )?;
-    // Swap: the one-process checkpoint goes on on `comm`, and `comm`'s on one process.
-    let mut many_resumed = DistributedDem::<L>::resume(&c1, comm.clone()).map_err(err)?;
-    let mut one_resumed = DistributedDem::<L>::resume(&c1, serial).map_err(err)?;
-    for sim in [&mut one, &mut many, &mut many_resumed, &mut one_resumed] {
-        sim.step(steps - half).map_err(err)?;
-    }
-    let want = state_bits(&one.state().map_err(err)?);
-    same(
-        &want,
-        &state_bits(&many.state().map_err(err)?),
-        &format!("{name}: state after {steps} steps"),
-    )?;
-    same(
-        &want,
-        &state_bits(&many_resumed.state().map_err(err)?),
-        &format!("{name}: state after a resume on {} ranks", comm.size()),
-    )?;
-    same(
-        &want,
-        &state_bits(&one_resumed.state().map_err(err)?),
-        &format!("{name}: state after a resume on one process"),
-    )?;
     let (d1, dm) = (
         one.diagnostics().map_err(err)?,
         many.diagnostics().map_err(err)?,

@@ -3,9 +3,9 @@
 //! of the one-process run (state, diagnostics, forces and checkpoint bytes), checkpoints
 //! move between rank counts, and a blow-up stops every rank with the same error.
 
-use simkit_backend::Distributed;
 use simkit_backend::comm::Comm;
 use simkit_backend::rng::rng_uniform;
+use simkit_backend::testing::check_decomposed;
 use simkit_backend::{Error, Simulation};
 use simkit_md::{
     Config, Dim, DistributedMd, Integrator, Langevin, LennardJones, PairTable, State, System,
@@ -228,45 +228,8 @@ fn err(e: Error) -> String {
 pub fn check_all(comm: &Comm) -> Result<usize, String> {
     let mut checks = 0;
     for (name, system, config, steps) in cases() {
-        let serial = Comm::serial();
-        let mut one = DistributedMd::new(system.clone(), &config, serial.clone()).map_err(err)?;
-        let mut many = DistributedMd::new(system.clone(), &config, comm.clone()).map_err(err)?;
-        let half = steps / 2;
-        one.step(half).map_err(err)?;
-        many.step(half).map_err(err)?;
-        let s1 = one.state().map_err(err)?;
-        let sm = many.state().map_err(err)?;
-        same_state(&s1, &sm, &format!("{name}: state after {half} steps"))?;
-        let c1 = one.checkpoint().map_err(err)?;
-        same(
-            &c1,
-            &many.checkpoint().map_err(err)?,
-            &format!("{name}: checkpoint"),
-        )?;
-        // Swap: the one-process checkpoint goes on on `comm`, and `comm`'s on one process.
-        let cm = many.checkpoint().map_err(err)?;
-        let mut many_resumed =
-            DistributedMd::<LennardJones>::resume(&c1, comm.clone()).map_err(err)?;
-        let mut one_resumed = DistributedMd::<LennardJones>::resume(&cm, serial).map_err(err)?;
-        for sim in [&mut one, &mut many, &mut many_resumed, &mut one_resumed] {
-            sim.step(steps - half).map_err(err)?;
-        }
-        let want = one.state().map_err(err)?;
-        same_state(
-            &want,
-            &many.state().map_err(err)?,
-            &format!("{name}: state after {steps} steps"),
-        )?;
-        same_state(
-            &want,
-            &many_resumed.state().map_err(err)?,
-            &format!("{name}: state after a resume on {} ranks", comm.size()),
-        )?;
-        same_state(
-            &want,
-            &one_resumed.state().map_err(err)?,
-            &format!("{name}: state after a resume on one process"),
-        )?;
+        let make = |c: Comm| DistributedMd::new(system.clone(), &config, c);
+        let (mut one, mut many) = check_decomposed(comm, name, steps, make, same_state)?;
         let (d1, dm) = (
             one.diagnostics().map_err(err)?,
             many.diagnostics().map_err(err)?,
