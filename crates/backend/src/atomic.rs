@@ -4,8 +4,9 @@
 //! flushed and synced, then renamed over the target. A reader therefore sees either the old
 //! file or the complete new one, never a half-written file, and a failed write leaves the
 //! previous file untouched and no temporary file behind. A writer killed before it
-//! committed leaves its temporary file; the next write to the same target removes it (on
-//! Linux, once that process is gone).
+//! committed leaves its temporary file; [`remove_stale_temporaries`] removes those of a
+//! target (checkpoint writes call it: they are rare, and a killed run is resumed from
+//! them).
 
 use std::fs::{self, File, OpenOptions};
 use std::io::{self, BufWriter, Write};
@@ -80,11 +81,7 @@ impl AtomicFile {
             _ => io_error(&parent, &e),
         })?;
         let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-        let mut prefix = std::ffi::OsString::from(".");
-        prefix.push(name);
-        prefix.push(".tmp-");
-        remove_stale(&parent, &prefix);
-        let mut tmp_name = prefix;
+        let mut tmp_name = temporary_prefix(name);
         tmp_name.push(format!("{}-{n}", std::process::id()));
         let tmp = parent.join(tmp_name);
         let file = OpenOptions::new()
@@ -141,13 +138,30 @@ impl AtomicFile {
     }
 }
 
-/// Removes the temporary files `<prefix><pid>-<n>` in `dir` left by writers that died
-/// before they committed (killed, or out of power): those whose process is gone. Linux
-/// only (a process exists while `/proc/<pid>` does); best effort.
-fn remove_stale(dir: &Path, prefix: &std::ffi::OsStr) {
+/// The start of the temporary files' names of target file `name`: `.name.tmp-`.
+fn temporary_prefix(name: &std::ffi::OsStr) -> std::ffi::OsString {
+    let mut prefix = std::ffi::OsString::from(".");
+    prefix.push(name);
+    prefix.push(".tmp-");
+    prefix
+}
+
+/// Removes the temporary files of `path` (`.name.tmp-<pid>-<n>` beside it) left by writers
+/// that died before they committed (killed, or out of power): those whose process is gone.
+/// Linux only (a process of this machine exists while `/proc/<pid>` does; elsewhere
+/// nothing is removed); best effort, it lists the directory once.
+pub fn remove_stale_temporaries(path: &Path) {
     if !Path::new("/proc/self").exists() {
         return;
     }
+    let Some(name) = path.file_name() else {
+        return;
+    };
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let prefix = temporary_prefix(name);
     let (Some(prefix), Ok(entries)) = (prefix.to_str(), fs::read_dir(dir)) else {
         return;
     };

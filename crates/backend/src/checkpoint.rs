@@ -358,8 +358,11 @@ pub fn require_law(bytes: &[u8], law: &str, default_law: &str) -> Result<()> {
     )))
 }
 
-/// Writes checkpoint `bytes` to `path` atomically, creating parent directories.
+/// Writes checkpoint `bytes` to `path` atomically, creating parent directories; first
+/// removes the temporary files of `path` that writers killed mid-write left
+/// ([`crate::atomic::remove_stale_temporaries`]).
 pub fn write_file(path: impl AsRef<Path>, bytes: &[u8]) -> Result<()> {
+    crate::atomic::remove_stale_temporaries(path.as_ref());
     crate::atomic::write_atomic(path, |w: &mut dyn Write| w.write_all(bytes))
 }
 

@@ -26,7 +26,7 @@ pub struct Kills {
     /// uninterrupted run).
     pub with_checkpoint: u32,
     /// Kills that left a temporary file: the writer died in the middle of a write (the
-    /// next writer removes it).
+    /// next checkpoint write removes it).
     pub mid_write: u32,
 }
 
