@@ -449,8 +449,8 @@ fn gpu_runs_step_to_a_finite_state_or_a_clear_error() {
     );
 }
 
-#[test]
-fn garbled_and_truncated_checkpoints_are_refused() {
+/// The checkpoint of a 108-atom Lennard-Jones crystal after 5 steps.
+fn small_checkpoint() -> Vec<u8> {
     let sys = scenes::fcc_lattice(
         [3; 3],
         0.3,
@@ -462,7 +462,12 @@ fn garbled_and_truncated_checkpoints_are_refused() {
     .unwrap();
     let mut md = Md::new(sys, &Config::default(), Backend::Cpu).unwrap();
     md.step(5).unwrap();
-    let bytes = md.checkpoint().unwrap();
+    md.checkpoint().unwrap()
+}
+
+#[test]
+fn garbled_and_truncated_checkpoints_are_refused() {
+    let bytes = small_checkpoint();
     let n = bytes.len();
     robust::run(
         &SEED,
@@ -534,18 +539,7 @@ fn lattices_refuse_bad_sizes_before_allocating() {
 fn resealed_checkpoints_never_panic_nor_allocate_past_their_size() {
     // 10^4 variants of a checkpoint past the checksum, each resumed by Md (and stepped) and
     // by DistributedMd.
-    let sys = scenes::fcc_lattice(
-        [3; 3],
-        0.3,
-        1.0,
-        PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5)).unwrap(),
-        &[0],
-        1,
-    )
-    .unwrap();
-    let mut md = Md::new(sys, &Config::default(), Backend::Cpu).unwrap();
-    md.step(5).unwrap();
-    let bytes = md.checkpoint().unwrap();
+    let bytes = small_checkpoint();
     let limit = |len: usize| (64 * len).max(8 << 20);
     let resumed = robust::fuzz_checkpoints(&SEED, 10_000, &bytes, &ALLOC, limit, |b| {
         if let Ok(mut d) = DistributedMd::<LennardJones>::resume(b, Comm::serial()) {
