@@ -15,6 +15,9 @@
 //!   drum's shell and the fitted surface drawn in), a side view for the 3D heap;
 //! - `pile_NNN.vtp` + `pile.pvd` (ParaView: `Velocity`, `AngularVelocity`, `radius`) and
 //!   `frames.xyz` (extended XYZ for OVITO and ASE, with `velo`, `radius` and `omega`);
+//! - `frames.gsd` (GSD, HOOMD-blue's format, for OVITO, freud and MDAnalysis: positions
+//!   relative to the box centre, velocities, diameters, masses, and the angular velocity
+//!   as `log/particles/angular_velocity`);
 //! - `angle.csv`: time, surface angle (degrees), kinetic and rotational energy per grain.
 //!
 //! Units: mean grain diameter 1, mass 1 at diameter 1, `g = 1` (time in `sqrt(d / g)`).
@@ -26,7 +29,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, ValueEnum};
-use simkit::backend::{Backend, Result, Simulation};
+use simkit::backend::{Backend, Precision, Result, Simulation};
 use simkit::dem::scenes::{
     DrumParams, HeapParams, column_heap, heap_flank, rotating_drum, surface_angle,
 };
@@ -34,6 +37,7 @@ use simkit::dem::{Config, ContactLaw, Dem, Dim, HertzMindlin, LinearHistory, Sce
 use simkit::output::colormap::Colormap;
 use simkit::output::csv::CsvWriter;
 use simkit::output::gif::GifWriter;
+use simkit::output::gsd::{GsdFrame, GsdWriter};
 use simkit::output::particles::ParticleFrame;
 use simkit::output::png::write_png;
 use simkit::output::vtk::{Particles, write_pvd};
@@ -174,6 +178,7 @@ fn pile<L: ContactLaw>(args: &Args, law: L) -> Result<()> {
     )?;
     let mut gif = GifWriter::create(out.join("pile.gif"), 100)?;
     let mut xyz = XyzWriter::create(out.join("frames.xyz"))?;
+    let mut gsd = GsdWriter::create(out.join("frames.gsd"), Precision::F32)?;
     let mut pvd: Vec<(f64, String)> = Vec::new();
     let bar = progress::bar(name, u64::from(frames), "frames");
     let mut last = f64::NAN;
@@ -195,6 +200,7 @@ fn pile<L: ContactLaw>(args: &Args, law: L) -> Result<()> {
         vtk(&s, &radii, &out.join(&file))?;
         pvd.push((s.time, file));
         xyz.push(&xyz_frame(&scene, &s, &radii)?)?;
+        gsd.push(&gsd_frame(&scene, u64::from(per_frame) * u64::from(k), &s)?)?;
     }
     bar.finish();
     csv.finish()?;
@@ -329,6 +335,21 @@ fn vtk(s: &State, radii: &[f64], path: &Path) -> Result<()> {
         .add_vector("Velocity", s.velocities.as_flattened(), 3)?
         .add_vector("AngularVelocity", s.angular_velocities.as_flattened(), 3)?;
     v.write(path)
+}
+
+/// A GSD frame at time step `step`: positions, velocities, one type `grain`, diameters,
+/// masses, angular velocities; the box of the scene.
+fn gsd_frame<L: ContactLaw>(scene: &Scene<L>, step: u64, s: &State) -> Result<GsdFrame> {
+    let axes = scene.dim().axes();
+    let (lo, hi) = (scene.lo(), scene.hi());
+    let mut f = GsdFrame::from_state(step, s, &lo[..axes], &hi[..axes])?;
+    let grains = scene.particles();
+    let diameters: Vec<f64> = grains.iter().map(|p| 2.0 * p.radius).collect();
+    let masses: Vec<f64> = grains.iter().map(|p| p.mass).collect();
+    f.types(&vec![0u32; grains.len()], &["grain"])?
+        .diameters(&diameters)?
+        .masses(&masses)?;
+    Ok(f)
 }
 
 /// An extended XYZ frame: positions, `velo`, `radius`, `omega`, the box.

@@ -21,6 +21,9 @@
 //! Output under `out/lj_fluid/`:
 //! - `thermo.csv`: step, time, temperature, pair energy, kinetic and total energy per
 //!   atom, pressure, every `--thermo-every` steps;
+//! - `traj.gsd` (GSD, HOOMD-blue's format, for OVITO, freud, MDAnalysis): a frame at every
+//!   thermo row (positions relative to the box centre, velocities, type `Ar`, diameter
+//!   sigma, mass); a resumed run continues it from its checkpoint's step;
 //! - `final.xyz` (extended XYZ: argon, velocities, radii, box) and `final.vtp` (VTK poly data
 //!   for ParaView and OVITO): the last state; the radius is sigma / 2.
 
@@ -32,6 +35,7 @@ use clap::Parser;
 use simkit::backend::{Backend, Error, GpuContext, Precision, Result, Simulation};
 use simkit::md::{Config, Diagnostics, LennardJones, Md, PairTable, State, System, scenes};
 use simkit::output::csv::CsvWriter;
+use simkit::output::gsd::{GsdFrame, GsdWriter};
 use simkit::output::vtk::Particles;
 use simkit::output::xyz::{XyzFrame, write_xyz};
 
@@ -198,6 +202,15 @@ fn run(args: &Args) -> Result<()> {
     let start = Thermo::new(first, &md.diagnostics()?, n);
     start.print("start");
     csv.row(&start.row())?;
+    // A resumed run rewrites its first frame and drops those written after its checkpoint.
+    let traj_path = out.join("traj.gsd");
+    let mut traj = if first > 0 && traj_path.exists() {
+        GsdWriter::resume(&traj_path, first - 1)?
+    } else {
+        // f32 frames (hoomd schema 1.4): every GSD reader opens them.
+        GsdWriter::create(&traj_path, Precision::F32)?
+    };
+    traj.push(&gsd_frame(first, &mut md)?)?;
     let every = if args.thermo_every == 0 {
         total
     } else {
@@ -220,6 +233,7 @@ fn run(args: &Args) -> Result<()> {
         bar.inc(u64::from(n_steps));
         end = Thermo::new(done, &md.diagnostics()?, n);
         csv.row(&end.row())?;
+        traj.push(&gsd_frame(done, &mut md)?)?;
     }
     bar.finish();
     csv.finish()?;
@@ -238,10 +252,36 @@ fn run(args: &Args) -> Result<()> {
     );
     write_snapshot(&md.state()?, &md, &out)?;
     println!(
-        "wrote {0}/thermo.csv, {0}/final.xyz, {0}/final.vtp",
+        "wrote {0}/thermo.csv, {0}/traj.gsd, {0}/final.xyz, {0}/final.vtp",
         out.display()
     );
     Ok(())
+}
+
+/// The state at `step` as a GSD frame: type `Ar`, diameter sigma, the species' mass.
+fn gsd_frame(step: u64, md: &mut Md) -> Result<GsdFrame> {
+    let state = md.state()?;
+    let system = md.system();
+    let (lo, len) = (system.lo(), system.lengths());
+    let hi = [lo[0] + len[0], lo[1] + len[1], lo[2] + len[2]];
+    let sigma = |s: u32| {
+        system
+            .table()
+            .get(s as usize, s as usize)
+            .map_or(1.0, |p| p.sigma)
+    };
+    let diameters: Vec<f64> = state.species.iter().map(|&s| sigma(s)).collect();
+    let masses: Vec<f64> = state
+        .species
+        .iter()
+        .map(|&s| system.masses()[s as usize])
+        .collect();
+    let mut frame = GsdFrame::from_state(step, &state, &lo, &hi)?;
+    frame
+        .types(&state.species, &["Ar"])?
+        .diameters(&diameters)?
+        .masses(&masses)?;
+    Ok(frame)
 }
 
 /// The last state as extended XYZ (species, positions, velocities, radii, box) and VTK

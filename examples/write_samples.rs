@@ -1,8 +1,8 @@
 //! One small file of every kind `simkit::output` writes for other programs (`.vtp` particles
 //! in binary and ASCII, a `.pvd` series of `.vtp` files, `.vti` grids in binary and ASCII,
-//! extended XYZ, CSV), with values from simple formulas of the particle or grid index.
-//! `scripts/check_readers.py` recomputes the same formulas and checks that VTK, meshio and
-//! ASE read every file back with the counts, names and values written.
+//! extended XYZ, GSD, CSV), with values from simple formulas of the particle or grid index.
+//! `scripts/check_readers.py` recomputes the same formulas and checks that VTK, ASE, `gsd`
+//! and freud read every file back with the counts, names and values written.
 //!
 //! ```text
 //! cargo run --release --example write_samples -- out/samples
@@ -12,8 +12,9 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::Parser;
-use simkit::backend::Result;
+use simkit::backend::{Precision, Result};
 use simkit::output::csv::write_csv;
+use simkit::output::gsd::{GsdFrame, GsdWriter};
 use simkit::output::vtk::{Encoding, ImageData, Particles, write_pvd};
 use simkit::output::xyz::{XyzFrame, write_xyz};
 
@@ -122,6 +123,43 @@ fn xyz(dir: &Path) -> Result<()> {
     write_xyz(dir.join("elements.xyz"), &[argon])
 }
 
+/// Box of the GSD samples: `[lo, hi]` holds every sample position (3D; the first two axes
+/// in 2D).
+const GSD_LO: [f64; 3] = [-1.0, -1.0, -2.0];
+const GSD_HI: [f64; 3] = [5.0, 7.0, 1.0];
+
+/// GSD trajectories: `traj.gsd` in f32 and `traj64.gsd` in f64 (3D, two frames at steps 0 and 100: positions, velocities,
+/// species, diameters `2 radius`, masses `1 + i`, `log/particles/angular_velocity =
+/// (i, 0, -i)` and `log/energy/kinetic = 0.5 f`) and `flat.gsd` (2D, one frame: the first
+/// two coordinates and velocity components).
+fn gsd(dir: &Path) -> Result<()> {
+    let kinds: Vec<u32> = (0..N as u32).map(|i| i % 3).collect();
+    let vel: Vec<[f64; 3]> = (0..N).map(velocity).collect();
+    let diameters: Vec<f64> = (0..N).map(|i| 2.0 * radius(i)).collect();
+    let masses: Vec<f64> = (0..N).map(|i| 1.0 + i as f64).collect();
+    let spin: Vec<f64> = (0..N).flat_map(|i| [i as f64, 0.0, -(i as f64)]).collect();
+    let mut traj = GsdWriter::create(dir.join("traj.gsd"), Precision::F32)?;
+    let mut exact = GsdWriter::create(dir.join("traj64.gsd"), Precision::F64)?;
+    for f in 0..2 {
+        let pos: Vec<[f64; 3]> = (0..N).map(|i| position(i, f)).collect();
+        let mut frame = GsdFrame::new(100 * f as u64, pos.as_flattened(), 3, &GSD_LO, &GSD_HI)?;
+        frame
+            .velocities(vel.as_flattened(), 3)?
+            .types(&kinds, &KINDS)?
+            .diameters(&diameters)?
+            .masses(&masses)?
+            .log("particles/angular_velocity", &spin, 3)?
+            .log("energy/kinetic", &[0.5 * f as f64], 1)?;
+        traj.push(&frame)?;
+        exact.push(&frame)?;
+    }
+    let xy: Vec<f64> = (0..N).flat_map(|i| position(i, 0)[..2].to_vec()).collect();
+    let vxy: Vec<f64> = (0..N).flat_map(|i| velocity(i)[..2].to_vec()).collect();
+    let mut flat = GsdFrame::new(7, &xy, 2, &GSD_LO[..2], &GSD_HI[..2])?;
+    flat.velocities(&vxy, 2)?.types(&kinds, &KINDS)?;
+    GsdWriter::create(dir.join("flat.gsd"), Precision::F32)?.push(&flat)
+}
+
 fn run(dir: &Path) -> Result<()> {
     particles(0, Encoding::Binary)?.write(dir.join("particles.vtp"))?;
     particles(0, Encoding::Ascii)?.write(dir.join("particles_ascii.vtp"))?;
@@ -134,6 +172,7 @@ fn run(dir: &Path) -> Result<()> {
     write_pvd(dir.join("series.pvd"), &series)?;
     grids(dir)?;
     xyz(dir)?;
+    gsd(dir)?;
     let rows: Vec<[f64; 2]> = (0..5).map(|k| [0.1 * k as f64, -1.5 * k as f64]).collect();
     write_csv(dir.join("series.csv"), &["t", "energy"], &rows)
 }

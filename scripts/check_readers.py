@@ -11,9 +11,12 @@ for consistency (counts, array names and sizes, sizes that are finite and positi
 `.vtp` frames against the `.xyz` frames when a directory has both).
 
 Readers: VTK's XML readers (vtkXMLPolyDataReader, vtkXMLImageDataReader; `.pvd` files are
-parsed with xml.etree and each listed file opened), ASE (`ase.io.read(path, index=":")`) and
-the csv module; and OVITO's `ovito.io.import_file` on the samples where the `ovito` module is
-installed (optional: it is large, and CI does not install it). Any reader error or warning, or any mismatch, is a failure; the script prints
+parsed with xml.etree and each listed file opened), ASE (`ase.io.read(path, index=":")`),
+the `gsd` package (`gsd.hoomd.open`) for `.gsd` trajectories, whose boxes and positions are
+then handed to freud (its neighbour query against a direct search), and the csv module; and OVITO's `ovito.io.import_file` on the samples where the `ovito` module is
+installed (optional: it is large, and CI does not install it; checked with OVITO 3.17.2,
+which reads the GSD trajectories' positions, velocities, radii (half the diameters), types,
+box and `log/particles/...` arrays as particle properties). Any reader error or warning, or any mismatch, is a failure; the script prints
 one line per check and `N passed, M failed`, and exits non-zero when M > 0.
 """
 
@@ -23,6 +26,11 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import ase.io
+import freud
+import gsd
+import gsd.fl
+import gsd.hoomd
+import gsd.version
 import numpy as np
 import vtk
 from vtk.util.numpy_support import vtk_to_numpy
@@ -65,6 +73,40 @@ def velocity(i):
 
 def radius(i):
     return 0.1 + 0.05 * i
+
+
+# The box of the GSD samples (examples/write_samples.rs): stored relative to its centre.
+GSD_LO = np.array([-1.0, -1.0, -2.0])
+GSD_HI = np.array([5.0, 7.0, 1.0])
+
+
+def gsd_frames(path):
+    """Every frame of a GSD file through gsd.hoomd, checked to be a hoomd-schema file."""
+    with gsd.hoomd.open(str(path), "r") as traj:
+        assert traj.file.schema == "hoomd", traj.file.schema
+        return list(traj)
+
+
+def check_freud_pairs(frame, r_max):
+    """freud's AABBQuery on the frame's box and positions finds the pairs within r_max
+    that a direct minimum-image search over all pairs finds."""
+    box = freud.box.Box.from_box(frame.configuration.box, dimensions=frame.configuration.dimensions)
+    pos = np.asarray(frame.particles.position, dtype=np.float32)
+    q = freud.locality.AABBQuery(box, pos)
+    lengths = np.asarray(frame.configuration.box[:3], dtype=float)
+    d = pos[None, :, :].astype(float) - pos[:, None, :].astype(float)
+    periodic = lengths > 0
+    d[..., periodic] -= lengths[periodic] * np.round(d[..., periodic] / lengths[periodic])
+    r = np.sqrt((d**2).sum(axis=-1))
+    np.fill_diagonal(r, np.inf)
+    # Pairs within rounding of r_max could go either way: move r_max off them.
+    while np.any(np.abs(r - r_max) < 1e-5):
+        r_max += 3e-5
+    want = {(int(i), int(j)) for i, j in zip(*np.nonzero(r < r_max))}
+    nlist = q.query(pos, {"r_max": r_max, "exclude_ii": True}).toNeighborList()
+    got = {(int(i), int(j)) for i, j in zip(nlist.query_point_indices, nlist.point_indices)}
+    assert got == want, f"freud found {len(got)} pairs, the direct search {len(want)}"
+    return len(want)
 
 
 def read_vtk(path):
@@ -185,6 +227,51 @@ def check_samples(d):
 
     check("series.csv", table)
 
+    def gsd_traj(name, dtype, schema):
+        frames = gsd_frames(d / name)
+        with gsd.fl.open(str(d / name), "r") as f:
+            assert f.schema_version == schema, f.schema_version
+        assert len(frames) == 2, len(frames)
+        centre = 0.5 * (GSD_LO + GSD_HI)
+        for f, frame in enumerate(frames):
+            assert frame.configuration.step == 100 * f, frame.configuration.step
+            assert frame.configuration.dimensions == 3
+            equal(frame.configuration.box, list(GSD_HI - GSD_LO) + [0, 0, 0], "box")
+            assert frame.particles.N == N, frame.particles.N
+            want = np.array([position(i, f) for i in range(N)]) - centre
+            assert frame.particles.position.dtype == dtype, frame.particles.position.dtype
+            equal(frame.particles.position, want.astype(dtype), "position")
+            equal(frame.particles.velocity, np.array([velocity(i) for i in range(N)], dtype), "velocity")
+            assert frame.particles.types == KINDS, frame.particles.types
+            equal(frame.particles.typeid, [i % 3 for i in range(N)], "typeid")
+            diameters = np.array([2 * radius(i) for i in range(N)], dtype)
+            equal(frame.particles.diameter, diameters, "diameter (frame 0's in frame 1)")
+            equal(frame.particles.mass, [1 + i for i in range(N)], "mass")
+            spin = [[i, 0, -i] for i in range(N)]
+            equal(frame.log["particles/angular_velocity"], spin, "log angular velocity")
+            equal(frame.log["energy/kinetic"], [0.5 * f], "log kinetic energy")
+
+    check(f"traj.gsd (f32, gsd {gsd.version.version})", lambda: gsd_traj("traj.gsd", np.float32, (1, 4)))
+    check("traj64.gsd (f64, schema 2.0)", lambda: gsd_traj("traj64.gsd", np.float64, (2, 0)))
+
+    def gsd_flat():
+        (frame,) = gsd_frames(d / "flat.gsd")
+        assert frame.configuration.step == 7 and frame.configuration.dimensions == 2
+        equal(frame.configuration.box, [6, 8, 0, 0, 0, 0], "2D box")
+        centre = 0.5 * (GSD_LO + GSD_HI)
+        want = [[p[0] - centre[0], p[1] - centre[1], 0] for p in (position(i, 0) for i in range(N))]
+        equal(frame.particles.position, np.float32(want), "2D position")
+        equal(frame.particles.velocity, np.float32([velocity(i)[:2] + [0] for i in range(N)]), "2D velocity")
+
+    check("flat.gsd (2D)", gsd_flat)
+
+    def gsd_freud():
+        for name in ("traj.gsd", "traj64.gsd", "flat.gsd"):
+            for frame in gsd_frames(d / name):
+                assert check_freud_pairs(frame, 1.3) > 0, "no pairs to compare"
+
+    check(f"traj.gsd, traj64.gsd and flat.gsd in freud {freud.__version__} (AABBQuery)", gsd_freud)
+
 
 def check_particle_file(path):
     """A `.vtp` from an example: counts, array sizes, a positive finite radius."""
@@ -247,8 +334,27 @@ def check_example(d):
 
         check(f"{d.name}/{f.name} (ASE)", xyz)
 
+    for f in sorted(d.glob("*.gsd")):
+
+        def trajectory(f=f):
+            frames = gsd_frames(f)
+            assert frames, "no frames"
+            steps = [int(fr.configuration.step) for fr in frames]
+            assert steps == sorted(set(steps)), f"steps not increasing: {steps}"
+            for fr in frames:
+                n = fr.particles.N
+                assert n > 0 and fr.particles.position.shape == (n, 3), fr.particles.position.shape
+                assert np.all(fr.particles.diameter > 0), "diameters not positive"
+                half = 0.5 * np.asarray(fr.configuration.box[:3])
+                inside = np.abs(fr.particles.position[:, : fr.configuration.dimensions])
+                assert np.all(inside <= half[: fr.configuration.dimensions] * (1 + 1e-6)), "outside the box"
+            check_freud_pairs(frames[-1], 0.5 * float(np.min(frames[-1].particles.diameter)) + 0.731)
+            return frames
+
+        check(f"{d.name}/{f.name} (gsd, freud)", trajectory)
+
     def not_empty():
-        kinds = ("*.pvd", "*.vtp", "*.vti", "*.xyz")
+        kinds = ("*.pvd", "*.vtp", "*.vti", "*.xyz", "*.gsd")
         assert any(any(d.glob(k)) for k in kinds), f"no VTK or XYZ files in {d}"
 
     check(f"{d.name} has files", not_empty)
@@ -298,6 +404,26 @@ def check_ovito(d):
 
     check("OVITO traj.xyz", traj)
 
+    def traj_gsd(name, dtype):
+        centre = 0.5 * (GSD_LO + GSD_HI)
+        pipeline = import_file(str(d / name))
+        assert pipeline.source.num_frames == 2, pipeline.source.num_frames
+        for f in range(2):
+            data = pipeline.compute(f)
+            p = data.particles
+            want = np.array([position(i, f) for i in range(N)]) - centre
+            equal(p["Position"][...], want.astype(dtype), "GSD Position")
+            equal(p["Velocity"][...], np.array([velocity(i) for i in range(N)], dtype), "GSD Velocity")
+            # OVITO keeps radii in f32 (half the diameter, exact in either file).
+            equal(p["Radius"][...], np.float32([radius(i) for i in range(N)]), "GSD Radius")
+            names = [p.particle_types.type_by_id(t).name for t in p["Particle Type"][...]]
+            assert names == [KINDS[i % 3] for i in range(N)], names
+            equal(p["angular_velocity"][...], [[i, 0, -i] for i in range(N)], "GSD angular_velocity")
+            equal(data.cell[...][:, 3], -0.5 * (GSD_HI - GSD_LO), "GSD cell origin")
+
+    check("OVITO traj.gsd (f32)", lambda: traj_gsd("traj.gsd", np.float32))
+    check("OVITO traj64.gsd (f64)", lambda: traj_gsd("traj64.gsd", np.float64))
+
 
 def main():
     if len(sys.argv) < 2:
@@ -307,7 +433,8 @@ def main():
     check_ovito(Path(sys.argv[1]))
     for d in sys.argv[2:]:
         check_example(Path(d))
-    print(f"{passed} passed, {failed} failed (vtk {vtk.vtkVersion.GetVTKVersion()}, ase {ase.__version__})")
+    versions = f"vtk {vtk.vtkVersion.GetVTKVersion()}, ase {ase.__version__}, gsd {gsd.version.version}, freud {freud.__version__}"
+    print(f"{passed} passed, {failed} failed ({versions})")
     return 1 if failed else 0
 
 

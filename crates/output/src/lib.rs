@@ -5,7 +5,8 @@
 //!
 //! Every file is written atomically through [`atomic::write_atomic`] (temporary file in the
 //! same directory, flush, sync, rename), so a crash or an error never leaves a half-written
-//! output, and parent directories are created as needed. Errors are
+//! output, and parent directories are created as needed. (GSD trajectories are appended
+//! to in place, in an order that keeps every completed frame readable: see [`gsd`].) Errors are
 //! [`simkit_backend::Error`] values whose messages name the bad value and the fix.
 //!
 //! | module | what it writes |
@@ -17,6 +18,7 @@
 //! | [`gif`] | animated GIF from RGB frames |
 //! | [`vtk`] | ParaView files: `.vti` image data, `.vtp` particles, `.pvd` series |
 //! | [`xyz`] | extended XYZ trajectories (ASE, OVITO) |
+//! | [`gsd`] | GSD trajectories (HOOMD-blue's format: freud, OVITO, MDAnalysis), appended frame by frame |
 //! | [`csv`] | CSV time series |
 //! | [`figure`], [`colormap`], [`numfmt`], [`png`], [`atomic`] | building blocks |
 //!
@@ -47,6 +49,7 @@ pub mod colormap;
 pub mod csv;
 pub mod figure;
 pub mod gif;
+pub mod gsd;
 pub mod heatmap;
 pub mod numfmt;
 pub mod particles;
