@@ -77,8 +77,8 @@ mod tests {
         let f = BlockField::from_lattice(&l, 8).unwrap();
         let (ux, _) = f.velocity();
         assert!(ux.iter().sum::<f64>() > 0.0, "east-movers dominate");
-        let dir = std::env::temp_dir().join(format!("simkit_files_{}", std::process::id()));
-        let (png, vti) = (dir.join("u.png"), dir.join("u.vti"));
+        let dir = tempfile::tempdir().unwrap();
+        let (png, vti) = (dir.path().join("u.png"), dir.path().join("u.vti"));
         write_block_velocity_png(&f, &png, "test").unwrap();
         write_block_field_vti(&f, &vti).unwrap();
         // 16 x 8 blocks of 8 x 8 sites: 18 x 8 physically square cells, upscaled.
@@ -87,6 +87,5 @@ mod tests {
         let text = std::fs::read_to_string(&vti).unwrap();
         assert!(text.contains("ImageData") && text.contains("velocity"));
         assert!(text.contains("density") && text.contains("WholeExtent=\"0 15 0 7 0 0\""));
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
