@@ -175,6 +175,10 @@ fn a_resumed_trajectory_drops_frames_after_the_checkpoint_step() {
         read_all(&path),
         stored(&[frame_3d(0, 8), frame_3d(1, 2)], F32)
     );
+    // Another particle count: the types are written again (the schema takes frame 0's
+    // only between frames of one count).
+    let file = GsdFile::open(&path).unwrap();
+    assert!(file.chunk(1, "particles/types").unwrap().is_some());
 }
 
 #[test]

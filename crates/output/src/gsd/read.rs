@@ -201,7 +201,8 @@ impl GsdFile {
         }))
     }
 
-    /// Frame `i`, chunks it lacks taken from frame 0 as the schema says.
+    /// Frame `i`, chunks it lacks taken from frame 0 as the schema says (particle chunks
+    /// only when the two frames hold as many particles).
     ///
     /// Errors: `i` out of range, a read failure, or chunks of the wrong type or shape.
     pub fn frame(&self, i: u64) -> Result<GsdFrame> {
@@ -224,10 +225,16 @@ impl GsdFile {
             let c = self.chunk(i, &name)?.expect("an indexed chunk");
             log_chunks.push((name, c));
         }
+        // A particle chunk missing from frame i is frame 0's only when both frames have the
+        // same particle count (else the schema's default).
+        let count = |f: u64| -> Result<Option<Chunk>> { self.chunk(f, "particles/N") };
+        let first = count(0)?;
+        let same_count = count(i)?.is_none_or(|c| Some(c) == first);
         let mut get = |name: &str| -> Result<Option<Chunk>> {
             match self.chunk(i, name)? {
                 Some(c) => Ok(Some(c)),
-                None => self.chunk(0, name),
+                None if same_count || !name.starts_with("particles/") => self.chunk(0, name),
+                None => Ok(None),
             }
         };
         GsdFrame::from_chunks(&mut get, log_chunks)

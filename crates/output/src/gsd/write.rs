@@ -232,6 +232,17 @@ impl GsdWriter {
     fn write_frame(&mut self, frame: Vec<(String, Chunk)>) -> Result<()> {
         // Name ids (new names appended), chunks in id order, those equal to frame 0's left out.
         let first_new_name = self.names.len();
+        // Particle chunks fall back to frame 0's only between frames of one particle count.
+        let initial = |name: &str| {
+            let id = self.names.iter().position(|n| n == name)?;
+            let (_, c) = self.initial.iter().find(|(i, _)| usize::from(*i) == id)?;
+            Some(c)
+        };
+        let count = frame
+            .iter()
+            .find(|(n, _)| n == "particles/N")
+            .map(|(_, c)| c);
+        let same_count = count == initial("particles/N");
         let mut chunks = Vec::new();
         for (name, chunk) in frame {
             let id = match self.names.iter().position(|n| *n == name) {
@@ -249,8 +260,10 @@ impl GsdWriter {
                 )
             })?;
             // The step and the logged time series are written in every frame.
+            let name = &self.names[usize::from(id)];
             let repeated = self.frames > 0
-                && name_is_attribute(&self.names[usize::from(id)])
+                && name_is_attribute(name)
+                && (same_count || !name.starts_with("particles/"))
                 && self.initial.iter().any(|(i, c)| *i == id && *c == chunk);
             if !repeated {
                 chunks.push((id, chunk));
