@@ -45,10 +45,9 @@ fn float_chunk(name: &str, columns: u32, values: &[f64], precision: Precision) -
     Ok(Chunk::from_f32(columns, &narrow))
 }
 
-/// `values` rounded to f32 and back (`None` stays `None`).
-fn round_f32(values: &Option<Vec<f64>>) -> Option<Vec<f64>> {
-    let v = values.as_ref()?;
-    Some(v.iter().map(|&x| f64::from(x as f32)).collect())
+/// `values` rounded to f32 and back.
+fn round_f32(values: &[f64]) -> Vec<f64> {
+    values.iter().map(|&x| f64::from(x as f32)).collect()
 }
 
 const AXES: [&str; 3] = ["x", "y", "z"];
@@ -324,10 +323,10 @@ impl GsdFrame {
         self.chunks(precision)?;
         let mut r = self.clone();
         r.box_ = self.box_.map(|x| f64::from(x as f32));
-        r.positions = round_f32(&Some(self.positions.clone())).unwrap_or_default();
-        r.velocities = round_f32(&self.velocities);
-        r.diameters = round_f32(&self.diameters);
-        r.masses = round_f32(&self.masses);
+        r.positions = round_f32(&self.positions);
+        r.velocities = self.velocities.as_deref().map(round_f32);
+        r.diameters = self.diameters.as_deref().map(round_f32);
+        r.masses = self.masses.as_deref().map(round_f32);
         Ok(r)
     }
 

@@ -27,7 +27,7 @@ impl GsdFile {
     /// the file's size before anything is allocated from it).
     ///
     /// Errors: a file that cannot be read, is not a GSD file of file layer 2.x with the
-    /// `hoomd` schema 1.x, or whose index or name list is corrupt.
+    /// `hoomd` schema 1.x or 2.x, or whose index or name list is corrupt.
     pub fn open(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref().to_path_buf();
         let mut file = File::open(&path).map_err(|e| io_error(&path, &e))?;
