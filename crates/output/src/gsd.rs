@@ -254,6 +254,13 @@ impl Chunk {
     }
 }
 
+/// The `hoomd` schema's rule for a chunk `name` that a frame lacks: it is frame 0's, except
+/// a particle chunk between frames of different particle counts (`same_count` false), which
+/// takes its default.
+fn inherits_from_frame_0(name: &str, same_count: bool) -> bool {
+    same_count || !name.starts_with("particles/")
+}
+
 /// One index entry.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 struct Entry {

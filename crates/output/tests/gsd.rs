@@ -10,11 +10,9 @@ use simkit_backend::Precision::{self, F32, F64};
 use simkit_backend::rng::rng_uniform;
 use simkit_output::gsd::{GsdFile, GsdFrame, GsdWriter};
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("simkit-gsd-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+/// A temporary directory, removed when dropped.
+fn scratch() -> tempfile::TempDir {
+    tempfile::tempdir().unwrap()
 }
 
 /// Frame `f` of a 3D test trajectory: `n` particles, positions and velocities from `f`,
@@ -60,16 +58,16 @@ fn read_all(path: &Path) -> Vec<GsdFrame> {
 
 #[test]
 fn frames_read_back_as_written_and_attributes_are_stored_once() {
-    let dir = scratch("roundtrip");
+    let dir = scratch();
     let frames: Vec<GsdFrame> = (0..5).map(|f| frame_3d(f, 40)).collect();
     // f64: the same bits; f32: each float rounded once.
-    let exact = dir.join("exact.gsd");
+    let exact = dir.path().join("exact.gsd");
     let mut w = GsdWriter::create(&exact, F64).unwrap();
     for f in &frames {
         w.push(f).unwrap();
     }
     assert_eq!(read_all(&exact), frames);
-    let path = dir.join("traj.gsd");
+    let path = dir.path().join("traj.gsd");
     let mut w = GsdWriter::create(&path, F32)
         .unwrap()
         .sync_each_frame(false);
@@ -110,7 +108,7 @@ fn frames_read_back_as_written_and_attributes_are_stored_once() {
         assert!(file.chunk(3, name).unwrap().is_some(), "{name} missing");
     }
     // 2D: Lz = 0, z = 0, two velocity components in, three stored.
-    let path2 = dir.join("flat.gsd");
+    let path2 = dir.path().join("flat.gsd");
     let mut w = GsdWriter::create(&path2, F32).unwrap();
     let mut f2 = GsdFrame::new(7, &[1.0f32, 2.0, 3.0, 0.5], 2, &[0.0, 0.0], &[4.0, 3.0]).unwrap();
     f2.velocities(&[0.5f32, -0.5, 1.0, 2.0], 2).unwrap();
@@ -121,13 +119,12 @@ fn frames_read_back_as_written_and_attributes_are_stored_once() {
     assert_eq!(back[0].box_(), [4.0, 3.0, 0.0, 0.0, 0.0, 0.0]);
     assert_eq!(back[0].positions(), [-1.0, 0.5, 0.0, 1.0, -1.0, 0.0]);
     assert_eq!(back[0].velocity().unwrap(), [0.5, -0.5, 0.0, 1.0, 2.0, 0.0]);
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn the_index_and_the_name_list_grow_past_their_first_blocks() {
-    let dir = scratch("grow");
-    let path = dir.join("traj.gsd");
+    let dir = scratch();
+    let path = dir.path().join("traj.gsd");
     let mut w = GsdWriter::create(&path, F32)
         .unwrap()
         .sync_each_frame(false);
@@ -148,8 +145,8 @@ fn the_index_and_the_name_list_grow_past_their_first_blocks() {
 
 #[test]
 fn a_resumed_trajectory_drops_frames_after_the_checkpoint_step() {
-    let dir = scratch("resume");
-    let path = dir.join("traj.gsd");
+    let dir = scratch();
+    let path = dir.path().join("traj.gsd");
     let mut w = GsdWriter::create(&path, F32).unwrap();
     for f in 0..10 {
         w.push(&frame_3d(f, 8)).unwrap();
@@ -189,8 +186,8 @@ fn bad_frames_are_errors_that_name_the_value() {
     assert!(e.contains("position[0].y"), "{e}");
     // A value beyond f32: refused by an f32 trajectory (which goes on), kept in f64.
     let huge = GsdFrame::new(0, &[0.5, 1e39, 0.5], 3, &box3.0, &box3.1).unwrap();
-    let dir = scratch("bad");
-    let mut w = GsdWriter::create(dir.join("f32.gsd"), F32).unwrap();
+    let dir = scratch();
+    let mut w = GsdWriter::create(dir.path().join("f32.gsd"), F32).unwrap();
     let e = w.push(&huge).unwrap_err().to_string();
     assert!(
         e.contains("particles/position[1]") && e.contains("f64"),
@@ -198,10 +195,10 @@ fn bad_frames_are_errors_that_name_the_value() {
     );
     let fine = GsdFrame::new(1, &[0.5; 3], 3, &box3.0, &box3.1).unwrap();
     w.push(&fine).unwrap();
-    assert_eq!(read_all(&dir.join("f32.gsd")), [fine]);
-    let mut w = GsdWriter::create(dir.join("f64.gsd"), F64).unwrap();
+    assert_eq!(read_all(&dir.path().join("f32.gsd")), [fine]);
+    let mut w = GsdWriter::create(dir.path().join("f64.gsd"), F64).unwrap();
     w.push(&huge).unwrap();
-    assert_eq!(read_all(&dir.join("f64.gsd")), [huge]);
+    assert_eq!(read_all(&dir.path().join("f64.gsd")), [huge]);
     let e = err(GsdFrame::new(
         0,
         &[0.5; 3],
@@ -235,8 +232,8 @@ fn bad_frames_are_errors_that_name_the_value() {
 
 #[test]
 fn corrupt_files_are_errors_not_panics() {
-    let dir = scratch("corrupt");
-    let path = dir.join("traj.gsd");
+    let dir = scratch();
+    let path = dir.path().join("traj.gsd");
     let mut w = GsdWriter::create(&path, F32)
         .unwrap()
         .sync_each_frame(false);
@@ -244,7 +241,7 @@ fn corrupt_files_are_errors_not_panics() {
         w.push(&frame_3d(f, 5)).unwrap();
     }
     let good = std::fs::read(&path).unwrap();
-    let bad = dir.join("bad.gsd");
+    let bad = dir.path().join("bad.gsd");
     let open = |bytes: &[u8]| {
         std::fs::write(&bad, bytes).unwrap();
         GsdFile::open(&bad).and_then(|f| {
@@ -279,7 +276,6 @@ fn corrupt_files_are_errors_not_panics() {
         errors += usize::from(open(&bytes).is_err());
     }
     assert!(errors > 0, "no corruption was noticed in 2000 cases");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A frame of [`every_write_boundary_leaves_the_completed_frames`]: every fifth frame logs
@@ -299,8 +295,8 @@ fn marked_frame(f: u64, n: usize) -> GsdFrame {
 /// completes the trajectory.
 #[test]
 fn every_write_boundary_leaves_the_completed_frames() {
-    let dir = scratch("boundaries");
-    let path = dir.join("traj.gsd");
+    let dir = scratch();
+    let path = dir.path().join("traj.gsd");
     const FRAMES: u64 = 40;
     let want: Vec<GsdFrame> = (0..FRAMES).map(|f| marked_frame(f, 4)).collect();
     let mut writes = 0;
@@ -326,7 +322,6 @@ fn every_write_boundary_leaves_the_completed_frames() {
     // Data, then index entries, per frame; names, index copies and headers besides.
     assert!(writes > 2 * FRAMES, "only {writes} writes");
     eprintln!("{writes} write boundaries checked");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 const CHILD: &str = "SIMKIT_GSD_WRITER";
@@ -351,8 +346,8 @@ fn killed_writers_leave_every_completed_frame() {
         }
         return;
     }
-    let dir = scratch("kills");
-    let path = dir.join("traj.gsd");
+    let dir = scratch();
+    let path = dir.path().join("traj.gsd");
     let exe = std::env::current_exe().unwrap();
     let mut growth = Vec::new();
     for k in 0..20u32 {
@@ -396,5 +391,4 @@ fn killed_writers_leave_every_completed_frame() {
         "the writers made no progress across kills: {growth:?}"
     );
     eprintln!("frames after each kill: {growth:?}");
-    let _ = std::fs::remove_dir_all(&dir);
 }

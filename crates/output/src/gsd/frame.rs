@@ -3,7 +3,7 @@
 use super::{Chunk, ChunkType};
 use crate::vtk::check_interleaved;
 use simkit_backend::particles::State;
-use simkit_backend::{Error, Precision, Result};
+use simkit_backend::{Error, Precision, Result, require_finite, require_positive};
 
 /// A `log/` quantity of a frame: name (after `log/`), columns, values.
 #[derive(Debug, Clone, PartialEq)]
@@ -43,6 +43,27 @@ fn float_chunk(name: &str, columns: u32, values: &[f64], precision: Precision) -
         ));
     }
     Ok(Chunk::from_f32(columns, &narrow))
+}
+
+/// Interleaved `values` with `dim` components each as three per item (`z = 0` in 2D),
+/// `shift` subtracted; a value that is not finite is an error naming `what[i].axis`.
+fn widen<T: Copy + Into<f64>>(
+    what: &str,
+    values: &[T],
+    dim: usize,
+    shift: [f64; 3],
+) -> Result<Vec<f64>> {
+    let mut out = Vec::with_capacity(values.len() / dim * 3);
+    for (i, p) in values.chunks_exact(dim).enumerate() {
+        for (a, &v) in p.iter().enumerate() {
+            let v = require_finite(&format!("{what}[{i}].{}", AXES[a]), v.into())?;
+            out.push(v - shift[a]);
+        }
+        if dim == 2 {
+            out.push(0.0);
+        }
+    }
+    Ok(out)
 }
 
 /// `values` rounded to f32 and back.
@@ -95,21 +116,7 @@ impl GsdFrame {
             box_[a] = length;
             centre[a] = 0.5 * (lo[a] + hi[a]);
         }
-        let n = positions.len() / dim;
-        let mut pos = Vec::with_capacity(3 * n);
-        for (i, p) in positions.chunks_exact(dim).enumerate() {
-            for (a, &v) in p.iter().enumerate() {
-                let v: f64 = v.into();
-                let name = || format!("position[{i}].{}", AXES[a]);
-                if !v.is_finite() {
-                    return Err(Error::invalid(name(), v, "positions must be finite"));
-                }
-                pos.push(v - centre[a]);
-            }
-            if dim == 2 {
-                pos.push(0.0);
-            }
-        }
+        let pos = widen("position", positions, dim, centre)?;
         Ok(Self {
             step,
             dimensions: dim as u8,
@@ -169,20 +176,7 @@ impl GsdFrame {
                 ),
             ));
         }
-        let mut out = Vec::with_capacity(3 * self.len());
-        for (i, p) in v.chunks_exact(dim).enumerate() {
-            for (a, &x) in p.iter().enumerate() {
-                let x: f64 = x.into();
-                if !x.is_finite() {
-                    let name = format!("velocity[{i}].{}", AXES[a]);
-                    return Err(Error::invalid(name, x, "velocities must be finite"));
-                }
-                out.push(x);
-            }
-            if dim == 2 {
-                out.push(0.0);
-            }
-        }
+        let out = widen("velocity", v, dim, [0.0; 3])?;
         self.velocities = Some(out);
         Ok(self)
     }
@@ -271,12 +265,8 @@ impl GsdFrame {
                 format!("expected a positive divisor of the {} values", values.len()),
             ));
         };
-        if let Some((i, v)) = values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-            return Err(Error::invalid(
-                format!("log {name}[{i}]"),
-                v,
-                "logged values must be finite",
-            ));
+        for (i, &v) in values.iter().enumerate() {
+            require_finite(&format!("log {name}[{i}]"), v)?;
         }
         self.logs.push(Log {
             name: name.to_string(),
@@ -300,13 +290,8 @@ impl GsdFrame {
 
     fn positive(&self, what: &str, values: &[f64]) -> Result<Vec<f64>> {
         self.check_len(what, values.len())?;
-        if let Some((i, v)) = values
-            .iter()
-            .enumerate()
-            .find(|(_, v)| !(v.is_finite() && **v > 0.0))
-        {
-            let name = format!("{what}[{i}]");
-            return Err(Error::invalid(name, v, "expected a finite positive value"));
+        for (i, &v) in values.iter().enumerate() {
+            require_positive(&format!("{what}[{i}]"), v)?;
         }
         Ok(values.to_vec())
     }

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use super::{
     Chunk, ChunkType, ENTRY, Entry, GSD_VERSION, GsdFrame, HEADER, Header, MAGIC, NAME_SEGMENT,
-    u64_at,
+    inherits_from_frame_0, u64_at,
 };
 use crate::atomic::io_error;
 use simkit_backend::{Error, Result};
@@ -233,7 +233,7 @@ impl GsdFile {
         let mut get = |name: &str| -> Result<Option<Chunk>> {
             match self.chunk(i, name)? {
                 Some(c) => Ok(Some(c)),
-                None if same_count || !name.starts_with("particles/") => self.chunk(0, name),
+                None if inherits_from_frame_0(name, same_count) => self.chunk(0, name),
                 None => Ok(None),
             }
         };

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use super::{
     Chunk, ChunkType, ENTRY, Entry, GsdFile, GsdFrame, HEADER, Header, INITIAL_ENTRIES,
-    INITIAL_SEGMENTS, NAME_SEGMENT, SCHEMA_F32, SCHEMA_F64,
+    INITIAL_SEGMENTS, NAME_SEGMENT, SCHEMA_F32, SCHEMA_F64, inherits_from_frame_0,
 };
 use crate::atomic::{io_error, write_atomic};
 use simkit_backend::{Error, Precision, Result};
@@ -263,7 +263,7 @@ impl GsdWriter {
             let name = &self.names[usize::from(id)];
             let repeated = self.frames > 0
                 && name_is_attribute(name)
-                && (same_count || !name.starts_with("particles/"))
+                && inherits_from_frame_0(name, same_count)
                 && self.initial.iter().any(|(i, c)| *i == id && *c == chunk);
             if !repeated {
                 chunks.push((id, chunk));
