@@ -4,6 +4,7 @@
 //! `DistributedDem`, and what it refuses. The same cases run on 2-4 MPI ranks in
 //! `tests/mpi.rs`.
 
+#[path = "decomposed/mod.rs"]
 mod decomposed;
 
 use simkit_backend::Distributed;

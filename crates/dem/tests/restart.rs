@@ -3,10 +3,11 @@
 //! truncated or corrupted files.
 
 /// The conformance suite every simulation crate runs (`conformance_tests!`).
+#[path = "suite/mod.rs"]
 mod suite;
 
 use approx::assert_abs_diff_eq;
-use simkit_backend::testing::{backends, check_restart};
+use simkit_backend::testing::{backends, check_restart, test_path};
 use simkit_backend::{Backend, Error, Restart, Simulation, checkpoint};
 use simkit_dem::{Config, Dem, Dim, Integrator, Material, Particle, Precision, Scene};
 
@@ -60,7 +61,7 @@ fn box3d() -> Scene {
 
 #[test]
 fn restart_is_bit_exact() {
-    let test = "restart_is_bit_exact";
+    let test = &test_path(module_path!(), "restart_is_bit_exact");
     for backend in backends(test) {
         check_restart(test, "bed vv", backend, 250, |b| {
             Dem::new(bed(), &Config::default(), b)
@@ -180,7 +181,10 @@ fn big_bed() -> Scene {
 fn a_writer_killed_at_random_moments_leaves_a_whole_checkpoint() {
     let make = || Dem::new(big_bed(), &Config::default(), Backend::Cpu);
     let seen = simkit_backend::testing::faults::check_killed_writers(
-        "a_writer_killed_at_random_moments_leaves_a_whole_checkpoint",
+        &test_path(
+            module_path!(),
+            "a_writer_killed_at_random_moments_leaves_a_whole_checkpoint",
+        ),
         60,
         1,
         make,
@@ -201,7 +205,10 @@ fn a_writer_killed_at_random_moments_leaves_a_whole_checkpoint() {
 fn a_full_disk_is_an_error_and_the_old_checkpoint_stays() {
     let make = || Dem::new(big_bed(), &Config::default(), Backend::Cpu);
     let message = simkit_backend::testing::faults::check_full_disk(
-        "a_full_disk_is_an_error_and_the_old_checkpoint_stays",
+        &test_path(
+            module_path!(),
+            "a_full_disk_is_an_error_and_the_old_checkpoint_stays",
+        ),
         make,
     );
     if std::env::var("SIMKIT_FAULT_CHILD").is_ok() {

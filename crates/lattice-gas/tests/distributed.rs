@@ -3,6 +3,7 @@
 //! MPI runs of the same cases are in `tests/mpi.rs`; the P-block stepping in one process is
 //! a unit test of the `distributed` module).
 
+#[path = "common/mod.rs"]
 mod common;
 
 use simkit_backend::comm::Comm;

@@ -3,9 +3,10 @@
 //! resumes exactly on another backend; bad files give clear errors.
 
 /// The conformance suite every simulation crate runs (`conformance_tests!`).
+#[path = "suite/mod.rs"]
 mod suite;
 
-use simkit_backend::testing::{backends, check_restart};
+use simkit_backend::testing::{backends, check_restart, test_path};
 use simkit_backend::{Backend, Error, Restart, Simulation, checkpoint};
 use simkit_lattice_gas::{Config, CpuMethod, GpuLayout, Lattice, LatticeGas, Obstacle, RuleSet};
 
@@ -64,9 +65,13 @@ fn configs() -> Vec<(&'static str, Config)> {
 fn restart_is_bit_exact() {
     for backend in backends("restart_is_bit_exact") {
         for (label, config) in configs() {
-            check_restart("restart_is_bit_exact", label, backend, 37, |b| {
-                scene(&config, b)
-            });
+            check_restart(
+                &test_path(module_path!(), "restart_is_bit_exact"),
+                label,
+                backend,
+                37,
+                |b| scene(&config, b),
+            );
         }
     }
 }

@@ -3,6 +3,7 @@
 //! long run, checkpoints moving between `Md` and `DistributedMd`, and what it refuses. The
 //! same cases run on 2-4 MPI ranks in `tests/mpi.rs`.
 
+#[path = "decomposed/mod.rs"]
 mod decomposed;
 
 use simkit_backend::Distributed;

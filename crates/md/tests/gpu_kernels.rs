@@ -3,7 +3,7 @@
 //! and the blow-up guard. (Both against the CPU: tests/conformance.rs.) GPU only: without
 //! an adapter these tests do nothing (with `SIMKIT_REQUIRE_GPU=1` they fail instead).
 
-use simkit_backend::testing::{backends, check_restart};
+use simkit_backend::testing::{backends, check_restart, test_path};
 use simkit_backend::{Backend, Error, Result, Simulation};
 use simkit_md::{
     Config, Dim, GpuKernel, Integrator, Langevin, LennardJones, Md, PairTable, State, System,
@@ -278,7 +278,7 @@ fn mix() -> System {
 
 #[test]
 fn cell_block_restart_is_bit_exact() {
-    let name = "cell_block_restart_is_bit_exact";
+    let name = &test_path(module_path!(), "cell_block_restart_is_bit_exact");
     let cb = GpuKernel::cell_block();
     let cases: [Case; 3] = [
         (

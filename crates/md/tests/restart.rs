@@ -1,9 +1,10 @@
 //! Checkpoint and restart, bit for bit (in a new process), and refused checkpoints.
 
 /// The conformance suite every simulation crate runs (`conformance_tests!`).
+#[path = "suite/mod.rs"]
 mod suite;
 
-use simkit_backend::testing::{backends, check_restart};
+use simkit_backend::testing::{backends, check_restart, test_path};
 use simkit_backend::{Backend, Error, Precision, Restart, Result, Simulation, checkpoint};
 use simkit_md::{Config, Dim, Integrator, Langevin, LennardJones, Md, PairTable, System, scenes};
 
@@ -46,7 +47,7 @@ type Case = (&'static str, fn() -> System, Config);
 
 #[test]
 fn restart_is_bit_exact() {
-    let name = "restart_is_bit_exact";
+    let name = &test_path(module_path!(), "restart_is_bit_exact");
     let cases: [Case; 6] = [
         (
             "3D mix, f64, velocity Verlet",

@@ -2,7 +2,7 @@
 //! identical pairs, plus edge cases. The properties draw their cases from a fixed seed (see
 //! `config`), so every run checks the same inputs.
 
-mod common;
+use crate::common;
 
 use proptest::prelude::*;
 use proptest::test_runner::{RngAlgorithm, RngSeed};

@@ -1,7 +1,7 @@
 //! Verlet lists: no pair within the cutoff is missed while every particle stays within
 //! skin / 2 of its build position, and `needs_rebuild` fires when one moves farther.
 
-mod common;
+use crate::common;
 
 use rand::{RngExt, SeedableRng};
 use simkit_neighbor::{BruteForce, CellGrid, ListKind, NeighborSearch, VerletList};

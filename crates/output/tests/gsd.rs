@@ -331,7 +331,10 @@ const CHILD: &str = "SIMKIT_GSD_WRITER";
 /// to the one written, and the next writer resumes it.
 #[test]
 fn killed_writers_leave_every_completed_frame() {
-    const TEST: &str = "killed_writers_leave_every_completed_frame";
+    let test = simkit_backend::testing::test_path(
+        module_path!(),
+        "killed_writers_leave_every_completed_frame",
+    );
     if let Ok(path) = std::env::var(CHILD) {
         let path = PathBuf::from(path);
         let mut w = if path.exists() {
@@ -354,7 +357,7 @@ fn killed_writers_leave_every_completed_frame() {
         let alive = path.with_extension("alive");
         let _ = std::fs::remove_file(&alive);
         let mut child = Command::new(&exe)
-            .args([TEST, "--exact", "--test-threads=1"])
+            .args([test.as_str(), "--exact", "--test-threads=1"])
             .env(CHILD, &path)
             .stdout(Stdio::null())
             .stderr(Stdio::null())

@@ -5,7 +5,7 @@
 //! L2 relative error, see `common`), trajectories with the same per-particle metric, and the
 //! CPU f32 trajectory against f64 with [`max_rel_diff`] over all coordinates.
 
-mod common;
+use crate::common;
 
 use common::{LAWS, l2_relative, max_error_over_rms, plasma};
 use simkit_backend::testing::{backends, max_rel_diff};

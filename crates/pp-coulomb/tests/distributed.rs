@@ -4,6 +4,7 @@
 //! targets into blocks is checked without MPI by the crate's unit tests (`cpu::tests`: 2, 3
 //! and 7 blocks on threads against one engine) and over MPI by `tests/mpi.rs`.
 
+#[path = "replicated/mod.rs"]
 mod replicated;
 
 use simkit_backend::Distributed;

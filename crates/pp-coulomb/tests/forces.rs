@@ -1,8 +1,8 @@
 //! Force kernels against the plain f64 reference, Newton's third law, bad input (the CPU vs
 //! GPU comparisons are in `conformance.rs`).
 
+use crate::common;
 use approx::abs_diff_eq;
-mod common;
 
 use common::{LAWS, l2_relative, max_error_over_rms, norm, plasma};
 #[cfg(feature = "gpu")]

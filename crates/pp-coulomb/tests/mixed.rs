@@ -4,7 +4,7 @@
 //! input, and the GPU's refusal. Restarts: `restart.rs`; blow-ups: `guard.rs`; distributed
 //! runs: `distributed.rs`; property tests: `robustness.rs`.
 
-mod common;
+use crate::common;
 
 use common::{LAWS, l2_relative, max_error_over_rms, plasma};
 use simkit_backend::{Backend, Error, Simulation};

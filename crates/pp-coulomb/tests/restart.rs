@@ -3,11 +3,12 @@
 //! errors for checkpoints of another model, truncated or corrupted ones.
 
 /// The conformance suite every simulation crate runs (`conformance_tests!`).
+#[path = "suite/mod.rs"]
 mod suite;
 
 use approx::assert_abs_diff_eq;
 use simkit_backend::checkpoint;
-use simkit_backend::testing::{backends, check_restart};
+use simkit_backend::testing::{backends, check_restart, test_path};
 use simkit_backend::{Backend, Error, Restart, Simulation};
 use simkit_pp_coulomb::{
     Config, ForceLaw, Integrator, Particles, PpCoulomb, Precision, Region, Species, Velocities,
@@ -36,7 +37,7 @@ fn plasma() -> Particles {
 /// interval 10 puts checks inside both halves and the resume at a non-multiple of it.
 #[test]
 fn restart_is_bit_exact() {
-    let name = "restart_is_bit_exact";
+    let name = &test_path(module_path!(), "restart_is_bit_exact");
     for backend in backends(name) {
         let mut precisions = vec![Precision::F32];
         if backend.has_f64() {
@@ -86,7 +87,7 @@ fn restart_is_bit_exact() {
 /// the same state relabelled as f32 (or an f32 one as mixed) is refused.
 #[test]
 fn mixed_restart_is_bit_exact() {
-    let name = "mixed_restart_is_bit_exact";
+    let name = &test_path(module_path!(), "mixed_restart_is_bit_exact");
     let cases = [
         ("exact leapfrog", ForceLaw::Exact, Integrator::Leapfrog),
         (

@@ -90,7 +90,7 @@ fn one_d<T: numpy::Element + Copy>(
     let len = a.len();
     if let Some(n) = n.filter(|&n| n != len) {
         return Err(PyValueError::new_err(format!(
-            "{name}: length {len}, must be {n} (one value per particle)"
+            "{name}: length {len}, must be {n}"
         )));
     }
     Ok(a.readonly().as_slice()?.to_vec())

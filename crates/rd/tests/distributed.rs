@@ -2,6 +2,7 @@
 //! model, boundary kind and integrator, with the same blow-up error (the MPI runs of the
 //! same cases are in `tests/mpi.rs`).
 
+#[path = "common/mod.rs"]
 mod common;
 
 use simkit_backend::comm::Comm;

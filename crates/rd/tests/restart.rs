@@ -4,9 +4,10 @@
 //! checkpoint whose contents are invalid is validated like `Rd::new`'s input.
 
 /// The conformance suite every simulation crate runs (`conformance_tests!`).
+#[path = "suite/mod.rs"]
 mod suite;
 
-use simkit_backend::testing::{backends, check_restart};
+use simkit_backend::testing::{backends, check_restart, test_path};
 use simkit_backend::{Backend, Error, Restart, Result, Simulation, checkpoint};
 use simkit_rd::scenes::{colony_scene, gray_scott_square};
 use simkit_rd::{Colony, Config, GpuOptions, GrayScott, Rd, Real, Stepping};
@@ -40,7 +41,7 @@ fn colony<T: Real>(backend: Backend<'_>, stepping: Stepping) -> Result<Rd<T, Col
 /// sweeps, and Heun), f32 on every backend and f64 on the CPU (and on a GPU with f64).
 #[test]
 fn restart_is_bit_exact() {
-    let test = "restart_is_bit_exact";
+    let test = &test_path(module_path!(), "restart_is_bit_exact");
     for backend in backends(test) {
         check_restart(test, "gray-scott f32", backend, 60, gray_scott::<f32>);
         check_restart(test, "colony f32 euler", backend, 50, |b| {

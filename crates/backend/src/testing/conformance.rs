@@ -228,13 +228,8 @@ macro_rules! conformance_tests {
             #[test]
             fn restart_is_bit_exact() {
                 for b in testing::backends("restart_is_bit_exact") {
-                    // The test's path in its binary (the module path less the crate),
-                    // by which the child process finds it.
-                    let here = module_path!();
-                    let test = format!(
-                        "{}::restart_is_bit_exact",
-                        here.split_once("::").map_or(here, |(_, rest)| rest)
-                    );
+                    // The test's path in its binary, by which the child process finds it.
+                    let test = testing::test_path(module_path!(), "restart_is_bit_exact");
                     testing::check_restart::<$sim>(
                         &test,
                         "conformance",

@@ -164,6 +164,24 @@ pub fn within(what: &str, diff: f64, bound: f64) -> std::result::Result<(), Stri
     }
 }
 
+/// The full name of test function `name` in its test binary, as `--exact` wants it: the
+/// module path (`module_path!()` at the call site) less the crate, then `name`. A test that
+/// runs itself in a child process ([`check_restart`], [`faults`]) passes
+/// `&test_path(module_path!(), "its_name")`, so the name stays right when test files are
+/// modules of one binary.
+///
+/// ```
+/// use simkit_backend::testing::test_path;
+/// assert_eq!(test_path("all::restart", "resumes"), "restart::resumes");
+/// assert_eq!(test_path("restart", "resumes"), "resumes");
+/// ```
+pub fn test_path(module_path: &str, name: &str) -> String {
+    match module_path.split_once("::") {
+        Some((_, rest)) => format!("{rest}::{name}"),
+        None => name.to_string(),
+    }
+}
+
 /// Environment variable through which [`check_restart`] tells its child process what to do.
 const RESTART_CHILD_ENV: &str = "SIMKIT_RESTART_CHILD";
 
@@ -173,7 +191,7 @@ const RESTART_CHILD_ENV: &str = "SIMKIT_RESTART_CHILD";
 /// included). The in-process resume is checked the same way first.
 ///
 /// Call it from the `#[test]` function whose full name in the test binary is `test` (e.g.
-/// `"restart_is_bit_exact"`): the child is that test binary, run with `--exact test` and an
+/// `test_path(module_path!(), "restart_is_bit_exact")`, see [`test_path`]): the child is that test binary, run with `--exact test` and an
 /// environment variable that makes this call resume, step and write instead. `make` builds
 /// the run on `backend` (several calls in one test are told apart by the backend's name and
 /// `label`).

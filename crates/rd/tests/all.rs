@@ -1,0 +1,18 @@
+//! Every integration test of `simkit-rd` in one test binary: each file of `tests/` is a
+//! module here, so the crate and its generic code are compiled and linked once for all
+//! of them instead of once per file.
+//! `tests/mpi.rs` stays its own binary: it launches itself under `mpirun` and needs the
+//! `mpi` feature. A new test file is added here as a module (the crate's Cargo.toml
+//! sets `autotests = false`).
+
+mod by_hand;
+mod colony_gap;
+mod conformance;
+mod distributed;
+mod gray_scott;
+mod guard;
+mod laws;
+mod restart;
+mod robustness;
+mod temporal_blocking;
+mod validation;
