@@ -18,10 +18,7 @@ pub(crate) fn backend(name: &str) -> PyResult<Backend<'static>> {
     match name {
         "cpu" => Ok(Backend::Cpu),
         #[cfg(feature = "gpu")]
-        "gpu" => match GPU.get_or_init(|| GpuContext::new().map_err(|e| e.to_string())) {
-            Ok(ctx) => Ok(Backend::Gpu(ctx)),
-            Err(message) => Err(pyo3::exceptions::PyRuntimeError::new_err(message.clone())),
-        },
+        "gpu" => Ok(Backend::Gpu(gpu_context()?)),
         #[cfg(not(feature = "gpu"))]
         "gpu" => Err(pyo3::exceptions::PyRuntimeError::new_err(
             "backend='gpu': this build of simkit has no GPU support (built without the `gpu` \
@@ -30,6 +27,16 @@ pub(crate) fn backend(name: &str) -> PyResult<Backend<'static>> {
         other => Err(PyValueError::new_err(format!(
             "invalid backend: {other:?} (use 'cpu' or 'gpu')"
         ))),
+    }
+}
+
+/// The process's GPU context, opened on first use (a failure to open is remembered: install
+/// a driver and restart Python).
+#[cfg(feature = "gpu")]
+pub(crate) fn gpu_context() -> PyResult<&'static GpuContext> {
+    match GPU.get_or_init(|| GpuContext::new().map_err(|e| e.to_string())) {
+        Ok(ctx) => Ok(ctx),
+        Err(message) => Err(pyo3::exceptions::PyRuntimeError::new_err(message.clone())),
     }
 }
 

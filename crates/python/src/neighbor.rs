@@ -46,12 +46,10 @@ impl<const D: usize> Method<D> {
             "brute" => Method::Brute(BruteForce::new(grid)),
             "verlet" => Method::Verlet(VerletList::new(grid, skin, ListKind::Half).py()?),
             #[cfg(feature = "gpu")]
-            "gpu" => match crate::backend::backend("gpu")? {
-                simkit::backend::Backend::Gpu(ctx) => {
-                    Method::Gpu(simkit::neighbor::GpuNeighborSearch::new(ctx, grid).py()?)
-                }
-                simkit::backend::Backend::Cpu => unreachable!("backend('gpu') is a GPU"),
-            },
+            "gpu" => Method::Gpu(
+                simkit::neighbor::GpuNeighborSearch::new(crate::backend::gpu_context()?, grid)
+                    .py()?,
+            ),
             other => {
                 return Err(PyValueError::new_err(format!(
                     "invalid method: {other:?} (use 'sorted', 'linked', 'verlet', 'brute' or \
