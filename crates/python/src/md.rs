@@ -109,6 +109,16 @@ fn lj_table(
     Ok(table)
 }
 
+/// The simulation of `system` with `c` on the named backend (built with the GIL released).
+fn start(py: Python<'_>, system: System, c: &Config, backend: &str, dim: usize) -> PyResult<Md> {
+    let b = crate::backend::backend(backend)?;
+    let inner = py.detach(|| simkit::md::Md::new(system, c, b)).py()?;
+    Ok(Md {
+        inner: Owned::new(inner),
+        dim,
+    })
+}
+
 #[pymethods]
 impl Md {
     #[new]
@@ -187,12 +197,7 @@ impl Md {
             check_every,
             allow_unstable_dt,
         )?;
-        let b = crate::backend::backend(backend)?;
-        let inner = py.detach(|| simkit::md::Md::new(system, &c, b)).py()?;
-        Ok(Self {
-            inner: Owned::new(inner),
-            dim,
-        })
+        start(py, system, &c, backend, dim)
     }
 
     /// The `in.lj` state of LAMMPS's benchmark (or any FCC crystal): `cells` FCC unit cells
@@ -243,12 +248,7 @@ impl Md {
             check_every,
             allow_unstable_dt,
         )?;
-        let b = crate::backend::backend(backend)?;
-        let inner = py.detach(|| simkit::md::Md::new(system, &c, b)).py()?;
-        Ok(Self {
-            inner: Owned::new(inner),
-            dim: 3,
-        })
+        start(py, system, &c, backend, 3)
     }
 
     /// Advances `n` steps (the GIL is released meanwhile). Raises `simkit.BlowUp` when the
