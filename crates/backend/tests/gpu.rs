@@ -307,6 +307,59 @@ fn shader_errors_are_errors_not_panics() {
 }
 
 #[test]
+fn a_kernel_built_again_shares_the_compiled_pipeline() {
+    let Some(ctx) = gpu_or_skip("a_kernel_built_again_shares_the_compiled_pipeline") else {
+        return;
+    };
+    const SOURCE: &str = "override SCALE: f32 = 1.0;
+@group(0) @binding(0) var<storage, read_write> v: array<f32>;
+@compute @workgroup_size(1) fn main() { v[0] = v[0] * SCALE; }";
+    let build = |scale: f64| {
+        let constants = [("SCALE", scale)];
+        let desc = KernelDesc {
+            label: "scale",
+            sources: &[SOURCE],
+            entry: "main",
+            workgroup_size: 1,
+            constants: &constants,
+        };
+        Kernel::new(&ctx, &desc).unwrap()
+    };
+    let (first, again, other) = (build(2.0), build(2.0), build(3.0));
+    assert_eq!(
+        first.pipeline(),
+        again.pipeline(),
+        "the same kernel compiled twice"
+    );
+    assert_ne!(
+        first.pipeline(),
+        other.pipeline(),
+        "another constant, the same pipeline"
+    );
+    // Each still runs with its own constant.
+    let v = GpuBuffer::<f32>::from_slice(&ctx, "v", &[1.0]).unwrap();
+    for kernel in [&first, &again, &other] {
+        let bind = kernel.bind(&ctx, &[v.binding()]).unwrap();
+        run_pass(&ctx, "scale", |pass| {
+            kernel.dispatch_workgroups(&ctx, pass, &bind, 1)
+        })
+        .unwrap();
+    }
+    assert_eq!(v.download(&ctx).unwrap(), [12.0]);
+    // A shader that fails to compile is not kept: it fails again.
+    let broken = KernelDesc {
+        label: "broken",
+        sources: &["@compute @workgroup_size(1) fn main() { let x: u32 = 2.5; }"],
+        entry: "main",
+        workgroup_size: 1,
+        constants: &[],
+    };
+    for _ in 0..2 {
+        assert!(matches!(Kernel::new(&ctx, &broken), Err(Error::Gpu(_))));
+    }
+}
+
+#[test]
 fn empty_buffers_round_trip() {
     let Some(ctx) = gpu_or_skip("empty_buffers_round_trip") else {
         return;

@@ -1,5 +1,6 @@
 //! Adapter choice and the device/queue pair every GPU backend runs on.
 
+use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
 use crate::{Error, Result};
@@ -49,7 +50,17 @@ struct Inner {
     limits: wgpu::Limits,
     features: wgpu::Features,
     faults: Arc<Faults>,
+    /// Every pipeline compiled on this device, by source, entry point and constants
+    /// ([`GpuContext::pipeline`]).
+    pipelines: Mutex<HashMap<PipelineKey, Pipeline>>,
 }
+
+/// What identifies a compiled pipeline: the WGSL source, the entry point and the override
+/// constants (values as bits).
+type PipelineKey = (String, String, Vec<(String, u64)>);
+
+/// A compute pipeline and its group-0 bind-group layout (both cheap handles to clone).
+pub(crate) type Pipeline = (wgpu::ComputePipeline, wgpu::BindGroupLayout);
 
 /// GPU failures that wgpu reports outside an error scope, kept for the next call.
 #[derive(Default)]
@@ -253,6 +264,7 @@ impl GpuContext {
                 limits,
                 features,
                 faults,
+                pipelines: Mutex::default(),
             }),
             wait_limit: DEFAULT_WAIT_LIMIT,
         })
@@ -420,6 +432,41 @@ impl GpuContext {
                 self.inner.info.name
             ))),
         }
+    }
+
+    /// The pipeline of `source`'s `entry` with override `constants`, compiled by `compile`
+    /// the first time it is asked for on this device and shared afterwards: every engine of
+    /// a process (the runs of a parameter sweep, a restart, the replicas of an ensemble)
+    /// reuses the pipelines of the first one instead of having the driver compile them
+    /// again. A failed compilation is not kept.
+    pub(crate) fn pipeline(
+        &self,
+        source: &str,
+        entry: &str,
+        constants: &[(&str, f64)],
+        compile: impl FnOnce() -> Result<Pipeline>,
+    ) -> Result<Pipeline> {
+        let key: PipelineKey = (
+            source.to_owned(),
+            entry.to_owned(),
+            constants
+                .iter()
+                .map(|&(name, value)| (name.to_owned(), value.to_bits()))
+                .collect(),
+        );
+        let cache = || {
+            self.inner
+                .pipelines
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+        };
+        if let Some(hit) = cache().get(&key) {
+            return Ok(hit.clone());
+        }
+        // Compiled outside the lock: two threads asking at once both compile, and the
+        // first one's pipeline is kept.
+        let compiled = compile()?;
+        Ok(cache().entry(key).or_insert(compiled).clone())
     }
 
     /// Submits an encoder's commands.

@@ -60,35 +60,39 @@ pub fn workgroup_grid(ctx: &GpuContext, workgroups: u64) -> Result<(u32, u32)> {
 }
 
 impl Kernel {
-    /// Compiles the WGSL and creates the pipeline; shader errors become [`Error::Gpu`].
+    /// Compiles the WGSL and creates the pipeline; shader errors become [`Error::Gpu`]. A
+    /// kernel of the same sources, entry point and constants built before on this device
+    /// (through any clone of `ctx`) shares the pipeline compiled then.
     pub fn new(ctx: &GpuContext, desc: &KernelDesc<'_>) -> Result<Self> {
         if desc.workgroup_size == 0 {
             return Err(Error::invalid("workgroup_size", 0, "must be >= 1"));
         }
         let source = desc.sources.join("\n");
         let what = format!("compiling kernel '{}'", desc.label);
-        let (pipeline, layout) = ctx.checked(&what, || {
-            let module = ctx
-                .device()
-                .create_shader_module(wgpu::ShaderModuleDescriptor {
-                    label: Some(desc.label),
-                    source: wgpu::ShaderSource::Wgsl(source.into()),
-                });
-            let pipeline = ctx
-                .device()
-                .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(desc.label),
-                    layout: None,
-                    module: &module,
-                    entry_point: Some(desc.entry),
-                    compilation_options: wgpu::PipelineCompilationOptions {
-                        constants: desc.constants,
-                        ..Default::default()
-                    },
-                    cache: None,
-                });
-            let layout = pipeline.get_bind_group_layout(0);
-            (pipeline, layout)
+        let (pipeline, layout) = ctx.pipeline(&source, desc.entry, desc.constants, || {
+            ctx.checked(&what, || {
+                let module = ctx
+                    .device()
+                    .create_shader_module(wgpu::ShaderModuleDescriptor {
+                        label: Some(desc.label),
+                        source: wgpu::ShaderSource::Wgsl(source.as_str().into()),
+                    });
+                let pipeline =
+                    ctx.device()
+                        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                            label: Some(desc.label),
+                            layout: None,
+                            module: &module,
+                            entry_point: Some(desc.entry),
+                            compilation_options: wgpu::PipelineCompilationOptions {
+                                constants: desc.constants,
+                                ..Default::default()
+                            },
+                            cache: None,
+                        });
+                let layout = pipeline.get_bind_group_layout(0);
+                (pipeline, layout)
+            })
         })?;
         Ok(Self {
             pipeline,
@@ -174,6 +178,12 @@ impl Kernel {
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, bind, &[]);
         pass.dispatch_workgroups(x, y, 1);
+    }
+
+    /// The compiled pipeline (shared by every kernel of the same sources, entry point and
+    /// constants on this device), for recording it in passes of your own.
+    pub fn pipeline(&self) -> &wgpu::ComputePipeline {
+        &self.pipeline
     }
 
     /// Invocations per workgroup.
