@@ -438,7 +438,8 @@ impl GpuContext {
     /// the first time it is asked for on this device and shared afterwards: every engine of
     /// a process (the runs of a parameter sweep, a restart, the replicas of an ensemble)
     /// reuses the pipelines of the first one instead of having the driver compile them
-    /// again. A failed compilation is not kept.
+    /// again. Pipelines are kept for the device's lifetime, one per distinct source and set
+    /// of constants; a failed compilation is not kept.
     pub(crate) fn pipeline(
         &self,
         source: &str,
