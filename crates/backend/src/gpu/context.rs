@@ -435,20 +435,20 @@ impl GpuContext {
     }
 
     /// The pipeline of `source`'s `entry` with override `constants`, compiled by `compile`
-    /// the first time it is asked for on this device and shared afterwards: every engine of
+    /// (given the source) the first time it is asked for on this device and shared afterwards: every engine of
     /// a process (the runs of a parameter sweep, a restart, the replicas of an ensemble)
     /// reuses the pipelines of the first one instead of having the driver compile them
     /// again. Pipelines are kept for the device's lifetime, one per distinct source and set
     /// of constants; a failed compilation is not kept.
     pub(crate) fn pipeline(
         &self,
-        source: &str,
+        source: String,
         entry: &str,
         constants: &[(&str, f64)],
-        compile: impl FnOnce() -> Result<Pipeline>,
+        compile: impl FnOnce(&str) -> Result<Pipeline>,
     ) -> Result<Pipeline> {
         let key: PipelineKey = (
-            source.to_owned(),
+            source,
             entry.to_owned(),
             constants
                 .iter()
@@ -466,7 +466,7 @@ impl GpuContext {
         }
         // Compiled outside the lock: two threads asking at once both compile, and the
         // first one's pipeline is kept.
-        let compiled = compile()?;
+        let compiled = compile(&key.0)?;
         Ok(cache().entry(key).or_insert(compiled).clone())
     }
 

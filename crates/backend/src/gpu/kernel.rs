@@ -1,6 +1,7 @@
 //! Compute kernels: WGSL modules, pipelines, bind groups and dispatch of any number of items.
 
 use super::GpuContext;
+use super::context::Pipeline;
 use crate::{Error, Result};
 
 /// WGSL helper shared by kernels dispatched with [`Kernel::dispatch_items`]:
@@ -67,33 +68,12 @@ impl Kernel {
         if desc.workgroup_size == 0 {
             return Err(Error::invalid("workgroup_size", 0, "must be >= 1"));
         }
-        let source = desc.sources.join("\n");
-        let what = format!("compiling kernel '{}'", desc.label);
-        let (pipeline, layout) = ctx.pipeline(&source, desc.entry, desc.constants, || {
-            ctx.checked(&what, || {
-                let module = ctx
-                    .device()
-                    .create_shader_module(wgpu::ShaderModuleDescriptor {
-                        label: Some(desc.label),
-                        source: wgpu::ShaderSource::Wgsl(source.as_str().into()),
-                    });
-                let pipeline =
-                    ctx.device()
-                        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                            label: Some(desc.label),
-                            layout: None,
-                            module: &module,
-                            entry_point: Some(desc.entry),
-                            compilation_options: wgpu::PipelineCompilationOptions {
-                                constants: desc.constants,
-                                ..Default::default()
-                            },
-                            cache: None,
-                        });
-                let layout = pipeline.get_bind_group_layout(0);
-                (pipeline, layout)
-            })
-        })?;
+        let (pipeline, layout) = ctx.pipeline(
+            desc.sources.join("\n"),
+            desc.entry,
+            desc.constants,
+            |source| compile(ctx, desc, source),
+        )?;
         Ok(Self {
             pipeline,
             layout,
@@ -190,6 +170,34 @@ impl Kernel {
     pub fn workgroup_size(&self) -> u32 {
         self.workgroup_size
     }
+}
+
+/// Compiles `source` (the joined sources of `desc`) into a pipeline and its group-0 layout;
+/// shader errors become [`Error::Gpu`].
+fn compile(ctx: &GpuContext, desc: &KernelDesc<'_>, source: &str) -> Result<Pipeline> {
+    ctx.checked(&format!("compiling kernel '{}'", desc.label), || {
+        let module = ctx
+            .device()
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(desc.label),
+                source: wgpu::ShaderSource::Wgsl(source.into()),
+            });
+        let pipeline = ctx
+            .device()
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(desc.label),
+                layout: None,
+                module: &module,
+                entry_point: Some(desc.entry),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: desc.constants,
+                    ..Default::default()
+                },
+                cache: None,
+            });
+        let layout = pipeline.get_bind_group_layout(0);
+        (pipeline, layout)
+    })
 }
 
 /// Runs `record` inside one compute pass recorded into `encoder` (not submitted: several
