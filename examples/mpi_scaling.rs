@@ -9,6 +9,7 @@
 //! RAYON_NUM_THREADS=1 mpirun -np 2 -x RAYON_NUM_THREADS target/release/examples/mpi_scaling pp-coulomb
 //! RAYON_NUM_THREADS=1 mpirun -np 2 -x RAYON_NUM_THREADS target/release/examples/mpi_scaling dem
 //! RAYON_NUM_THREADS=1 mpirun -np 2 -x RAYON_NUM_THREADS target/release/examples/mpi_scaling md
+//! mpirun -np 2 target/release/examples/mpi_scaling --steps 20000 comm --size 1024
 //! ```
 //! `benches/peers/mpi_scaling.sh` alternates 1 and 2 ranks and prints the efficiencies.
 //! Problems: `rd` — Gray–Scott f64 (`F = 0.04`, `k = 0.06`, `Du = 1`, `Dv = 0.5`, explicit
@@ -21,7 +22,9 @@
 //! 200,000 grains), spatial decomposition along x and y; `md` — LAMMPS's `in.lj` liquid
 //! (`cells^3` FCC cells at density 0.8442, T = 1.44, cutoff 2.5, skin 0.3, `dt = 0.005`,
 //! f64, velocity Verlet; default 20 cells, 32,000 atoms), spatial decomposition along x and
-//! y.
+//! y; `comm` — the communication layer alone: calls per second of `Comm::agree` on a
+//! passing check and of a depth-1 halo exchange of two f64 fields on a periodic `size^2`
+//! grid (what the agreement adds to each collective call, next to what a call costs).
 //! Each run takes a few warm-up steps, then times `steps` steps between barriers.
 
 use std::process::ExitCode;
@@ -30,7 +33,7 @@ use std::time::Instant;
 use clap::{Parser, Subcommand};
 use simkit::backend::Result;
 use simkit::backend::Simulation;
-use simkit::backend::comm::Comm;
+use simkit::backend::comm::{CartDecomposition, Comm};
 use simkit::dem::scenes::granular_box;
 use simkit::dem::{Config as DemConfig, DistributedDem};
 use simkit::lattice_gas::{Config as LgConfig, DistributedLatticeGas, Lattice};
@@ -89,6 +92,15 @@ enum Problem {
         /// FCC unit cells per side (4 cells^3 atoms; 20 = the 32,000 atoms of in.lj)
         #[arg(long, default_value_t = 20)]
         cells: usize,
+    },
+    /// The communication layer's own costs, per call (`steps` calls): `Comm::agree` of a
+    /// passing check (the agreement every collective call with a local check adds: one
+    /// all-gather of a byte) and a depth-1 halo exchange of two f64 fields on a periodic
+    /// size^2 grid (rd's Gray–Scott exchange, agreement included)
+    Comm {
+        /// Cells per side of the grid whose halo is exchanged
+        #[arg(long, default_value_t = 4096)]
+        size: usize,
     },
     /// Direct-sum Coulomb (f64) of the source's plasma, replicated data
     PpCoulomb {
@@ -184,6 +196,17 @@ fn run(args: &Args) -> Result<()> {
             drop(system);
             time(&comm, args, "md", n, n as f64, "atom-steps/s", |k| {
                 run.step(k)
+            })
+        }
+        Problem::Comm { size } => {
+            time(&comm, args, "comm-agree", size, 1.0, "calls/s", |n| {
+                (0..n).try_for_each(|_| comm.agree(Ok(())))
+            })?;
+            let grid = CartDecomposition::new([size, size], comm.size(), [true, true])?;
+            let [nx, ny] = grid.block(comm.rank()).len;
+            let mut fields = vec![0.0f64; 2 * (nx + 2) * (ny + 2)];
+            time(&comm, args, "comm-halo", size, 1.0, "calls/s", |n| {
+                (0..n).try_for_each(|_| grid.exchange_halo(&comm, &mut fields, 1))
             })
         }
         Problem::PpCoulomb { n } => {

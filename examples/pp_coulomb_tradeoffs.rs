@@ -194,7 +194,7 @@ fn run(args: &Args) -> Result<()> {
     // 1. Precision and force law: force error against exact f64 versus time per evaluation.
     let n_force = 8192;
     let (p, spacing) = plasma(n_force)?;
-    let exact = reference_accelerations(&p, ForceLaw::Exact);
+    let exact = reference_accelerations(&p, ForceLaw::Exact)?;
     writeln!(
         md,
         "## Force error versus cost (N = {n_force}, mean spacing a = {spacing:.3})\n"

@@ -18,7 +18,8 @@ pub fn block_velocity_options(field: &BlockField, title: &str) -> VectorFieldOpt
     let (_, _, cols, rows) = field.velocity_square_cells();
     let scale = (768 / cols.max(rows)).clamp(1, 32) as u32;
     let (_, spacing) = field.block_geometry();
-    let (width, height) = (field.nx as f64 * spacing[0], field.ny as f64 * spacing[1]);
+    let (nx, ny) = field.blocks();
+    let (width, height) = (nx as f64 * spacing[0], ny as f64 * spacing[1]);
     VectorFieldOptions::new().background(
         HeatmapOptions::new()
             .upscale(scale)
@@ -43,7 +44,8 @@ pub fn write_block_velocity_png(field: &BlockField, path: &Path, title: &str) ->
 /// block at the block centre, in lattice units ([`BlockField::block_geometry`]).
 pub fn write_block_field_vti(field: &BlockField, path: &Path) -> Result<()> {
     let (origin, spacing) = field.block_geometry();
-    let mut img = ImageData::new_2d(field.nx, field.ny, origin, spacing)?;
+    let (nx, ny) = field.blocks();
+    let mut img = ImageData::new_2d(nx, ny, origin, spacing)?;
     let (ux, uy) = field.velocity();
     let vel: Vec<f64> = ux
         .iter()

@@ -1,10 +1,11 @@
 //! The communication layer under `mpirun -np P` (P = 2, 3, 4): halo exchange at depths 1
 //! to 3 with and without periodic axes (every ghost cell, corners included, checked against
-//! the global field), gather to rank 0, the reductions and the broadcast from rank 0, and
-//! the particle domain (owners, ghosts against every image within the halo, refresh,
-//! migration), and a bad input on one rank of a halo exchange or a gather (an error on
-//! every rank, not a hang), and a rank killed mid-run ending the job. Built only with the `mpi` feature; the test launches its own binary under `mpirun` (skipped with a message when
-//! `mpirun` is missing, unless `SIMKIT_REQUIRE_MPI=1`).
+//! the global field), gather to rank 0, the reductions and the broadcast from rank 0, the
+//! particle domain (owners, ghosts against every image within the halo, refresh,
+//! migration), shifts of any length, a bad input on one rank of a halo exchange, a gather
+//! or a shift (an error, not a hang or an aborted job), and a rank killed mid-run ending the
+//! job. Built only with the `mpi` feature; the test launches its own binary under `mpirun`
+//! (skipped with a message when `mpirun` is missing, unless `SIMKIT_REQUIRE_MPI=1`).
 #![cfg(feature = "mpi")]
 
 use simkit_backend::testing::check_on_ranks;
@@ -123,8 +124,10 @@ fn child(comm: &Comm) -> Result<usize, String> {
 }
 
 /// A bad input on exactly one rank (the last) of a halo exchange and of a gather, and a
-/// failed check on rank 0 of an indexed gather: every rank returns an error at once (before, the others waited forever for its messages), the
-/// others naming the failing rank with its message; the next collective call works.
+/// failed check on rank 0 of an indexed gather: every rank returns an error at once
+/// (before, the others waited forever for its messages), the others naming the failing
+/// rank with its message. A message of the wrong length in a shift: an error on its
+/// receiver, not an aborted job. The next collective call works.
 fn one_bad_rank(comm: &Comm) {
     let (rank, size) = (comm.rank(), comm.size());
     let bad = size - 1;
@@ -161,6 +164,33 @@ fn one_bad_rank(comm: &Comm) {
         err.to_string().contains("gathered particles"),
         "rank {rank}: {err}"
     );
+    // A shift around the ring where the last rank sends one value more than its receiver
+    // (rank 0) expects: an error on rank 0 naming the sender and both lengths (before, a
+    // receive too short for the message, MPI_ERR_TRUNCATE, aborted the job); the others
+    // receive theirs.
+    let (dest, source) = ((rank + 1) % size, (rank + size - 1) % size);
+    let send = vec![rank as f64; 1 + usize::from(rank == bad)];
+    let mut recv = [0.0f64];
+    let got = comm.shift(&send, Some(dest), &mut recv, Some(source), 7);
+    if rank == 0 {
+        let text = got
+            .expect_err("a message longer than the receive buffer")
+            .to_string();
+        assert!(
+            text.contains(&format!("message from rank {bad}")) && text.contains("16 bytes"),
+            "{text}"
+        );
+    } else {
+        got.unwrap_or_else(|e| panic!("rank {rank}: {e}"));
+        assert_eq!(recv, [source as f64]);
+    }
+    // Messages of any length (rank r sends r + 1 values): each rank gets its source's,
+    // with no count sent ahead of the data.
+    let send: Vec<u32> = (0..=rank as u32).collect();
+    let got = comm
+        .shift_vec(&send, Some(dest), Some(source), 8)
+        .unwrap_or_else(|e| panic!("rank {rank}: {e}"));
+    assert_eq!(got, (0..=source as u32).collect::<Vec<_>>(), "rank {rank}");
     // Nothing is left half-sent: the communicator still works.
     assert_eq!(comm.all_sum(1.0).unwrap(), size as f64);
 }

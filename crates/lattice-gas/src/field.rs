@@ -33,24 +33,34 @@ pub fn site_momentum(cell: u8) -> (f64, f64) {
 /// Sums over `block x block` groups of fluid (non-wall) sites; the last block of a row or
 /// column is smaller when the size is not a multiple of `block`. Block `(bx, by)` is entry
 /// `by * nx + bx`; block row 0 holds lattice rows `0..block` (the bottom).
+///
+/// Built by [`BlockField::zeros`], [`BlockField::from_lattice`] or a simulation's
+/// `block_field`, and read through its accessors: the fields are private, so the block
+/// counts and the arrays' lengths always agree (a field cannot be edited into a shape its
+/// methods would index out of bounds).
+///
+/// ```compile_fail
+/// let mut f = simkit_lattice_gas::BlockField::zeros(64, 32, 8).unwrap();
+/// f.nx = 0; // private: a field's shape is fixed when it is built
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct BlockField {
     /// Blocks along x.
-    pub nx: usize,
+    pub(crate) nx: usize,
     /// Blocks along y.
-    pub ny: usize,
+    pub(crate) ny: usize,
     /// Block side in sites.
-    pub block: usize,
+    pub(crate) block: usize,
     /// Fluid site-visits per block (sites times samples).
-    pub sites: Vec<f64>,
+    pub(crate) sites: Vec<f64>,
     /// Particles per block (summed over samples).
-    pub particles: Vec<f64>,
+    pub(crate) particles: Vec<f64>,
     /// Momentum x per block (summed).
-    pub px: Vec<f64>,
+    pub(crate) px: Vec<f64>,
     /// Momentum y per block (summed).
-    pub py: Vec<f64>,
+    pub(crate) py: Vec<f64>,
     /// Samples summed.
-    pub samples: u64,
+    pub(crate) samples: u64,
 }
 
 impl BlockField {
@@ -98,6 +108,36 @@ impl BlockField {
             f.py[b] += my;
         }
         Ok(f)
+    }
+
+    /// Blocks along x and along y: `(nx, ny)`.
+    pub fn blocks(&self) -> (usize, usize) {
+        (self.nx, self.ny)
+    }
+
+    /// Block side in sites.
+    pub fn block(&self) -> usize {
+        self.block
+    }
+
+    /// Fluid site-visits per block (fluid sites times samples), `ny x nx` row-major.
+    pub fn sites(&self) -> &[f64] {
+        &self.sites
+    }
+
+    /// Particles per block, summed over the samples.
+    pub fn particles(&self) -> &[f64] {
+        &self.particles
+    }
+
+    /// Momentum `(p_x, p_y)` per block, summed over the samples.
+    pub fn momentum(&self) -> (&[f64], &[f64]) {
+        (&self.px, &self.py)
+    }
+
+    /// Snapshots summed into this field (1 for one snapshot).
+    pub fn samples(&self) -> u64 {
+        self.samples
     }
 
     /// Mean particles per fluid site of each block (0 where a block has no fluid).

@@ -249,16 +249,12 @@ fn block_field_equals_the_byte_block_sums_on_every_backend() {
         // another order (per direction, then per block), equal to rounding: 1e-9 on sums of
         // at most 6 * 256 unit vectors (measured: 2.1e-14 on multi-spin, 0 elsewhere).
         assert_eq!(
-            (got.nx, got.ny, &got.sites, &got.particles),
-            (bytes.nx, bytes.ny, &bytes.sites, &bytes.particles),
+            (got.blocks(), got.sites(), got.particles()),
+            (bytes.blocks(), bytes.sites(), bytes.particles()),
             "{name}"
         );
-        for (x, y) in got
-            .px
-            .iter()
-            .zip(&bytes.px)
-            .chain(got.py.iter().zip(&bytes.py))
-        {
+        let ((gx, gy), (bx, by)) = (got.momentum(), bytes.momentum());
+        for (x, y) in gx.iter().zip(bx).chain(gy.iter().zip(by)) {
             assert!((x - y).abs() < 1e-9, "{name}: {x} vs {y}");
         }
         assert!(sim.block_field(0).is_err(), "{name}");

@@ -31,7 +31,16 @@ pub struct Diagnostics {
 /// Potential energy `sum_{i<j} q_i q_j phi(r_ij)`, summed in f64 (O(N^2), rayon): the rows
 /// `q_i sum_{j>i} q_j phi(r_ij)` in parallel, then their sum in particle order, so the
 /// result does not depend on the thread count.
-pub fn potential_energy(p: &Particles, law: ForceLaw) -> f64 {
+///
+/// Errors: particles that [`Particles::validate`] refuses (e.g. columns of different
+/// lengths: the fields are public, so nothing else keeps them consistent).
+pub fn potential_energy(p: &Particles, law: ForceLaw) -> Result<f64> {
+    p.validate()?;
+    Ok(potential_sum(p, law))
+}
+
+/// [`potential_energy`] of particles known to be valid.
+fn potential_sum(p: &Particles, law: ForceLaw) -> f64 {
     let mut rows = vec![0.0; p.len()];
     potential_rows(p, law, 0..p.len(), &mut rows);
     rows.iter().sum()
@@ -57,19 +66,23 @@ pub(crate) fn potential_rows(p: &Particles, law: ForceLaw, range: Range<usize>, 
 /// Accelerations by a plain scalar f64 double loop (a reference for tests): the pair
 /// weights of [`crate::laws`], without SIMD, blocking or reciprocal square-root estimates.
 /// Under the exact law a coincident pair contributes nothing (as the kernels' self pair).
-pub fn reference_accelerations(p: &Particles, law: ForceLaw) -> Vec<[f64; 3]> {
+///
+/// Errors: particles that [`Particles::validate`] refuses.
+pub fn reference_accelerations(p: &Particles, law: ForceLaw) -> Result<Vec<[f64; 3]>> {
+    p.validate()?;
     let all: Vec<usize> = (0..p.len()).collect();
-    accelerations_of(p, law, &all)
+    Ok(accelerations_of(p, law, &all))
 }
 
 /// [`reference_accelerations`] of the particles `targets` only (each against every
 /// particle): a check of a large run on a subset, `O(targets.len() N)`. Errors if a target
-/// is not below `p.len()`.
+/// is not below `p.len()`, or for particles that [`Particles::validate`] refuses.
 pub fn reference_accelerations_of(
     p: &Particles,
     law: ForceLaw,
     targets: &[usize],
 ) -> Result<Vec<[f64; 3]>> {
+    p.validate()?;
     if let Some(&bad) = targets.iter().find(|&&i| i >= p.len()) {
         return Err(Error::invalid(
             "target",
@@ -106,9 +119,26 @@ fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
     ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
 }
 
-/// Diagnostics of `p` with accelerations `acc` (from the backend) under `law`.
-pub fn diagnostics(p: &Particles, acc: &[[f64; 3]], law: ForceLaw) -> Diagnostics {
-    with_potential(p, acc, potential_energy(p, law))
+/// Diagnostics of `p` with accelerations `acc` (from the backend, one per particle) under
+/// `law`.
+///
+/// Errors: particles that [`Particles::validate`] refuses, or `acc` of another length
+/// than the particles.
+pub fn diagnostics(p: &Particles, acc: &[[f64; 3]], law: ForceLaw) -> Result<Diagnostics> {
+    p.validate()?;
+    if acc.len() != p.len() {
+        return Err(Error::invalid(
+            "number of accelerations",
+            acc.len(),
+            format!("must equal the number of particles, {}", p.len()),
+        ));
+    }
+    Ok(state_diagnostics(p, acc, law))
+}
+
+/// [`diagnostics`] of a simulation's own state (valid by construction).
+pub(crate) fn state_diagnostics(p: &Particles, acc: &[[f64; 3]], law: ForceLaw) -> Diagnostics {
+    with_potential(p, acc, potential_sum(p, law))
 }
 
 /// [`diagnostics`] with the potential energy given.

@@ -78,6 +78,13 @@ const BYTES_PER_PARTICLE: usize =
     2 * size_of::<[f64; 3]>() + 2 * size_of::<f64>() + size_of::<u32>();
 
 /// Particles in structure-of-arrays form (host side, f64).
+///
+/// The columns are public for direct building and editing; everything that takes a
+/// `Particles` (the simulations' constructors, [`potential_energy`](crate::potential_energy),
+/// [`reference_accelerations`](crate::reference_accelerations) and
+/// [`diagnostics`](fn@crate::diagnostics)) checks it with [`Particles::validate`] first, so
+/// columns of different lengths or a bad value are an error there, never an index out of
+/// bounds.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Particles {
     /// Positions.

@@ -5,7 +5,7 @@ use simkit_backend::{Backend, Restart, Result, Simulation};
 
 use crate::config::Config;
 use crate::cpu;
-use crate::diagnostics::{Diagnostics, diagnostics};
+use crate::diagnostics::{Diagnostics, state_diagnostics};
 use crate::engine::Engine;
 #[cfg(feature = "gpu")]
 use crate::gpu;
@@ -114,7 +114,7 @@ impl PpCoulomb {
     pub fn diagnostics(&mut self) -> Result<Diagnostics> {
         let state = self.state()?;
         let acc = self.engine.accelerations()?;
-        Ok(diagnostics(&state, &acc, self.run.config.force))
+        Ok(state_diagnostics(&state, &acc, self.run.config.force))
     }
 }
 

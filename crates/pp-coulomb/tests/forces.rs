@@ -11,7 +11,7 @@ use simkit_backend::testing::{backends, simd_exercised};
 use simkit_backend::{Backend, Simulation};
 use simkit_pp_coulomb::{
     Config, ForceLaw, MAX_PARTICLES, Particles, PpCoulomb, Precision, Region, Species, Velocities,
-    reference_accelerations,
+    diagnostics, potential_energy, reference_accelerations, reference_accelerations_of,
 };
 
 /// Both CPU kernels (the AVX-512 rsqrt path, where the CPU has it, and the portable sqrt +
@@ -40,7 +40,7 @@ fn cpu_kernels_match_reference_and_third_law() {
         [2.2e-14, 9.8e-6, 1.4e-6],
     ];
     for (law, [b64, b32, bl32]) in LAWS.into_iter().zip(BOUNDS) {
-        let reference = reference_accelerations(&p, law);
+        let reference = reference_accelerations(&p, law).unwrap();
         // Both CPU paths: AVX-512 rsqrt + Newton (where the CPU has it) and sqrt + divide.
         for rsqrt in [true, false] {
             let cpu = |prec| {
@@ -111,6 +111,27 @@ fn bad_input_is_a_clear_error() {
     ] {
         assert!(PpCoulomb::new(p.clone(), &bad, Backend::Cpu).is_err());
     }
+}
+
+/// The reference sums take `Particles`, whose columns are public: columns of different
+/// lengths are an error naming the column (before, an index out of bounds panicked).
+#[test]
+fn the_reference_sums_refuse_inconsistent_particles() {
+    let mut p = plasma(10, 1);
+    let acc = reference_accelerations(&p, ForceLaw::Exact).unwrap();
+    assert_eq!(acc.len(), 10);
+    let law = ForceLaw::Exact;
+    let short =
+        |e: simkit_backend::Error| assert!(e.to_string().contains("length of charge"), "{e}");
+    p.charge.pop();
+    short(reference_accelerations(&p, law).unwrap_err());
+    short(reference_accelerations_of(&p, law, &[0]).unwrap_err());
+    short(potential_energy(&p, law).unwrap_err());
+    short(diagnostics(&p, &acc, law).unwrap_err());
+    p.charge.push(-1.0);
+    assert!(diagnostics(&p, &acc, law).is_ok());
+    let err = diagnostics(&p, &acc[..9], law).unwrap_err();
+    assert!(err.to_string().contains("number of accelerations"), "{err}");
 }
 
 #[test]

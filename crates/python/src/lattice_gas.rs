@@ -217,7 +217,8 @@ impl LatticeGas {
     fn block_field<'py>(&mut self, py: Python<'py>, block: usize) -> PyResult<Bound<'py, PyDict>> {
         let f: BlockField = self.inner.get().block_field(block).py()?;
         let (ux, uy) = f.velocity();
-        let shape = [f.ny, f.nx];
+        let (nx, ny) = f.blocks();
+        let shape = [ny, nx];
         let grid = |v: Vec<f64>| -> PyResult<Bound<'py, PyArray2<f64>>> {
             arrays::to_array(py, v).reshape(shape)
         };

@@ -553,6 +553,17 @@ mod tests {
             .unwrap();
         assert_eq!(r, [1.0, 2.0]);
         assert_eq!(
+            comm.shift_vec(&[5u32, 6, 7], Some(0), Some(0), 0).unwrap(),
+            [5, 6, 7]
+        );
+        assert!(
+            comm.shift_vec::<u32>(&[], None, None, 0)
+                .unwrap()
+                .is_empty()
+        );
+        assert!(comm.shift_vec(&[1u32], Some(0), None, 0).is_err());
+        assert!(comm.shift_vec(&[1u32], Some(2), Some(2), 0).is_err());
+        assert_eq!(
             comm.broadcast_from_root(Some(vec![3u8, 4])).unwrap(),
             [3, 4]
         );

@@ -76,34 +76,9 @@ struct Phase {
     tag: u16,
 }
 
-/// Tags of the four ghost messages and of the migration messages (the counts travel under
-/// the tag plus [`COUNT_TAG`]).
+/// Tags of the four ghost messages and of the migration messages.
 const GHOST_TAG: u16 = 0x4740;
 const MIGRATE_TAG: u16 = 0x4d40;
-const COUNT_TAG: u16 = 0x100;
-
-/// Sends `send` to `dest` and returns what `source` sent this rank in the same shift,
-/// whatever its length (the counts travel first).
-fn shift_any<R: Pod>(
-    comm: &Comm,
-    send: &[R],
-    dest: Option<usize>,
-    source: Option<usize>,
-    tag: u16,
-) -> Result<Vec<R>> {
-    let mut n = [0u64];
-    comm.shift(&[send.len() as u64], dest, &mut n, source, tag + COUNT_TAG)?;
-    let n = usize::try_from(n[0]).map_err(|_| {
-        Error::invalid(
-            "particle count of a message",
-            n[0],
-            "too many for this machine",
-        )
-    })?;
-    let mut recv = vec![R::zeroed(); if source.is_some() { n } else { 0 }];
-    comm.shift(send, dest, &mut recv, source, tag)?;
-    Ok(recv)
-}
 
 impl ParticleDomain {
     /// The box `[lo, lo + len)` (x and y) with the given periodic axes, cut into
@@ -276,8 +251,8 @@ impl ParticleDomain {
             }
             let tag = MIGRATE_TAG + 2 * axis as u16;
             // Down-going: from the `up` neighbour; then up-going: from the `down` one.
-            keep.extend(shift_any(comm, &to_down, down, up, tag)?);
-            keep.extend(shift_any(comm, &to_up, up, down, tag + 1)?);
+            keep.extend(comm.shift_vec(&to_down, down, up, tag)?);
+            keep.extend(comm.shift_vec(&to_up, up, down, tag + 1)?);
             items = keep;
         }
         comm.agree(stray.map_or(Ok(()), Err))?;
@@ -393,7 +368,7 @@ impl Phase {
             })
             .collect();
         match expect {
-            None => shift_any(comm, &out, self.dest, self.source, self.tag),
+            None => comm.shift_vec(&out, self.dest, self.source, self.tag),
             Some(n) => {
                 let mut recv = vec![R::zeroed(); if self.source.is_some() { n } else { 0 }];
                 comm.shift(&out, self.dest, &mut recv, self.source, self.tag)?;

@@ -236,7 +236,10 @@ impl Comm {
     ///
     /// Errors: a rank `>= size()`; on one process, a partner on one side only (the message
     /// would never arrive) or `send` and `recv` of different lengths; with MPI, a message of
-    /// another length than `recv`.
+    /// another length than `recv` (on the receiving rank; the message is taken off the
+    /// wire whole and dropped, so the communicator stays usable and the job is not
+    /// aborted by a truncated receive). An error on one rank is that rank's alone: callers
+    /// agree on it ([`Comm::agree`]) before the ranks part ways.
     // `tag` only matters between processes.
     #[cfg_attr(not(feature = "mpi"), allow(unused_variables))]
     pub fn shift<T: Pod>(
@@ -262,16 +265,74 @@ impl Comm {
             return Ok(());
         }
         match &self.kind {
-            Kind::Serial => match (dest, source) {
-                (None, None) => Ok(()),
-                _ => Err(Error::invalid(
-                    "shift partners on one process",
-                    format!("dest {dest:?}, source {source:?}"),
-                    "give both as Some(0) (a copy onto itself) or both as None",
-                )),
-            },
+            Kind::Serial => serial_partners(dest, source),
             #[cfg(feature = "mpi")]
-            Kind::Mpi(m) => mpi_shift(&m.world, send, dest, recv, source, tag),
+            Kind::Mpi(m) => {
+                let want = std::mem::size_of_val(recv);
+                let into: &mut [u8] = bytemuck::cast_slice_mut(recv);
+                mpi_shift(&m.world, send, dest, source, tag, |msg, bytes, from| {
+                    if bytes == want {
+                        msg.matched_receive_into(into);
+                        return Ok(());
+                    }
+                    discard(msg, bytes);
+                    Err(Error::invalid(
+                        format!("message from rank {from}"),
+                        format!("{bytes} bytes"),
+                        format!(
+                            "the receiver expected {want} bytes: the ranks disagree on the \
+                             block sizes"
+                        ),
+                    ))
+                })
+                .map(|_| ())
+            }
+        }
+    }
+
+    /// One step of a shift whose message may have any length: sends `send` to rank `dest`
+    /// and returns what rank `source` sent this rank (empty when `source` is `None`). The
+    /// receiver learns the length from the message itself (`MPI_Mprobe`), so no count
+    /// travels ahead of the data and nothing is allocated beyond what arrived. Collective
+    /// over the ranks that name each other, as [`Comm::shift`].
+    ///
+    /// Errors: as [`Comm::shift`], and with MPI a message that is not a whole number of
+    /// `T` values.
+    #[cfg_attr(not(feature = "mpi"), allow(unused_variables))]
+    pub fn shift_vec<T: Pod>(
+        &self,
+        send: &[T],
+        dest: Option<usize>,
+        source: Option<usize>,
+        tag: u16,
+    ) -> Result<Vec<T>> {
+        self.check_rank("destination rank", dest)?;
+        self.check_rank("source rank", source)?;
+        let me = self.rank();
+        if dest == Some(me) && source == Some(me) {
+            return Ok(send.to_vec());
+        }
+        match &self.kind {
+            Kind::Serial => serial_partners(dest, source).map(|()| Vec::new()),
+            #[cfg(feature = "mpi")]
+            Kind::Mpi(m) => mpi_shift(&m.world, send, dest, source, tag, |msg, bytes, from| {
+                let size = std::mem::size_of::<T>();
+                if size == 0 || !bytes.is_multiple_of(size) {
+                    discard(msg, bytes);
+                    return Err(Error::invalid(
+                        format!("message from rank {from}"),
+                        format!("{bytes} bytes"),
+                        format!(
+                            "must be a whole number of {size}-byte values: the ranks \
+                             disagree on the message type"
+                        ),
+                    ));
+                }
+                let mut out = vec![T::zeroed(); bytes / size];
+                msg.matched_receive_into(bytemuck::cast_slice_mut::<T, u8>(&mut out));
+                Ok(out)
+            })
+            .map(Option::unwrap_or_default),
         }
     }
 
@@ -558,52 +619,62 @@ fn from_bytes<T: Pod>(bytes: &[u8]) -> Vec<T> {
     out
 }
 
-/// [`Comm::shift`] over MPI for partners that are not both this rank.
+/// A shift on one process with partners that are not both this rank: only "no partner on
+/// either side" is meaningful (a message to or from another rank would never arrive).
+fn serial_partners(dest: Option<usize>, source: Option<usize>) -> Result<()> {
+    match (dest, source) {
+        (None, None) => Ok(()),
+        _ => Err(Error::invalid(
+            "shift partners on one process",
+            format!("dest {dest:?}, source {source:?}"),
+            "give both as Some(0) (a copy onto itself) or both as None",
+        )),
+    }
+}
+
+/// One shift over MPI for partners that are not both this rank: posts the send to `dest`
+/// (non-blocking, so a ring or chain of shifts cannot deadlock), probes the message from
+/// `source` (`MPI_Mprobe`), hands it with its length in bytes and its sender to `take`
+/// (which must receive it: [`mpi::point_to_point::Message`] panics when dropped unread),
+/// then waits for the send. `None` when there is no source.
 #[cfg(feature = "mpi")]
-fn mpi_shift<T: Pod>(
+fn mpi_shift<T: Pod, R>(
     world: &mpi::topology::SimpleCommunicator,
     send: &[T],
     dest: Option<usize>,
-    recv: &mut [T],
     source: Option<usize>,
     tag: u16,
-) -> Result<()> {
+    take: impl FnOnce(mpi::point_to_point::Message, usize, usize) -> Result<R>,
+) -> Result<Option<R>> {
+    use mpi::datatype::Equivalence;
     use mpi::traits::{Communicator, Destination, Source};
     let tag = i32::from(tag);
     let out: &[u8] = bytemuck::cast_slice(send);
-    let want = std::mem::size_of_val(recv);
-    let inb: &mut [u8] = bytemuck::cast_slice_mut(recv);
-    let status = match (dest, source) {
-        (Some(d), Some(s)) => Some(mpi::point_to_point::send_receive_into_with_tags(
-            out,
-            &world.process_at_rank(d as i32),
-            tag,
-            inb,
-            &world.process_at_rank(s as i32),
-            tag,
-        )),
-        (Some(d), None) => {
-            world.process_at_rank(d as i32).send_with_tag(out, tag);
-            None
-        }
-        (None, Some(s)) => Some(
+    mpi::request::scope(|scope| {
+        let sending = dest.map(|d| {
             world
-                .process_at_rank(s as i32)
-                .receive_into_with_tag(inb, tag),
-        ),
-        (None, None) => None,
-    };
-    if let Some(st) = status {
-        let got = st.count(<u8 as mpi::datatype::Equivalence>::equivalent_datatype()) as usize;
-        if got != want {
-            return Err(Error::invalid(
-                format!("message from rank {}", st.source_rank()),
-                format!("{got} bytes"),
-                format!(
-                    "the receiver expected {want} bytes: the ranks disagree on the block sizes"
-                ),
-            ));
+                .process_at_rank(d as i32)
+                .immediate_send_with_tag(scope, out, tag)
+        });
+        let got = source
+            .map(|s| {
+                let (msg, status) = world.process_at_rank(s as i32).matched_probe_with_tag(tag);
+                let bytes = status.count(u8::equivalent_datatype());
+                take(msg, usize::try_from(bytes).unwrap_or(0), s)
+            })
+            .transpose();
+        if let Some(request) = sending {
+            request.wait_without_status();
         }
-    }
-    Ok(())
+        got
+    })
+}
+
+/// Receives a probed message into a scratch buffer of its own length and drops it: a
+/// message the receiver cannot use is taken off the wire whole (a receive into a smaller
+/// buffer would be `MPI_ERR_TRUNCATE`, which aborts the job).
+#[cfg(feature = "mpi")]
+fn discard(msg: mpi::point_to_point::Message, bytes: usize) {
+    let mut sink = vec![0u8; bytes];
+    msg.matched_receive_into(&mut sink[..]);
 }
