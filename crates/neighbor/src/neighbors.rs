@@ -38,7 +38,7 @@ impl<const D: usize> std::fmt::Debug for Neighbors<D> {
 /// The backend behind a [`Neighbors`] (an enum, not a trait object: pair enumeration is
 /// generic over the callback).
 enum Engine<const D: usize> {
-    Cpu(SortedCells<D>),
+    Cpu(Box<SortedCells<D>>),
     #[cfg(feature = "gpu")]
     Gpu(Box<GpuNeighborSearch<D>>),
 }
@@ -49,7 +49,9 @@ impl<const D: usize> Neighbors<D> {
     /// over the GPU's limits.
     pub fn new(grid: &CellGrid<D>, config: &Config, backend: Backend<'_>) -> Result<Self> {
         let engine = match backend {
-            Backend::Cpu => Engine::Cpu(SortedCells::new(grid).with_kernel(config.kernel)?),
+            Backend::Cpu => {
+                Engine::Cpu(Box::new(SortedCells::new(grid).with_kernel(config.kernel)?))
+            }
             #[cfg(feature = "gpu")]
             Backend::Gpu(ctx) => Engine::Gpu(Box::new(GpuNeighborSearch::new(ctx, grid)?)),
         };
@@ -68,7 +70,7 @@ impl<const D: usize> NeighborSearch<D> for Neighbors<D> {
 
     fn build(&mut self, positions: &[[f64; D]]) -> Result<()> {
         match &mut self.engine {
-            Engine::Cpu(s) => NeighborSearch::build(s, positions),
+            Engine::Cpu(s) => NeighborSearch::build(s.as_mut(), positions),
             #[cfg(feature = "gpu")]
             Engine::Gpu(s) => s.build(positions),
         }
@@ -84,7 +86,7 @@ impl<const D: usize> NeighborSearch<D> for Neighbors<D> {
 
     fn for_each_pair<F: FnMut(usize, usize, [f64; D], f64)>(&mut self, f: F) -> Result<()> {
         match &mut self.engine {
-            Engine::Cpu(s) => NeighborSearch::for_each_pair(s, f),
+            Engine::Cpu(s) => NeighborSearch::for_each_pair(s.as_mut(), f),
             #[cfg(feature = "gpu")]
             Engine::Gpu(s) => s.for_each_pair(f),
         }

@@ -89,6 +89,10 @@ pub struct SortedCells<const D: usize> {
     /// single-precision first pass (see [`SortedCells::build`]); empty otherwise.
     coords32: [Vec<f32>; D],
     wrapped: Vec<[f64; D]>,
+    /// The buffers the next build fills before they replace `cell_of` and `wrapped` (the
+    /// last build's, kept for reuse): a build that fails midway leaves the live ones whole.
+    spare_cell_of: Vec<u32>,
+    spare_wrapped: Vec<[f64; D]>,
     /// The counting sort's scatter target (see [`Slot`]), in sorted order.
     slots: Vec<Slot<D>>,
 }
@@ -118,6 +122,8 @@ impl<const D: usize> SortedCells<D> {
             coords: std::array::from_fn(|_| Vec::new()),
             coords32: std::array::from_fn(|_| Vec::new()),
             wrapped: Vec::new(),
+            spare_cell_of: Vec::new(),
+            spare_wrapped: Vec::new(),
             slots: Vec::new(),
         }
     }
@@ -141,7 +147,9 @@ impl<const D: usize> SortedCells<D> {
     }
 
     /// Sorts `positions` into cells (wrapping periodic axes, validating every coordinate).
-    /// A build that fails changes nothing: queries answer for the last successful build.
+    /// A build that fails changes nothing: queries answer for the last successful build
+    /// (the wrapped positions and cells are written into a second set of buffers, kept
+    /// between builds: `n (8 D + 4)` bytes beside the live ones).
     ///
     /// Parallel on the rayon pool: the cell assignment, then a two-pass counting sort over
     /// contiguous chunks of particles (each chunk counts its particles per cell; a prefix
@@ -159,23 +167,19 @@ impl<const D: usize> SortedCells<D> {
             ));
         }
         let g = &self.grid;
-        // Every coordinate is checked before anything is changed: a failed build leaves the
-        // list as the last successful one made it.
-        positions
-            .par_chunks(WRAP_BLOCK)
-            .enumerate()
-            .try_for_each(|(b, ps)| {
-                for (k, &p) in ps.iter().enumerate() {
-                    g.wrap(b * WRAP_BLOCK + k, p)?;
-                }
-                Ok::<(), Error>(())
-            })?;
-        self.wrapped.resize(n, [0.0; D]);
-        self.cell_of.resize(n, 0);
+        // Every coordinate is wrapped and assigned its cell in the spare buffers, which
+        // replace the live ones only when all are valid: a failed build leaves the list as
+        // the last successful one made it (one pass over the particles: a checking pass
+        // before the writing one made the whole build about 1.5x slower at 10^6 particles
+        // and 1.7x at 10^5, measured on 2 cores).
+        let mut wrapped = std::mem::take(&mut self.spare_wrapped);
+        let mut cell_of = std::mem::take(&mut self.spare_cell_of);
+        wrapped.resize(n, [0.0; D]);
+        cell_of.resize(n, 0);
         // Blocks of particles per task, a plain loop inside (no per-particle closure call).
-        self.wrapped
+        let assigned = wrapped
             .par_chunks_mut(WRAP_BLOCK)
-            .zip(self.cell_of.par_chunks_mut(WRAP_BLOCK))
+            .zip(cell_of.par_chunks_mut(WRAP_BLOCK))
             .enumerate()
             .try_for_each(|(b, (ws, cs))| {
                 let first = b * WRAP_BLOCK;
@@ -184,7 +188,13 @@ impl<const D: usize> SortedCells<D> {
                     *c = g.cell_of(*w) as u32;
                 }
                 Ok::<(), Error>(())
-            })?;
+            });
+        if let Err(e) = assigned {
+            (self.spare_wrapped, self.spare_cell_of) = (wrapped, cell_of);
+            return Err(e);
+        }
+        self.spare_wrapped = std::mem::replace(&mut self.wrapped, wrapped);
+        self.spare_cell_of = std::mem::replace(&mut self.cell_of, cell_of);
         // Pass 1: counts per cell of every chunk. Chunk-private counts cost `n_cells` words
         // each, so sparse grids (many more cells than particles) use one chunk.
         let nc = g.n_cells();
