@@ -18,7 +18,8 @@
 //!
 //! - `rd`: Gray–Scott (D_u = 1, D_v = 0.5, F = 0.04, k = 0.06, h = 1, explicit Euler with
 //!   dt = 0.1) on a periodic `n x n` grid in f64 or f32; cell updates/s (a cell update = both
-//!   species of one cell advanced by one step).
+//!   species of one cell advanced by one step), and the sums of `u`, `v` and `v^2` over the
+//!   final grid (row-major order) for a peer's check.
 //! - `neighbor`: `n` uniform random points at number density 1 in a closed cube, cutoff 2.5;
 //!   sorted cells, build + count of every pair (rayon); unordered pairs/s.
 //! - `lattice-gas`: FHP-I on a periodic `n x n` lattice at density 0.3; site updates/s, and
@@ -190,12 +191,24 @@ fn rd<T: simkit::rd::Real>(args: &Args, n: usize, steps: u32, prec: &str) -> Res
     let secs = median_time(args.reps, || sim.step(steps))?;
     let rate = (n * n) as f64 * f64::from(steps) / secs;
     let backend = sim.backend_name().replace(' ', "_");
+    // Sums over the final fields in row-major order, for a peer that runs the same scene
+    // and steps to compare with (after (reps + 1) x steps steps: the warm-up run included).
+    let state = sim.state()?;
+    let sum =
+        |s: usize, f: fn(f64) -> f64| -> f64 { state.field(s).iter().map(|x| f(x.to_f64())).sum() };
+    let done = (args.reps as u64 + 1) * u64::from(steps);
     report(
         args,
         rate,
         "cell-updates/s",
         secs,
-        &format!("workload=gray-scott-{prec} n={n} steps={steps} backend={backend}"),
+        &format!(
+            "workload=gray-scott-{prec} n={n} steps={steps} backend={backend} \
+             steps_done={done} sum_u={:.17e} sum_v={:.17e} sum_vv={:.17e}",
+            sum(0, |x| x),
+            sum(1, |x| x),
+            sum(1, |x| x * x)
+        ),
     );
     Ok(())
 }

@@ -15,7 +15,10 @@
 #
 # Rows (simkit / peer; the rate of each side is the median over the rounds):
 #   rd           py-pde Gray-Scott 512^2 (compiled Euler stepper, JIT excluded) vs simkit rd
-#                Gray-Scott f64 512^2, 2 threads; cell updates/s
+#                Gray-Scott f64 512^2, 2 threads; cell updates/s; and a C stencil of our own
+#                (benches/peers/gray_scott.c: f64, -O3 -march=native, OpenMP over column
+#                tiles, 2 threads) vs simkit rd on the same scene at 512^2 and 4096^2, each
+#                run's sums of u, v and v^2 compared with simkit's after the same steps
 #   neighbor     kiddo 6 (ImmutableKdTree build + per-point within().unsorted().visit()
 #                queries in tree order, rayon, 2 threads) vs simkit sorted cells (build + count
 #                every pair, 2 threads), N = 1e6 uniform points at density 1, cutoff 2.5; pairs/s
@@ -39,7 +42,7 @@
 #
 # What it installs when missing: py-pde into a venv at target/pypde (pip), Debian's lammps
 # package (apt-get, as root), the kiddo peer (cargo, into target/peers/kiddo) and the C/C++
-# peers (gcc/g++ -O3 -march=native, into target/peers). A peer that cannot be built or run
+# peers and our C stencil (gcc/g++ -O3 -march=native, into target/peers). A peer that cannot be built or run
 # is skipped with a line saying why. Peers are built and run from where they are; nothing of
 # them is copied into the repository.
 #
@@ -74,7 +77,7 @@ PEERS=$(cd "$PEERS" 2>/dev/null && pwd) || PEERS=""
 
 # Sizes: default (timed runs of about 2-5 s each on a 2-core machine) and --quick.
 if [ "$QUICK" -eq 1 ]; then
-  RD_N=64 RD_PEER_STEPS=50 RD_STEPS=200
+  RD_N=64 RD_PEER_STEPS=50 RD_STEPS=200 CGS_N="64 128" CGS_STEPS="200 20"
   NB_N=20000 NB_REPS=3 KIDDO_REPS=1
   DEM_STEPS=50 DEM_LONG_STEPS=100 DEM_BIG=10 DEM_BIG_STEPS=10
   MD_STEPS=10
@@ -82,7 +85,7 @@ if [ "$QUICK" -eq 1 ]; then
   FHP_N=128 FHP_STEPS=20
   PP_N=2000 PP_STEPS=1 FMA_ITERS=1000000
 else
-  RD_N=512 RD_PEER_STEPS=1000 RD_STEPS=8000
+  RD_N=512 RD_PEER_STEPS=1000 RD_STEPS=8000 CGS_N="512 4096" CGS_STEPS="4000 60"
   NB_N=1000000 NB_REPS=15 KIDDO_REPS=3
   DEM_STEPS=4000 DEM_LONG_STEPS=30000 DEM_BIG=100 DEM_BIG_STEPS=200
   MD_STEPS=500
@@ -99,7 +102,8 @@ ROWS=$(mktemp)    # table rows, in order
 SKIPS=$(mktemp)   # "name: skipped (why)" lines
 NOTES=$(mktemp)   # per-round samples
 SKLOG=$(mktemp)   # every peer_rates line
-trap 'rm -f "$ROWS" "$SKIPS" "$NOTES" "$SKLOG"' EXIT
+RDSUMS=$(mktemp)  # the C stencil's and simkit's lines with their field sums
+trap 'rm -f "$ROWS" "$SKIPS" "$NOTES" "$SKLOG" "$RDSUMS"' EXIT
 
 say() { echo "$*" >&2; }
 skip() { echo "- $1: skipped ($2)" >>"$SKIPS"; say "$1: skipped ($2)"; }
@@ -169,6 +173,14 @@ if want rd; then
   fi
 fi
 
+CGS=""
+if want rd; then
+  if ! command -v gcc >/dev/null 2>&1; then skip "C Gray-Scott stencil" "gcc not found"
+  elif gcc -O3 -march=native -fopenmp benches/peers/gray_scott.c -o "$PB/gray_scott" -lm \
+    >/dev/null 2>&1; then CGS="$PB/gray_scott"
+  else skip "C Gray-Scott stencil" "gcc -O3 -march=native -fopenmp benches/peers/gray_scott.c failed"; fi
+fi
+
 KIDDO=""
 if want neighbor; then
   if ! need_peers kiddo_bench/Cargo.toml; then
@@ -207,6 +219,13 @@ m_pypde() {
     2>/dev/null | sed -n 's/.*cell_updates_per_s=\([^ ]*\).*/\1/p' | head -n 1
 }
 m_sk_rd() { sk rd --n "$RD_N" --steps "$RD_STEPS" --threads 2 | rate_of; }
+# The C stencil and simkit on size $CN, $CS steps per timed run, both after (1 + 1) x $CS
+# steps in all, their lines (with the field sums) kept in $RDSUMS.
+m_cgs() {
+  OMP_NUM_THREADS=2 "$CGS" "$CN" "$CS" 1 2>/dev/null | tee -a "$RDSUMS" |
+    sed -n 's/^cell_updates_per_s=\([^ ]*\).*/\1/p' | head -n 1
+}
+m_sk_cgs() { sk rd --n "$CN" --steps "$CS" --threads 2 --reps 1 | tee -a "$RDSUMS" | rate_of; }
 # kiddo: unordered pairs / (median build time + median tree-order parallel query time).
 m_kiddo() {
   "$KIDDO" "$NB_N" 2 "$KIDDO_REPS" build,tord 2>/dev/null | awk '
@@ -281,6 +300,11 @@ r=1
 while [ "$r" -le "$ROUNDS" ]; do
   say "round $r/$ROUNDS"
   if want rd && [ -n "$PYPDE" ]; then say "  rd"; pair pypde m_pypde skrd m_sk_rd "$r"; fi
+  if want rd && [ -n "$CGS" ]; then
+    say "  rd (C stencil)"
+    set -- $CGS_STEPS
+    for CN in $CGS_N; do CS=$1; shift; pair "cgs$CN" m_cgs "skcgs$CN" m_sk_cgs "$r"; done
+  fi
   if want neighbor && [ -n "$KIDDO" ]; then say "  neighbor"; pair kiddo m_kiddo sknb m_sk_nb "$r"; fi
   if want dem && [ "$LMP" -eq 1 ] && [ "$MPI" -eq 1 ] && [ -z "${DEM_BUILD:-}" ]; then
     say "  dem"
@@ -325,6 +349,31 @@ if want rd; then
       "cell updates/s" ratio 10
     note "rd: py-pde $RD_PEER_STEPS steps per run: $(samples pypde); simkit $RD_STEPS steps: $(samples skrd)"
   fi
+fi
+if want rd && [ -n "$CGS" ]; then
+  set -- $CGS_STEPS
+  for CN in $CGS_N; do
+    CS=$1; shift
+    # The largest relative difference of the three sums between any C run and any simkit
+    # run of this size (same scene, same steps).
+    agree=$(awk -v n="$CN" '
+      { who = ($0 ~ /^cell_updates_per_s=/) ? "c" : "s"; ok = 0
+        for (i = 1; i <= NF; i++) { split($i, kv, "=")
+          if (kv[1] == "n" && kv[2] == n) ok = 1
+          if (kv[1] ~ /^sum_/) v[kv[1]] = kv[2] + 0 }
+        if (!ok) next
+        for (k in v) { m = k SUBSEP who; if (!(m in lo) || v[k] < lo[m]) lo[m] = v[k]
+          if (!(m in hi) || v[k] > hi[m]) hi[m] = v[k] } }
+      END { d = -1
+        for (m in lo) { split(m, p, SUBSEP); if (p[2] != "c") continue
+          o = p[1] SUBSEP "s"; if (!(o in lo)) continue
+          a = hi[m] - lo[o]; b = hi[o] - lo[m]; x = (a > b) ? a : b; if (x < 0) x = -x
+          s = (lo[o] < 0) ? -lo[o] : lo[o]; if (s > 0) x /= s; if (x > d) d = x }
+        if (d < 0) print "no check"; else printf "%.1e", d }' "$RDSUMS")
+    row rd "C stencil f64 ${CN}^2 (ours: -O3 -march=native, OpenMP, column tiles), 2 threads; sums differ by $agree" \
+      "$(med "cgs$CN")" "$(med "skcgs$CN")" "cell updates/s" ratio 1
+    note "rd ${CN}^2 vs the C stencil, $CS steps per run: C: $(samples "cgs$CN"); simkit: $(samples "skcgs$CN")"
+  done
 fi
 if want neighbor && [ -n "$KIDDO" ]; then
   row neighbor "kiddo 6 k-d tree, build + tree-order queries, N=$NB_N, 2 threads" \
