@@ -16,8 +16,8 @@
 # Rows (simkit / peer; the rate of each side is the median over the rounds):
 #   rd           py-pde Gray-Scott 512^2 (compiled Euler stepper, JIT excluded) vs simkit rd
 #                Gray-Scott f64 512^2, 2 threads; cell updates/s; and a C stencil of our own
-#                (benches/peers/gray_scott.c: f64, -O3 -march=native, OpenMP over column
-#                tiles, 2 threads) vs simkit rd on the same scene at 512^2 and 4096^2, each
+#                (benches/peers/gray_scott.c: f64, -O3 -march=native, OpenMP over blocks
+#                of rows and columns, 2 threads) vs simkit rd on the same scene at 512^2 and 4096^2, each
 #                run's sums of u, v and v^2 compared with simkit's after the same steps
 #   neighbor     kiddo 6 (ImmutableKdTree build + per-point within().unsorted().visit()
 #                queries in tree order, rayon, 2 threads) vs simkit sorted cells (build + count
@@ -370,7 +370,7 @@ if want rd && [ -n "$CGS" ]; then
           a = hi[m] - lo[o]; b = hi[o] - lo[m]; x = (a > b) ? a : b; if (x < 0) x = -x
           s = (lo[o] < 0) ? -lo[o] : lo[o]; if (s > 0) x /= s; if (x > d) d = x }
         if (d < 0) print "no check"; else printf "%.1e", d }' "$RDSUMS")
-    row rd "C stencil f64 ${CN}^2 (ours: -O3 -march=native, OpenMP, column tiles), 2 threads; sums differ by $agree" \
+    row rd "C stencil f64 ${CN}^2 (ours: -O3 -march=native, OpenMP, blocked), 2 threads; sums differ by $agree" \
       "$(med "cgs$CN")" "$(med "skcgs$CN")" "cell updates/s" ratio 1
     note "rd ${CN}^2 vs the C stencil, $CS steps per run: C: $(samples "cgs$CN"); simkit: $(samples "skcgs$CN")"
   done
