@@ -238,8 +238,8 @@ impl Comm {
     /// would never arrive) or `send` and `recv` of different lengths; with MPI, a message of
     /// another length than `recv` (on the receiving rank; the message is taken off the
     /// wire whole and dropped, so the communicator stays usable and the job is not
-    /// aborted by a truncated receive). An error on one rank is that rank's alone: callers
-    /// agree on it ([`Comm::agree`]) before the ranks part ways.
+    /// aborted by a truncated receive). Such an error is the receiving rank's alone: a
+    /// caller that goes on to other collective calls agrees on it first ([`Comm::agree`]).
     // `tag` only matters between processes.
     #[cfg_attr(not(feature = "mpi"), allow(unused_variables))]
     pub fn shift<T: Pod>(
