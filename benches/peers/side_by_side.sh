@@ -77,7 +77,7 @@ PEERS=$(cd "$PEERS" 2>/dev/null && pwd) || PEERS=""
 
 # Sizes: default (timed runs of about 2-5 s each on a 2-core machine) and --quick.
 if [ "$QUICK" -eq 1 ]; then
-  RD_N=64 RD_PEER_STEPS=50 RD_STEPS=200 CGS_N="64 128" CGS_STEPS="200 20"
+  RD_N=64 RD_PEER_STEPS=50 RD_STEPS=200 CGS_RUNS="64:200 128:20"
   NB_N=20000 NB_REPS=3 KIDDO_REPS=1
   DEM_STEPS=50 DEM_LONG_STEPS=100 DEM_BIG=10 DEM_BIG_STEPS=10
   MD_STEPS=10
@@ -85,7 +85,7 @@ if [ "$QUICK" -eq 1 ]; then
   FHP_N=128 FHP_STEPS=20
   PP_N=2000 PP_STEPS=1 FMA_ITERS=1000000
 else
-  RD_N=512 RD_PEER_STEPS=1000 RD_STEPS=8000 CGS_N="512 4096" CGS_STEPS="4000 60"
+  RD_N=512 RD_PEER_STEPS=1000 RD_STEPS=8000 CGS_RUNS="512:4000 4096:60"
   NB_N=1000000 NB_REPS=15 KIDDO_REPS=3
   DEM_STEPS=4000 DEM_LONG_STEPS=30000 DEM_BIG=100 DEM_BIG_STEPS=200
   MD_STEPS=500
@@ -302,8 +302,10 @@ while [ "$r" -le "$ROUNDS" ]; do
   if want rd && [ -n "$PYPDE" ]; then say "  rd"; pair pypde m_pypde skrd m_sk_rd "$r"; fi
   if want rd && [ -n "$CGS" ]; then
     say "  rd (C stencil)"
-    set -- $CGS_STEPS
-    for CN in $CGS_N; do CS=$1; shift; pair "cgs$CN" m_cgs "skcgs$CN" m_sk_cgs "$r"; done
+    for c in $CGS_RUNS; do
+      CN=${c%:*} CS=${c#*:}
+      pair "cgs$CN" m_cgs "skcgs$CN" m_sk_cgs "$r"
+    done
   fi
   if want neighbor && [ -n "$KIDDO" ]; then say "  neighbor"; pair kiddo m_kiddo sknb m_sk_nb "$r"; fi
   if want dem && [ "$LMP" -eq 1 ] && [ "$MPI" -eq 1 ] && [ -z "${DEM_BUILD:-}" ]; then
@@ -351,9 +353,8 @@ if want rd; then
   fi
 fi
 if want rd && [ -n "$CGS" ]; then
-  set -- $CGS_STEPS
-  for CN in $CGS_N; do
-    CS=$1; shift
+  for c in $CGS_RUNS; do
+    CN=${c%:*} CS=${c#*:}
     # The largest relative difference of the three sums between any C run and any simkit
     # run of this size (same scene, same steps).
     agree=$(awk -v n="$CN" '

@@ -228,6 +228,15 @@ impl Comm {
         }
     }
 
+    /// Checks a shift's partners: `true` when both are this rank (the message is a copy),
+    /// an error for a rank `>= size()`.
+    fn to_itself(&self, dest: Option<usize>, source: Option<usize>) -> Result<bool> {
+        self.check_rank("destination rank", dest)?;
+        self.check_rank("source rank", source)?;
+        let me = Some(self.rank());
+        Ok(dest == me && source == me)
+    }
+
     /// One step of a shift: sends `send` to rank `dest` and receives `recv.len()` values
     /// from rank `source` into `recv`, at the same time (`MPI_Sendrecv`, so a ring or a
     /// chain of shifts cannot deadlock). `None` means no partner on that side (a domain
@@ -250,10 +259,7 @@ impl Comm {
         source: Option<usize>,
         tag: u16,
     ) -> Result<()> {
-        self.check_rank("destination rank", dest)?;
-        self.check_rank("source rank", source)?;
-        let me = self.rank();
-        if dest == Some(me) && source == Some(me) {
+        if self.to_itself(dest, source)? {
             if send.len() != recv.len() {
                 return Err(Error::invalid(
                     "length of a message to this rank itself",
@@ -271,19 +277,19 @@ impl Comm {
                 let want = std::mem::size_of_val(recv);
                 let into: &mut [u8] = bytemuck::cast_slice_mut(recv);
                 mpi_shift(&m.world, send, dest, source, tag, |msg, bytes, from| {
-                    if bytes == want {
-                        msg.matched_receive_into(into);
-                        return Ok(());
-                    }
-                    discard(msg, bytes);
-                    Err(Error::invalid(
-                        format!("message from rank {from}"),
-                        format!("{bytes} bytes"),
-                        format!(
-                            "the receiver expected {want} bytes: the ranks disagree on the \
+                    if bytes != want {
+                        return refuse(
+                            msg,
+                            bytes,
+                            from,
+                            &format!(
+                                "the receiver expected {want} bytes: the ranks disagree on the \
                              block sizes"
-                        ),
-                    ))
+                            ),
+                        );
+                    }
+                    msg.matched_receive_into(into);
+                    Ok(())
                 })
                 .map(|_| ())
             }
@@ -306,10 +312,7 @@ impl Comm {
         source: Option<usize>,
         tag: u16,
     ) -> Result<Vec<T>> {
-        self.check_rank("destination rank", dest)?;
-        self.check_rank("source rank", source)?;
-        let me = self.rank();
-        if dest == Some(me) && source == Some(me) {
+        if self.to_itself(dest, source)? {
             return Ok(send.to_vec());
         }
         match &self.kind {
@@ -318,15 +321,15 @@ impl Comm {
             Kind::Mpi(m) => mpi_shift(&m.world, send, dest, source, tag, |msg, bytes, from| {
                 let size = std::mem::size_of::<T>();
                 if size == 0 || !bytes.is_multiple_of(size) {
-                    discard(msg, bytes);
-                    return Err(Error::invalid(
-                        format!("message from rank {from}"),
-                        format!("{bytes} bytes"),
-                        format!(
-                            "must be a whole number of {size}-byte values: the ranks \
-                             disagree on the message type"
+                    return refuse(
+                        msg,
+                        bytes,
+                        from,
+                        &format!(
+                            "must be a whole number of {size}-byte values: the ranks disagree \
+                         on the message type"
                         ),
-                    ));
+                    );
                 }
                 let mut out = vec![T::zeroed(); bytes / size];
                 msg.matched_receive_into(bytemuck::cast_slice_mut::<T, u8>(&mut out));
@@ -670,11 +673,17 @@ fn mpi_shift<T: Pod, R>(
     })
 }
 
-/// Receives a probed message into a scratch buffer of its own length and drops it: a
-/// message the receiver cannot use is taken off the wire whole (a receive into a smaller
-/// buffer would be `MPI_ERR_TRUNCATE`, which aborts the job).
+/// Refuses a probed message of `bytes` bytes from rank `from` for the reason `why`: receives
+/// it into a scratch buffer of its own length and drops it, so it is taken off the wire
+/// whole (a receive into a smaller buffer would be `MPI_ERR_TRUNCATE`, which aborts the
+/// job), and returns the error naming the sender.
 #[cfg(feature = "mpi")]
-fn discard(msg: mpi::point_to_point::Message, bytes: usize) {
+fn refuse<R>(msg: mpi::point_to_point::Message, bytes: usize, from: usize, why: &str) -> Result<R> {
     let mut sink = vec![0u8; bytes];
     msg.matched_receive_into(&mut sink[..]);
+    Err(Error::invalid(
+        format!("message from rank {from}"),
+        format!("{bytes} bytes"),
+        why,
+    ))
 }
