@@ -12,6 +12,7 @@
 //! ```text
 //! cargo run --release --example peer_rates -- rd --n 512 --steps 2000 --threads 2
 //! cargo run --release --example peer_rates -- neighbor --n 1000000 --threads 2
+//! cargo run --release --example peer_rates -- neighbor-list --n 1000000 --threads 2
 //! cargo run --release --example peer_rates -- lattice-gas --n 16384 --steps 20 --method lut
 //! cargo run --release --example peer_rates -- pp-coulomb --n 50000 --precision f64
 //! ```
@@ -22,6 +23,12 @@
 //!   final grid (row-major order) for a peer's check.
 //! - `neighbor`: `n` uniform random points at number density 1 in a closed cube, cutoff 2.5;
 //!   sorted cells, build + count of every pair (rayon); unordered pairs/s.
+//! - `neighbor-list`: `n` uniform random points at number density 1 in a periodic cube,
+//!   cutoff 2.5, no skin; a half list (each pair stored once, as LAMMPS's binned half list
+//!   with `newton on`), rayon; unordered pairs/s. `--kind engine` (default): the list md and
+//!   dem rebuild, [`BlockedHalfList`] (counting sort by cell, the positions permuted, the
+//!   per-block lists built); `--kind verlet`: [`VerletList`] (sorted cells, lists in the
+//!   caller's particle order).
 //! - `lattice-gas`: FHP-I on a periodic `n x n` lattice at density 0.3; site updates/s, and
 //!   the memory traffic at 2 bytes per site update (one state byte read, one written).
 //! - `pp-coulomb`: the source's plasma (normalised units, Debye-length exclusion) with `n`
@@ -35,7 +42,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use rand::{RngExt, SeedableRng};
 use simkit::backend::{Backend, Error, Result, Simulation};
 use simkit::lattice_gas::{Config as LgConfig, CpuMethod, Lattice, LatticeGas};
-use simkit::neighbor::{CellGrid, SortedCells};
+use simkit::neighbor::{BlockedHalfList, CellGrid, ListKind, SortedCells, VerletList};
 use simkit::pp_coulomb::{Config as PpConfig, Integrator, PpCoulomb, Precision, scenes, units};
 use simkit::rd::scenes::gray_scott_square;
 use simkit::rd::{Config as RdConfig, GrayScott, Rd, Stepping};
@@ -77,6 +84,15 @@ enum Command {
         #[arg(long, default_value_t = 1_000_000)]
         n: usize,
     },
+    /// Half list (no skin) of n random points in a periodic cube, cutoff 2.5 (pairs/s)
+    NeighborList {
+        /// Number of points
+        #[arg(long, default_value_t = 1_000_000)]
+        n: usize,
+        /// Which list
+        #[arg(long, value_enum, default_value_t = ListChoice::Engine)]
+        kind: ListChoice,
+    },
     /// FHP-I lattice gas on a periodic n x n lattice (site updates/s)
     LatticeGas {
         /// Lattice side
@@ -110,6 +126,15 @@ enum Prec {
     F32,
     /// Double precision
     F64,
+}
+
+/// The half lists of `neighbor-list`.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum ListChoice {
+    /// `BlockedHalfList`: sort, permute, build (md's and dem's list)
+    Engine,
+    /// `VerletList` from sorted cells
+    Verlet,
 }
 
 /// Lattice-gas CPU method.
@@ -149,6 +174,7 @@ fn run(args: &Args) -> Result<()> {
             Prec::F32 => rd::<f32>(args, n, steps, "f32"),
         },
         Command::Neighbor { n } => neighbor(args, n),
+        Command::NeighborList { n, kind } => neighbor_list(args, n, kind),
         Command::LatticeGas { n, steps, method } => lattice_gas(args, n, steps, method),
         Command::PpCoulomb {
             n,
@@ -213,13 +239,21 @@ fn rd<T: simkit::rd::Real>(args: &Args, n: usize, steps: u32, prec: &str) -> Res
     Ok(())
 }
 
-fn neighbor(args: &Args, n: usize) -> Result<()> {
-    const CUTOFF: f64 = 2.5;
+/// The neighbour workloads' cutoff.
+const CUTOFF: f64 = 2.5;
+
+/// `n` uniform random points at number density 1 in a cube; returns them and the side.
+fn random_points(n: usize) -> (Vec<[f64; 3]>, f64) {
     let side = (n as f64).cbrt();
     let mut rng = rand_pcg::Pcg64::seed_from_u64(42);
-    let points: Vec<[f64; 3]> = (0..n)
+    let points = (0..n)
         .map(|_| std::array::from_fn(|_| rng.random::<f64>() * side))
         .collect();
+    (points, side)
+}
+
+fn neighbor(args: &Args, n: usize) -> Result<()> {
+    let (points, side) = random_points(n);
     let grid = CellGrid::new([0.0; 3], [side; 3], [false; 3], CUTOFF)?;
     let mut cells = SortedCells::new(&grid);
     let mut pairs = 0;
@@ -234,6 +268,38 @@ fn neighbor(args: &Args, n: usize) -> Result<()> {
         "pairs/s",
         secs,
         &format!("workload=sorted-cells-build+pairs n={n} cutoff={CUTOFF} pairs={pairs}"),
+    );
+    Ok(())
+}
+
+fn neighbor_list(args: &Args, n: usize, kind: ListChoice) -> Result<()> {
+    let (points, side) = random_points(n);
+    let (secs, pairs, name) = match kind {
+        ListChoice::Engine => {
+            let mut list =
+                BlockedHalfList::<f64, 3>::new([0.0; 3], [side; 3], [true; 3], CUTOFF, n)?;
+            let mut sorted = Vec::with_capacity(n);
+            let secs = median_time(args.reps, || {
+                let order = list.sort(&points)?;
+                sorted.clear();
+                sorted.extend(order.iter().map(|&k| points[k as usize]));
+                list.build(&sorted, true)
+            })?;
+            (secs, list.pair_count(), "blocked-half-list-sort+build")
+        }
+        ListChoice::Verlet => {
+            let grid = CellGrid::new([0.0; 3], [side; 3], [true; 3], CUTOFF)?;
+            let mut list = VerletList::new(&grid, 0.0, ListKind::Half)?;
+            let secs = median_time(args.reps, || list.build(&points))?;
+            (secs, list.stored_entries(), "half-verlet-list-build")
+        }
+    };
+    report(
+        args,
+        pairs as f64 / secs,
+        "pairs/s",
+        secs,
+        &format!("workload={name} n={n} cutoff={CUTOFF} periodic pairs={pairs}"),
     );
     Ok(())
 }

@@ -21,7 +21,14 @@
 #                run's sums of u, v and v^2 compared with simkit's after the same steps
 #   neighbor     kiddo 6 (ImmutableKdTree build + per-point within().unsorted().visit()
 #                queries in tree order, rayon, 2 threads) vs simkit sorted cells (build + count
-#                every pair, 2 threads), N = 1e6 uniform points at density 1, cutoff 2.5; pairs/s
+#                every pair, 2 threads), N = 1e6 uniform points at density 1, cutoff 2.5; pairs/s;
+#                and list builds on the same points in a periodic cube, no skin: LAMMPS's
+#                binned half-list build (the -march=native build below, benches/peers/neigh.lmp,
+#                "Neigh" time of its breakdown; 1 rank and 2 MPI ranks) and freud's AABBQuery
+#                (build + query to a NeighborList, 2 threads; benches/peers/freud_pairs.py) vs
+#                the half list md and dem rebuild (BlockedHalfList: sort by cell, permute,
+#                build; 1 and 2 threads), and simkit's VerletList (2 threads, no target: the
+#                general list in the caller's particle order); unordered pairs/s
 #   dem          LAMMPS (mpirun -np 2) vs simkit dem (2 threads) on
 #                benches/peers/dem_gran3d.lmp, 20,000 spheres, the first 4000 steps and the
 #                first 30,000 (the pile settles: dense contacts), and 1,000,000 spheres (100^3
@@ -31,7 +38,17 @@
 #                "no rotation" rows (LAMMPS gran/hooke, which integrates rotation, vs simkit's
 #                viscous friction without rotation)
 #   md           LAMMPS lj/cut vs simkit md (examples/lj_fluid, f64) on benches/peers/in.lj,
-#                32,000 atoms, 1 core and 2 cores; atom-steps/s
+#                32,000 atoms, 1 core and 2 cores; atom-steps/s. Peers: Debian's lmp (generic
+#                x86-64 build, plain styles); LAMMPS built here with -O3 -march=native
+#                (benches/peers/build_native.sh lammps) with each suffix (none, -sf opt, -sf omp,
+#                -sf intel: mixed precision, its default; its `mode double` crashes when built
+#                with GCC, and without an Intel compiler its kernels are not vectorised; MPI
+#                ranks of one thread) and the best of them;
+#                GROMACS 2022 in.lj (benches/peers/gromacs: the unit conversion is in lj.mdp)
+#                built here with its widest SIMD (build_native.sh gromacs) and Debian's
+#                SSE4.1 gmx, one rank of 1 and 2 OpenMP threads, mixed precision (GROMACS's
+#                default), against simkit f64 and f32; the potential energy per atom at step 0
+#                of GROMACS (mixed, and Debian's double-precision gmx_d) and of simkit printed
 #   lattice-gas  STREAM-like triad (2 OpenMP threads) vs simkit lattice-gas lookup table at
 #                16384^2 (2 threads), site updates/s x 2 bytes (one state byte read, one
 #                written): % of the measured memory bandwidth; and the source's serial FHP
@@ -40,15 +57,18 @@
 #                and f64 (interactions/s x 20 flops): % of peak; and the source's OpenMP
 #                direct sum (2 threads) vs simkit f64 at N = 50,000; interactions/s
 #
-# What it installs when missing: py-pde into a venv at target/pypde (pip), Debian's lammps
-# package (apt-get, as root), the kiddo peer (cargo, into target/peers/kiddo) and the C/C++
-# peers and our C stencil (gcc/g++ -O3 -march=native, into target/peers). A peer that cannot be built or run
-# is skipped with a line saying why. Peers are built and run from where they are; nothing of
-# them is copied into the repository.
+# What it installs when missing: py-pde into a venv at target/pypde and freud-analysis into
+# target/freud (pip), Debian's lammps and gromacs packages (apt-get, as root), LAMMPS and
+# GROMACS built for this CPU from Debian's source packages into a cache outside the
+# repository (about 5 and 20 minutes on 2 cores, once; see build_native.sh), the kiddo
+# peer (cargo, into target/peers/kiddo) and the C/C++ peers and our C stencil (gcc/g++ -O3
+# -march=native, into target/peers). A peer that cannot be built or run is skipped with a
+# line saying why. Peers are built and run from where they are; nothing of them is copied
+# into the repository.
 #
-# Default sizes take about 10 minutes on a 2-core machine (py-pde's JIT compile, ~40 s per
-# process, is the largest part). Run it on a quiet machine (check `uptime`): the load before
-# and after is in the table.
+# Default sizes take about 27 minutes on a 2-core machine once the peers are built (the dem
+# rows about half of it; `--only md,neighbor` about 12). Run it on a quiet machine (check
+# `uptime`): the load before and after is in the table.
 
 set -u
 cd "$(dirname "$0")/../.." || exit 1
@@ -78,7 +98,7 @@ PEERS=$(cd "$PEERS" 2>/dev/null && pwd) || PEERS=""
 # Sizes: default (timed runs of about 2-5 s each on a 2-core machine) and --quick.
 if [ "$QUICK" -eq 1 ]; then
   RD_N=64 RD_PEER_STEPS=50 RD_STEPS=200 CGS_RUNS="64:200 128:20"
-  NB_N=20000 NB_REPS=3 KIDDO_REPS=1
+  NB_N=20000 NB_REPS=3 KIDDO_REPS=1 NB_LMP_BUILDS=2
   DEM_STEPS=50 DEM_LONG_STEPS=100 DEM_BIG=10 DEM_BIG_STEPS=10
   MD_STEPS=10
   LG_N=1024 LG_STEPS=4 TRIAD_REPS=3
@@ -86,7 +106,7 @@ if [ "$QUICK" -eq 1 ]; then
   PP_N=2000 PP_STEPS=1 FMA_ITERS=1000000
 else
   RD_N=512 RD_PEER_STEPS=1000 RD_STEPS=8000 CGS_RUNS="512:4000 4096:60"
-  NB_N=1000000 NB_REPS=15 KIDDO_REPS=3
+  NB_N=1000000 NB_REPS=15 KIDDO_REPS=3 NB_LMP_BUILDS=10
   DEM_STEPS=4000 DEM_LONG_STEPS=30000 DEM_BIG=100 DEM_BIG_STEPS=200
   MD_STEPS=500
   LG_N=16384 LG_STEPS=60 TRIAD_REPS=20
@@ -158,19 +178,21 @@ cc_peer() {
     { echo "$3 failed on $1"; return 1; }
 }
 
+# venv_python DIR MODULE PACKAGE: the python of a venv at DIR that imports MODULE, made with
+# `pip install PACKAGE` when missing; skips PACKAGE (and prints nothing) when that fails.
+venv_python() {
+  if ! "$1/bin/python" -c "import $2" >/dev/null 2>&1; then
+    say "$3: installing into $1 (pip install $3)..."
+    { python3 -m venv "$1" && "$1/bin/pip" install -q "$3"; } >/dev/null 2>&1
+  fi
+  if "$1/bin/python" -c "import $2" >/dev/null 2>&1; then echo "$1/bin/python"
+  else skip "$3" "no venv at $1 and python3 -m venv / pip install $3 failed"; fi
+}
+
 PYPDE=""
 if want rd; then
-  if ! need_peers pypde_grayscott.py; then
-    skip "py-pde" "$(where pypde_grayscott.py)"
-  else
-    V=target/pypde
-    if ! "$V/bin/python" -c 'import pde' >/dev/null 2>&1; then
-      say "py-pde: installing into $V (pip install py-pde)..."
-      { python3 -m venv "$V" && "$V/bin/pip" install -q py-pde; } >/dev/null 2>&1
-    fi
-    if "$V/bin/python" -c 'import pde' >/dev/null 2>&1; then PYPDE="$V/bin/python"
-    else skip "py-pde" "no venv at $V and python3 -m venv / pip install py-pde failed"; fi
-  fi
+  if ! need_peers pypde_grayscott.py; then skip "py-pde" "$(where pypde_grayscott.py)"
+  else PYPDE=$(venv_python target/pypde pde py-pde); fi
 fi
 
 CGS=""
@@ -200,6 +222,47 @@ if want dem || want md; then
 fi
 MPI=0
 if have_mpirun; then MPI=1; fi
+
+# LAMMPS and GROMACS built for this CPU (cached; built here the first time).
+LMPN="" DEM_SF="" DEM_LMP="Debian LAMMPS"
+if want md || want neighbor || want dem; then
+  say "LAMMPS for this CPU (benches/peers/build_native.sh lammps; about 5 minutes the first time)..."
+  LMPN=$(sh benches/peers/build_native.sh lammps 2>/dev/null) ||
+    { LMPN=""; skip "LAMMPS -march=native" "benches/peers/build_native.sh lammps failed (log: $(peer_cache)/lammps-native/build.log)"; }
+  if [ -n "$LMPN" ]; then DEM_SF="-sf omp -pk omp 1" DEM_LMP="LAMMPS -march=native -sf omp"; fi
+fi
+# GMX_BUILDS: "tag:binary" of the GROMACS builds whose in.lj is prepared in $PB/gromacs-tag.
+GMX_BUILDS="" GMX_E0=""
+if want md; then
+  say "GROMACS for this CPU (benches/peers/build_native.sh gromacs; about 20 minutes the first time)..."
+  if g=$(sh benches/peers/build_native.sh gromacs 2>/dev/null); then GMX_BUILDS="native:$g"
+  else skip "GROMACS -march=native" "benches/peers/build_native.sh gromacs failed (log: $(peer_cache)/gromacs-native/build.log)"; fi
+  if ! command -v gmx >/dev/null 2>&1 && [ "$(id -u)" -eq 0 ]; then
+    apt-get install -y -q gromacs >/dev/null 2>&1
+  fi
+  if command -v gmx >/dev/null 2>&1; then GMX_BUILDS="$GMX_BUILDS debian:gmx"
+  else skip "GROMACS (Debian)" "gmx not found and apt-get install gromacs not possible or failed"; fi
+  for g in $GMX_BUILDS; do
+    t=${g%%:*}
+    if gromacs_prepare "${g#*:}" "$PB/gromacs-$t"; then
+      GMX_E0="$GMX_E0 $t: $(gromacs_energy0 "${g#*:}" "$PB/gromacs-$t");"
+    else
+      skip "GROMACS ($t)" "grompp failed (see $PB/gromacs-$t/grompp.log)"
+      GMX_BUILDS=$(echo "$GMX_BUILDS" | tr ' ' '\n' | grep -v "^$t:" | tr '\n' ' ')
+    fi
+  done
+  if command -v gmx_d >/dev/null 2>&1 && gromacs_prepare gmx_d "$PB/gromacs-double"; then
+    GMX_E0="$GMX_E0 debian double precision: $(gromacs_energy0 gmx_d "$PB/gromacs-double");"
+  fi
+fi
+
+FREUD=""
+if want neighbor; then
+  FREUD=$(venv_python target/freud freud freud-analysis)
+  # freud 3.4's LinkCell ball query is not its fast path: measured here (2 threads) its time
+  # grows as N^1.9 (8.6 s at N = 2e4, 174 s at 1e5), so at N = 1e6 only AABBQuery runs.
+  [ -n "$FREUD" ] && skip "freud LinkCell" "not run at N=$NB_N: its ball query's time grows about as N^2 (8.6 s at N=2e4, 174 s at N=1e5 on 2 threads, 2026-12-07); AABBQuery is freud's fast path"
+fi
 
 TRIAD="" FHP="" FMA="" PPL=""
 if want lattice-gas; then
@@ -235,17 +298,31 @@ m_kiddo() {
     END { if (p > 0 && build + q > 0) printf "%.6g\n", p / (build + q) }'
 }
 m_sk_nb() { sk neighbor --n "$NB_N" --threads 2 --reps "$NB_REPS" | rate_of; }
+# The list builds: LAMMPS (ranks $1), freud AABBQuery, simkit's half Verlet list (threads $1).
+m_lmp_nl() { (LMP_BIN=$LMPN; lammps_neigh_rate "$1" "$NB_N" "$NB_LMP_BUILDS"); }
+m_freud() {
+  "$FREUD" benches/peers/freud_pairs.py "$NB_N" 1 2 aabb 2>/dev/null |
+    sed -n 's/^pairs_per_s=\([^ ]*\).*/\1/p'
+}
+m_sk_nl() { sk neighbor-list --n "$NB_N" --threads "$1" --reps "$NB_REPS" | rate_of; }
+m_sk_vl() { sk neighbor-list --kind verlet --n "$NB_N" --threads 2 --reps "$NB_REPS" | rate_of; }
 # dem: $DM is the LAMMPS model (hooke or hooke/history), $SM simkit's (viscous or history).
-m_lmp_dem1() { lammps_rate "$DEM_DECK" "$DEM_N" "$DEM_STEPS" 1 -var model "$DM"; }
+# dem's LAMMPS: the -march=native build with -sf omp (one thread per rank) when it is there,
+# else Debian's lmp with its plain styles.
+dem_lmp() {
+  # shellcheck disable=SC2086 # DEM_SF is a list of separate words
+  (if [ -n "$LMPN" ]; then LMP_BIN=$LMPN; fi; lammps_rate "$@" -var model "$DM" $DEM_SF)
+}
+m_lmp_dem1() { dem_lmp "$DEM_DECK" "$DEM_N" "$DEM_STEPS" 1; }
 m_sk_dem1() { dem_timer_rate 1 "$DEM_STEPS" --model "$SM"; }
-m_lmp_dem2() { lammps_rate "$DEM_DECK" "$DEM_N" "$DEM_STEPS" 2 -var model "$DM"; }
+m_lmp_dem2() { dem_lmp "$DEM_DECK" "$DEM_N" "$DEM_STEPS" 2; }
 m_sk_dem2() { dem_timer_rate 2 "$DEM_STEPS" --model "$SM"; }
-m_lmp_dem_long() { lammps_rate "$DEM_DECK" "$DEM_N" "$DEM_LONG_STEPS" 2 -var model "$DM"; }
+m_lmp_dem_long() { dem_lmp "$DEM_DECK" "$DEM_N" "$DEM_LONG_STEPS" 2; }
 m_sk_dem_long() { dem_timer_rate 2 "$DEM_LONG_STEPS" --model "$SM"; }
 DEM_BIG_N=$((DEM_BIG * DEM_BIG * DEM_BIG))
 m_lmp_dem_big() {
-  lammps_rate "$DEM_DECK" "$DEM_BIG_N" "$DEM_BIG_STEPS" 2 -var nx "$DEM_BIG" -var ny "$DEM_BIG" \
-    -var nz "$DEM_BIG" -var model "$DM"
+  dem_lmp "$DEM_DECK" "$DEM_BIG_N" "$DEM_BIG_STEPS" 2 -var nx "$DEM_BIG" -var ny "$DEM_BIG" \
+    -var nz "$DEM_BIG"
 }
 m_sk_dem_big() {
   dem_timer_rate 2 "$DEM_BIG_STEPS" --nx "$DEM_BIG" --ny "$DEM_BIG" --nz "$DEM_BIG" --model "$SM"
@@ -256,6 +333,37 @@ m_lmp_md1() { lammps_rate "$MD_DECK" "$MD_N" "$MD_STEPS" 1; }
 m_lmp_md2() { lammps_rate "$MD_DECK" "$MD_N" "$MD_STEPS" 2; }
 m_sk_md1() { lj_fluid_rate 1 "$MD_STEPS"; }
 m_sk_md2() { lj_fluid_rate 2 "$MD_STEPS"; }
+# LAMMPS suffixes of the -march=native build, and their command-line arguments.
+LMP_SF="plain opt omp intel"
+sf_args() {
+  case $1 in
+    opt) echo "-sf opt" ;;
+    omp) echo "-sf omp -pk omp 1" ;;
+    intel) echo "-sf intel -pk intel 0 mode mixed omp 1" ;;
+  esac
+}
+# md_peers / md_simkit: one measurement of every md peer / simkit md row, 1 and 2 cores.
+md_peers() {
+  for c in 1 2; do
+    [ "$c" -eq 2 ] && [ "$MPI" -eq 0 ] && lmp_ok=0 || lmp_ok=1
+    if [ "$LMP" -eq 1 ] && [ "$lmp_ok" -eq 1 ]; then add "lmpmd$c" "$(m_lmp_md$c)"; fi
+    if [ -n "$LMPN" ] && [ "$lmp_ok" -eq 1 ]; then
+      for sf in $LMP_SF; do
+        # shellcheck disable=SC2046 # the suffix arguments are separate words
+        add "lmpn$c$sf" "$(LMP_BIN=$LMPN; lammps_rate "$MD_DECK" "$MD_N" "$MD_STEPS" "$c" $(sf_args "$sf"))"
+      done
+    fi
+    for g in $GMX_BUILDS; do
+      add "gmx$c${g%%:*}" "$(gromacs_rate "${g#*:}" "$c" "$MD_STEPS" "$PB/gromacs-${g%%:*}")"
+    done
+  done
+}
+md_simkit() {
+  for c in 1 2; do
+    add "skmd$c" "$(lj_fluid_rate "$c" "$MD_STEPS")"
+    add "skmdf$c" "$(lj_fluid_rate "$c" "$MD_STEPS" --f32)"
+  done
+}
 m_triad() {
   OMP_NUM_THREADS=2 "$TRIAD" "$TRIAD_REPS" 2>/dev/null |
     sed -n 's/^triad GB\/s:.*median \([^ ]*\).*/\1/p'
@@ -308,7 +416,18 @@ while [ "$r" -le "$ROUNDS" ]; do
     done
   fi
   if want neighbor && [ -n "$KIDDO" ]; then say "  neighbor"; pair kiddo m_kiddo sknb m_sk_nb "$r"; fi
-  if want dem && [ "$LMP" -eq 1 ] && [ "$MPI" -eq 1 ] && [ -z "${DEM_BUILD:-}" ]; then
+  if want neighbor; then
+    say "  neighbor (list builds)"
+    if [ -n "$LMPN" ]; then
+      pair lmpnl1 "m_lmp_nl 1" sknl1 "m_sk_nl 1" "$r"
+      if [ "$MPI" -eq 1 ]; then
+        pair lmpnl2 "m_lmp_nl 2" sknl2 "m_sk_nl 2" "$r"
+        add skvl2 "$(m_sk_vl)"
+      fi
+    fi
+    if [ -n "$FREUD" ]; then pair freud m_freud sknl2 "m_sk_nl 2" "$r"; fi
+  fi
+  if want dem && { [ "$LMP" -eq 1 ] || [ -n "$LMPN" ]; } && [ "$MPI" -eq 1 ] && [ -z "${DEM_BUILD:-}" ]; then
     say "  dem"
     for m in $DEM_MODELS; do
       t=${m%%:*} DM=${m#*:} SM=${m##*:}
@@ -319,9 +438,9 @@ while [ "$r" -le "$ROUNDS" ]; do
       pair "lmpdembig$t" m_lmp_dem_big "skdembig$t" m_sk_dem_big "$r"
     done
   fi
-  if want md && [ "$LMP" -eq 1 ] && [ -z "${MD_BUILD:-}" ]; then
-    say "  md"; pair lmpmd1 m_lmp_md1 skmd1 m_sk_md1 "$r"
-    if [ "$MPI" -eq 1 ]; then pair lmpmd2 m_lmp_md2 skmd2 m_sk_md2 "$r"; fi
+  if want md && [ -z "${MD_BUILD:-}" ]; then
+    say "  md"
+    if [ $((r % 2)) -eq 1 ]; then md_peers; md_simkit; else md_simkit; md_peers; fi
   fi
   if want lattice-gas; then
     say "  lattice-gas"
@@ -381,16 +500,36 @@ if want neighbor && [ -n "$KIDDO" ]; then
     "$(med kiddo)" "$(med sknb)" "pairs/s (build + all pairs)" ratio 12
   note "neighbor: kiddo (pairs / (median build + median query time) of $KIDDO_REPS reps per run): $(samples kiddo); simkit sorted cells (median of $NB_REPS build + count runs per run): $(samples sknb)"
 fi
-if want dem && [ "$LMP" -eq 1 ]; then
+if want neighbor; then
+  if [ -n "$LMPN" ]; then
+    row neighbor "LAMMPS -march=native binned half-list build vs simkit's md/dem list, 1 rank vs 1 thread, N=$NB_N, periodic" \
+      "$(med lmpnl1)" "$(med sknl1)" "pairs/s (list build)" ratio 10
+    note "neighbor list 1 core: LAMMPS ($NB_LMP_BUILDS builds per run): $(samples lmpnl1); simkit md/dem list (median of $NB_REPS): $(samples sknl1)"
+    if [ "$MPI" -eq 1 ]; then
+      row neighbor "LAMMPS -march=native binned half-list build, 2 MPI ranks vs 2 threads" \
+        "$(med lmpnl2)" "$(med sknl2)" "pairs/s (list build)" ratio 10
+      note "neighbor list 2 cores: LAMMPS: $(samples lmpnl2); simkit: $(samples sknl2)"
+      row neighbor "the same LAMMPS build vs simkit's VerletList (2 threads)" \
+        "$(med lmpnl2)" "$(med skvl2)" "pairs/s (list build)" ratio ""
+      note "neighbor VerletList 2 threads: $(samples skvl2)"
+    fi
+  fi
+  if [ -n "$FREUD" ]; then
+    row neighbor "freud $("$FREUD" -c 'import freud; print(freud.__version__)' 2>/dev/null) AABBQuery build + query to a NeighborList, 2 threads, N=$NB_N" \
+      "$(med freud)" "$(med sknl2)" "pairs/s (list build)" ratio 10
+    note "neighbor: freud AABBQuery (one timed run after a warm-up; its list holds both directions): $(samples freud)"
+  fi
+fi
+if want dem && { [ "$LMP" -eq 1 ] || [ -n "$LMPN" ]; }; then
   if [ "$MPI" -eq 0 ]; then skip "dem" "mpirun not found (the target is on 2 cores)"
   elif [ -n "${DEM_BUILD:-}" ]; then skip "dem" "cargo build --example dem_box_timer failed"
   else
     for m in $DEM_MODELS; do
       t=${m%%:*}
       if [ "$t" = h ]; then
-        what="LAMMPS gran/hooke/history + nve/sphere vs simkit LinearHistory with rotation (same physics)"
+        what="$DEM_LMP gran/hooke/history + nve/sphere vs simkit LinearHistory with rotation (same physics)"
       else
-        what="no rotation: LAMMPS gran/hooke (with rotation) vs simkit viscous friction without rotation"
+        what="no rotation: $DEM_LMP gran/hooke (with rotation) vs simkit viscous friction without rotation"
       fi
       row dem "$what, 1 rank vs 1 thread, N=$DEM_N, $DEM_STEPS steps" \
         "$(med "lmpdem1$t")" "$(med "skdem1$t")" "particle-steps/s" ratio 2
@@ -407,17 +546,45 @@ if want dem && [ "$LMP" -eq 1 ]; then
     done
   fi
 fi
-if want md && [ "$LMP" -eq 1 ]; then
+if want md; then
   if [ -n "${MD_BUILD:-}" ]; then skip "md" "cargo build --example lj_fluid failed"
   else
-    row md "LAMMPS lj/cut in.lj, 1 core, N=$MD_N, $MD_STEPS steps" "$(med lmpmd1)" \
-      "$(med skmd1)" "atom-steps/s" ratio 2
-    note "md 1 core: LAMMPS: $(samples lmpmd1); simkit: $(samples skmd1)"
-    if [ "$MPI" -eq 1 ]; then
-      row md "LAMMPS lj/cut in.lj, 2 MPI ranks vs 2 threads" "$(med lmpmd2)" "$(med skmd2)" \
-        "atom-steps/s" ratio 2
-      note "md 2 cores: LAMMPS: $(samples lmpmd2); simkit: $(samples skmd2)"
-    else skip "md (2 cores)" "mpirun not found"; fi
+    for c in 1 2; do
+      if [ "$c" -eq 1 ]; then cores="1 core"; else cores="2 cores"; fi
+      note "md $cores: simkit f64: $(samples "skmd$c"); simkit f32: $(samples "skmdf$c")"
+      if [ "$LMP" -eq 1 ] && [ -n "$(samples "lmpmd$c")" ]; then
+        row md "Debian LAMMPS lj/cut in.lj (generic build), $cores (MPI ranks), N=$MD_N, $MD_STEPS steps" \
+          "$(med "lmpmd$c")" "$(med "skmd$c")" "atom-steps/s" ratio ""
+        note "md $cores: Debian LAMMPS: $(samples "lmpmd$c")"
+      fi
+      if [ -n "$LMPN" ] && [ -n "$(samples "lmpn${c}plain")" ]; then
+        best=0 bsf=""
+        for sf in $LMP_SF; do
+          m=$(med "lmpn$c$sf")
+          row md "LAMMPS -march=native, $(if [ "$sf" = plain ]; then echo lj/cut; else echo "-sf $sf"; fi), $cores (MPI ranks)" \
+            "$m" "$(med "skmd$c")" "atom-steps/s" ratio ""
+          note "md $cores: LAMMPS -march=native $sf: $(samples "lmpn$c$sf")"
+          if awk -v a="$m" -v b="$best" 'BEGIN {exit !(a + 0 > b + 0)}'; then best=$m bsf=$sf; fi
+        done
+        row md "best LAMMPS build and suffix (-march=native, $bsf), $cores" "$best" \
+          "$(med "skmd$c")" "atom-steps/s" ratio 1.5
+      fi
+      for g in $GMX_BUILDS; do
+        t=${g%%:*}
+        if [ "$t" = native ]; then what="GROMACS 2022 -march=native (widest SIMD)"; tg=1
+        else what="Debian GROMACS 2022 (SSE4.1)"; tg=""; fi
+        row md "$what mixed precision vs simkit f64, $cores (1 rank, OpenMP threads)" "$(med "gmx$c$t")" \
+          "$(med "skmd$c")" "atom-steps/s" ratio "$tg"
+        row md "$what mixed precision vs simkit f32, $cores (1 rank, OpenMP threads)" "$(med "gmx$c$t")" \
+          "$(med "skmdf$c")" "atom-steps/s" ratio "$tg"
+        note "md $cores: $what: $(samples "gmx$c$t")"
+      done
+    done
+    if [ -n "$GMX_E0" ]; then
+      e0=$(target/release/examples/lj_fluid --steps 1 --thermo-every 0 2>/dev/null |
+        sed -n 's/^start .*E_pair\/N \([^ ]*\).*/\1/p')
+      note "md potential energy per atom at step 0 (epsilon): simkit f64 $e0; GROMACS$GMX_E0"
+    fi
   fi
 fi
 if want lattice-gas; then
