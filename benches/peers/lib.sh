@@ -101,7 +101,7 @@ gromacs_energy0() {
   (cd "$2" && GMX_MAXBACKUP=-1 "$1" mdrun -s lj.tpr -deffnm e0 -nsteps 0 -ntmpi 1 -ntomp 1 \
     >e0.out 2>&1 && echo Potential | GMX_MAXBACKUP=-1 "$1" energy -f e0.edr -o e0.xvg \
     >>e0.out 2>&1) || return 0
-  awk '!/^[#@]/ {e = $2} END {if (e != "") printf "%.7f\n", e / 32000}' "$2/e0.xvg"
+  awk -v n="$MD_N" '!/^[#@]/ {e = $2} END {if (e != "") printf "%.7f\n", e / n}' "$2/e0.xvg"
 }
 
 # gromacs_rate GMX THREADS STEPS DIR: mdrun on DIR/lj.tpr, one thread-MPI rank with THREADS
@@ -111,7 +111,7 @@ gromacs_rate() {
   (cd "$4" && GMX_MAXBACKUP=-1 OMP_NUM_THREADS="$2" "$1" mdrun -s lj.tpr -deffnm run -ntmpi 1 \
     -ntomp "$2" -pin on -nb cpu -nsteps $((2 * $3)) -resethway -noconfout >run.out 2>&1) ||
     return 0
-  awk '/^Performance:/ {printf "%.6g\n", 32000 * $2 * 1000 / 0.005 / 86400}' "$4/run.log"
+  awk -v n="$MD_N" '/^Performance:/ {printf "%.6g\n", n * $2 * 1000 / 0.005 / 86400}' "$4/run.log"
 }
 
 # dem_timer_rate THREADS STEPS [ARGS...]: simkit dem on the LAMMPS comparison box
@@ -146,9 +146,10 @@ debian_source() {
   _src=$(find "$2" -mindepth 1 -maxdepth 1 -type d -name "$1-*" | head -n 1)
   if [ -z "$_src" ]; then
     if [ "$(id -u)" -eq 0 ]; then
-      for _f in /etc/apt/sources.list.d/debian.sources; do
-        [ -f "$_f" ] && grep -q '^Types: deb$' "$_f" && sed -i 's/^Types: deb$/Types: deb deb-src/' "$_f"
-      done
+      _f=/etc/apt/sources.list.d/debian.sources
+      if [ -f "$_f" ] && grep -q '^Types: deb$' "$_f"; then
+        sed -i 's/^Types: deb$/Types: deb deb-src/' "$_f"
+      fi
       command -v dpkg-source >/dev/null 2>&1 || apt-get install -y -q dpkg-dev >/dev/null 2>&1
       apt-get update -q >/dev/null 2>&1
     fi

@@ -242,15 +242,14 @@ if want md; then
   fi
   if command -v gmx >/dev/null 2>&1; then GMX_BUILDS="$GMX_BUILDS debian:gmx"
   else skip "GROMACS (Debian)" "gmx not found and apt-get install gromacs not possible or failed"; fi
+  ready=""
   for g in $GMX_BUILDS; do
     t=${g%%:*}
     if gromacs_prepare "${g#*:}" "$PB/gromacs-$t"; then
-      GMX_E0="$GMX_E0 $t: $(gromacs_energy0 "${g#*:}" "$PB/gromacs-$t");"
-    else
-      skip "GROMACS ($t)" "grompp failed (see $PB/gromacs-$t/grompp.log)"
-      GMX_BUILDS=$(echo "$GMX_BUILDS" | tr ' ' '\n' | grep -v "^$t:" | tr '\n' ' ')
-    fi
+      ready="$ready $g" GMX_E0="$GMX_E0 $t: $(gromacs_energy0 "${g#*:}" "$PB/gromacs-$t");"
+    else skip "GROMACS ($t)" "grompp failed (see $PB/gromacs-$t/grompp.log)"; fi
   done
+  GMX_BUILDS=$ready
   if command -v gmx_d >/dev/null 2>&1 && gromacs_prepare gmx_d "$PB/gromacs-double"; then
     GMX_E0="$GMX_E0 debian double precision: $(gromacs_energy0 gmx_d "$PB/gromacs-double");"
   fi
@@ -298,8 +297,10 @@ m_kiddo() {
     END { if (p > 0 && build + q > 0) printf "%.6g\n", p / (build + q) }'
 }
 m_sk_nb() { sk neighbor --n "$NB_N" --threads 2 --reps "$NB_REPS" | rate_of; }
-# The list builds: LAMMPS (ranks $1), freud AABBQuery, simkit's half Verlet list (threads $1).
-m_lmp_nl() { (LMP_BIN=$LMPN; lammps_neigh_rate "$1" "$NB_N" "$NB_LMP_BUILDS"); }
+# native CMD...: runs CMD with the -march=native LAMMPS as $LMP_BIN when it was built.
+native() { (if [ -n "$LMPN" ]; then LMP_BIN=$LMPN; fi; "$@"); }
+# The list builds: LAMMPS (ranks $1), freud AABBQuery, simkit's half lists (threads $1).
+m_lmp_nl() { native lammps_neigh_rate "$1" "$NB_N" "$NB_LMP_BUILDS"; }
 m_freud() {
   "$FREUD" benches/peers/freud_pairs.py "$NB_N" 1 2 aabb 2>/dev/null |
     sed -n 's/^pairs_per_s=\([^ ]*\).*/\1/p'
@@ -311,7 +312,7 @@ m_sk_vl() { sk neighbor-list --kind verlet --n "$NB_N" --threads 2 --reps "$NB_R
 # else Debian's lmp with its plain styles.
 dem_lmp() {
   # shellcheck disable=SC2086 # DEM_SF is a list of separate words
-  (if [ -n "$LMPN" ]; then LMP_BIN=$LMPN; fi; lammps_rate "$@" -var model "$DM" $DEM_SF)
+  native lammps_rate "$@" -var model "$DM" $DEM_SF
 }
 m_lmp_dem1() { dem_lmp "$DEM_DECK" "$DEM_N" "$DEM_STEPS" 1; }
 m_sk_dem1() { dem_timer_rate 1 "$DEM_STEPS" --model "$SM"; }
@@ -329,10 +330,6 @@ m_sk_dem_big() {
 }
 # The dem models: "tag LAMMPS-model simkit-model".
 DEM_MODELS="h:hooke/history:history v:hooke:viscous"
-m_lmp_md1() { lammps_rate "$MD_DECK" "$MD_N" "$MD_STEPS" 1; }
-m_lmp_md2() { lammps_rate "$MD_DECK" "$MD_N" "$MD_STEPS" 2; }
-m_sk_md1() { lj_fluid_rate 1 "$MD_STEPS"; }
-m_sk_md2() { lj_fluid_rate 2 "$MD_STEPS"; }
 # LAMMPS suffixes of the -march=native build, and their command-line arguments.
 LMP_SF="plain opt omp intel"
 sf_args() {
@@ -346,11 +343,13 @@ sf_args() {
 md_peers() {
   for c in 1 2; do
     [ "$c" -eq 2 ] && [ "$MPI" -eq 0 ] && lmp_ok=0 || lmp_ok=1
-    if [ "$LMP" -eq 1 ] && [ "$lmp_ok" -eq 1 ]; then add "lmpmd$c" "$(m_lmp_md$c)"; fi
+    if [ "$LMP" -eq 1 ] && [ "$lmp_ok" -eq 1 ]; then
+      add "lmpmd$c" "$(lammps_rate "$MD_DECK" "$MD_N" "$MD_STEPS" "$c")"
+    fi
     if [ -n "$LMPN" ] && [ "$lmp_ok" -eq 1 ]; then
       for sf in $LMP_SF; do
         # shellcheck disable=SC2046 # the suffix arguments are separate words
-        add "lmpn$c$sf" "$(LMP_BIN=$LMPN; lammps_rate "$MD_DECK" "$MD_N" "$MD_STEPS" "$c" $(sf_args "$sf"))"
+        add "lmpn$c$sf" "$(native lammps_rate "$MD_DECK" "$MD_N" "$MD_STEPS" "$c" $(sf_args "$sf"))"
       done
     fi
     for g in $GMX_BUILDS; do
