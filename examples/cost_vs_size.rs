@@ -29,8 +29,8 @@
 //!   overlapping contacts each: a packed bed), small random velocities, no gravity, the
 //!   linear law with tangential history and rotation (restitution 0.5, contact time 2e-3,
 //!   mu 0.5), the default dt = t_c / 30; particle-steps/s, at least 20 steps per batch.
-//! - `rd`: Gray–Scott on a periodic `n x n` grid (the side-by-side scene), explicit Euler;
-//!   cell updates/s.
+//! - `rd`: Gray–Scott on a periodic `n x n` grid (the side-by-side scene), explicit Euler
+//!   with dt = 0.1 (the default 4 steps per fused sweep); cell updates/s.
 //! - `lattice-gas`: FHP on a periodic `n x n` lattice (`n` a multiple of 64) at density
 //!   0.3, the default CPU method; site updates/s.
 //! - `neighbor`: the half list md and dem rebuild (`BlockedHalfList`: sort, permute,
@@ -41,9 +41,10 @@
 //!   step of about five seconds on one core), far short of the L3: the state of any `n`
 //!   a direct sum can afford fits in cache.
 //!
-//! Output: `out/cost_vs_size/<crate>.csv` (threads, elements, bytes, rate, seconds per
-//! batch, units per batch, seconds since the sweep began, the core clock before and after
-//! the point from a timed chain of dependent adds) and `<crate>.png`; with `--update-docs` the same files in `docs/cost_vs_size/`.
+//! Output: `out/cost_vs_size/<crate>.csv` (sweep, threads, elements, bytes, rate, seconds
+//! per batch, units per batch, seconds since the sweep began, the core clock before and
+//! after the point from a timed chain of dependent adds) and `<crate>.png`; with
+//! `--update-docs` the same files in `docs/cost_vs_size/`.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
@@ -102,11 +103,17 @@ struct Args {
 /// The workloads.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum Crate {
+    /// Lennard-Jones liquid (`in.lj`), atom-steps/s
     Md,
+    /// Packed bed with tangential history and rotation, particle-steps/s
     Dem,
+    /// Gray–Scott reaction–diffusion, cell updates/s
     Rd,
+    /// FHP lattice gas, site updates/s
     LatticeGas,
+    /// The half list md and dem rebuild, pairs/s
     Neighbor,
+    /// Direct-sum Coulomb, interactions/s
     PpCoulomb,
 }
 
