@@ -63,6 +63,8 @@ use simkit::pp_coulomb::{Config as PpConfig, Integrator, PpCoulomb, scenes as pp
 use simkit::rd::scenes::gray_scott_square;
 use simkit::rd::{Config as RdConfig, GrayScott, Rd, Stepping};
 
+#[path = "common/machine.rs"]
+mod machine;
 #[path = "common/progress.rs"]
 mod progress;
 
@@ -227,23 +229,26 @@ struct Point {
     ghz: [f64; 2],
 }
 
+/// The value of `key` (e.g. `VmRSS:`) in a `/proc` file of `key value kB` lines, in bytes.
+fn proc_bytes(path: &str, key: &str) -> Option<u64> {
+    std::fs::read_to_string(path).ok().and_then(|s| {
+        s.lines()
+            .find_map(|l| l.strip_prefix(key))
+            .and_then(|v| v.trim().strip_suffix("kB"))
+            .and_then(|v| v.trim().parse::<u64>().ok())
+            .map(|kib| kib * 1024)
+    })
+}
+
 /// The resident set of this process in bytes (`VmRSS` of `/proc/self/status`).
 fn resident_bytes() -> Result<u64> {
-    let status = std::fs::read_to_string("/proc/self/status")
-        .map_err(|e| Error::invalid("/proc/self/status", "unreadable", e.to_string()))?;
-    status
-        .lines()
-        .find_map(|l| l.strip_prefix("VmRSS:"))
-        .and_then(|v| v.trim().strip_suffix("kB"))
-        .and_then(|v| v.trim().parse::<u64>().ok())
-        .map(|kib| kib * 1024)
-        .ok_or_else(|| {
-            Error::invalid(
-                "/proc/self/status",
-                "no VmRSS line",
-                "the memory footprint is read from Linux's /proc",
-            )
-        })
+    proc_bytes("/proc/self/status", "VmRSS:").ok_or_else(|| {
+        Error::invalid(
+            "/proc/self/status",
+            "no readable VmRSS line",
+            "the memory footprint is read from Linux's /proc",
+        )
+    })
 }
 
 /// Times `run(units)`: one untimed unit, then batches of at least `seconds` (and at least
@@ -272,9 +277,19 @@ fn time_batches(
 fn one_point(krate: Crate, elements: usize, seconds: f64) -> Result<Point> {
     let before = resident_bytes()?;
     let ghz_before = core_ghz(0.02);
-    // (elements, work per unit in the rate's unit, units per batch, batch time, resident
-    // bytes with the system still alive)
-    let (elements, work, units, batch_s, after) = match krate {
+    // Each arm ends with this while its system is alive (its memory still resident):
+    // elements, work per unit in the rate's unit, and (units per batch, batch time).
+    let point = |elements: usize, work: f64, (units, batch_s): (u32, f64)| -> Result<Point> {
+        Ok(Point {
+            elements,
+            bytes: resident_bytes()?.saturating_sub(before),
+            rate: work * f64::from(units) / batch_s,
+            batch_s,
+            units,
+            ghz: [ghz_before, core_ghz(0.02)],
+        })
+    };
+    match krate {
         Crate::Md => {
             let cells = ((elements as f64 / 4.0).cbrt().round() as usize).max(3);
             let table = PairTable::uniform(1, LennardJones::new(1.0, 1.0, 2.5))?;
@@ -285,15 +300,13 @@ fn one_point(krate: Crate, elements: usize, seconds: f64) -> Result<Point> {
             };
             let mut sim = Md::new(system, &config, Backend::Cpu)?;
             let n = sim.system().particle_count();
-            let (units, t) = time_batches(seconds, 20, |k| sim.step(k))?;
-            (n, n as f64, units, t, resident_bytes()?)
+            point(n, n as f64, time_batches(seconds, 20, |k| sim.step(k))?)
         }
         Crate::Dem => {
             let side = ((elements as f64).cbrt().round() as usize).max(5);
             let mut sim = Dem::new(packed_bed(side)?, &DemConfig::default(), Backend::Cpu)?;
             let n = side * side * side;
-            let (units, t) = time_batches(seconds, 20, |k| sim.step(k))?;
-            (n, n as f64, units, t, resident_bytes()?)
+            point(n, n as f64, time_batches(seconds, 20, |k| sim.step(k))?)
         }
         Crate::Rd => {
             let side = ((elements as f64).sqrt().round() as usize).max(32);
@@ -301,28 +314,16 @@ fn one_point(krate: Crate, elements: usize, seconds: f64) -> Result<Point> {
             let model = GrayScott::new(1.0, 0.5, 0.04, 0.06)?;
             let config = RdConfig::new(Stepping::euler(0.1));
             let mut sim = Rd::new(grid, model, &config, Backend::Cpu)?;
-            let (units, t) = time_batches(seconds, 4, |k| sim.step(k))?;
-            (
-                side * side,
-                (side * side) as f64,
-                units,
-                t,
-                resident_bytes()?,
-            )
+            let n = side * side;
+            point(n, n as f64, time_batches(seconds, 4, |k| sim.step(k))?)
         }
         Crate::LatticeGas => {
             let side = ((elements as f64).sqrt() / 64.0).round().max(1.0) as usize * 64;
             let mut lattice = Lattice::new(side, side)?;
             lattice.fill_random(0.3, 1)?;
             let mut sim = LatticeGas::new(lattice, &LgConfig::default(), Backend::Cpu)?;
-            let (units, t) = time_batches(seconds, 2, |k| sim.step(k))?;
-            (
-                side * side,
-                (side * side) as f64,
-                units,
-                t,
-                resident_bytes()?,
-            )
+            let n = side * side;
+            point(n, n as f64, time_batches(seconds, 2, |k| sim.step(k))?)
         }
         Crate::Neighbor => {
             let n = elements.max(1000);
@@ -333,7 +334,7 @@ fn one_point(krate: Crate, elements: usize, seconds: f64) -> Result<Point> {
                 .collect();
             let mut list = BlockedHalfList::<f64, 3>::new([0.0; 3], [side; 3], [true; 3], 2.5, n)?;
             let mut sorted = Vec::with_capacity(n);
-            let (units, t) = time_batches(seconds, 1, |k| {
+            let timing = time_batches(seconds, 1, |k| {
                 for _ in 0..k {
                     let order = list.sort(&points)?;
                     sorted.clear();
@@ -342,7 +343,7 @@ fn one_point(krate: Crate, elements: usize, seconds: f64) -> Result<Point> {
                 }
                 Ok(())
             })?;
-            (n, list.pair_count() as f64, units, t, resident_bytes()?)
+            point(n, list.pair_count() as f64, timing)
         }
         Crate::PpCoulomb => {
             let inputs = units::PhysicalInputs {
@@ -352,20 +353,10 @@ fn one_point(krate: Crate, elements: usize, seconds: f64) -> Result<Point> {
             let (p, law, _) = pp_scenes::plasma_box(&inputs, 1)?;
             let config = PpConfig::new(1.0, law).with_integrator(Integrator::SymplecticEuler);
             let mut sim = PpCoulomb::new(p, &config, Backend::Cpu)?;
-            let (units, t) = time_batches(seconds, 1, |k| sim.step(k))?;
-            let work = sim.interactions_per_step();
-            (inputs.particles, work, units, t, resident_bytes()?)
+            let timing = time_batches(seconds, 1, |k| sim.step(k))?;
+            point(inputs.particles, sim.interactions_per_step(), timing)
         }
-    };
-    let bytes = after.saturating_sub(before);
-    Ok(Point {
-        elements,
-        bytes,
-        rate: work * f64::from(units) / batch_s,
-        batch_s,
-        units,
-        ghz: [ghz_before, core_ghz(0.02)],
-    })
+    }
 }
 
 /// The clock of the core this runs on (GHz), from a timed chain of dependent register adds
@@ -463,27 +454,9 @@ fn cpu_list_len(list: &str) -> usize {
         .max(1)
 }
 
-/// This machine's CPU model (`model name` of /proc/cpuinfo).
-fn cpu_model() -> String {
-    std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find_map(|l| l.strip_prefix("model name"))
-                .map(|v| v.trim_start_matches([' ', '\t', ':']).to_string())
-        })
-        .unwrap_or_else(|| "unknown CPU".to_string())
-}
-
 /// Available memory in bytes (`MemAvailable` of /proc/meminfo), if known.
 fn available_bytes() -> Option<u64> {
-    std::fs::read_to_string("/proc/meminfo").ok().and_then(|s| {
-        s.lines()
-            .find_map(|l| l.strip_prefix("MemAvailable:"))
-            .and_then(|v| v.trim().strip_suffix("kB"))
-            .and_then(|v| v.trim().parse::<u64>().ok())
-            .map(|k| k * 1024)
-    })
+    proc_bytes("/proc/meminfo", "MemAvailable:")
 }
 
 /// A human size: `512 KiB`, `2 MiB`, `1.5 GiB`.
@@ -501,7 +474,7 @@ fn human(bytes: f64) -> String {
 /// Runs every point of every crate in its own process and writes the CSVs and plots.
 fn sweep(args: &Args) -> Result<()> {
     let caches = caches();
-    let cpu = cpu_model();
+    let cpu = machine::cpu_model().unwrap_or_else(|| "unknown CPU".to_string());
     let l3 = caches.last().map_or(64 << 20, |c| c.1);
     let limit = available_bytes().map_or(u64::MAX, |a| a / 3);
     let max_bytes = args

@@ -23,6 +23,8 @@ use simkit::pp_coulomb::{
     reference_accelerations,
 };
 
+#[path = "common/machine.rs"]
+mod machine;
 #[path = "common/progress.rs"]
 mod progress;
 #[path = "common/tradeoffs.rs"]
@@ -168,14 +170,7 @@ fn run(args: &Args) -> Result<()> {
     let dir = args.out.dir("pp_coulomb_tradeoffs");
     let gpu = GpuContext::new().ok();
     let mut md = String::new();
-    let cpu_name = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown CPU".into());
+    let cpu_name = machine::cpu_model().unwrap_or_else(|| "unknown CPU".into());
     let threads = rayon::current_num_threads();
     writeln!(md, "# pp-coulomb trade-offs\n").ok();
     writeln!(

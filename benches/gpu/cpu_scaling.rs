@@ -12,15 +12,7 @@ use crate::{Timing, rate_of, si};
 
 /// The CPU's model name from `/proc/cpuinfo` (or `unknown`).
 pub fn cpu_model() -> String {
-    std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|t| {
-            t.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|s| s.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown".into())
+    crate::machine::cpu_model().unwrap_or_else(|| "unknown".into())
 }
 
 /// A case: name, unit, and a function that builds the run and returns `(work per step,

@@ -13,6 +13,8 @@
 
 mod ceilings;
 mod cpu_scaling;
+#[path = "../../examples/common/machine.rs"]
+mod machine;
 mod rows;
 
 use std::fmt::Write as _;
