@@ -10,8 +10,9 @@
 //! forces into accelerations, closes the step with the half kick and opens the next one
 //! (half kick, drift, rebuild check). Periodic coordinates are wrapped at list rebuilds
 //! only, and each listed pair keeps the periodic image it had then, so the force loop has
-//! no minimum-image test. Block boundaries depend only on the particle count, so the result
-//! is bit-for-bit independent of the number of threads, with no atomics and no locks.
+//! no minimum-image test. Block boundaries depend only on the particle count and the box,
+//! so the result is bit-for-bit independent of the number of threads, with no atomics and
+//! no locks.
 
 use std::collections::HashMap;
 

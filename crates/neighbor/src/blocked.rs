@@ -12,10 +12,11 @@ use crate::MAX_CELLS;
 ///
 /// Made for force loops that run one task per block and use Newton's third law: a block
 /// owns the forces on its own particles and queues the reactions it owes to later blocks.
-/// The block boundaries depend only on the particle count ([`block_size`](Self::block_size)),
-/// never on the number of threads, so such a loop (reducing the queued reactions in block
-/// order) gives bit-identical results for any thread count; the list itself is the same
-/// whether it is built serially or on the rayon pool.
+/// The block boundaries depend only on the particle count and the box
+/// ([`block_size`](Self::block_size)), never on the number of threads, so such a loop
+/// (reducing the queued reactions in block order) gives bit-identical results for any
+/// thread count; the list itself is the same whether it is built serially or on the rayon
+/// pool.
 ///
 /// Use, at every list rebuild:
 /// 1. wrap the periodic coordinates into the box `[lo, lo + len)`;
@@ -99,19 +100,20 @@ pub struct HalfListBlock<T, const D: usize> {
     image_offsets: Vec<u32>,
     image_partners: Vec<(u32, [T; D])>,
     reach: usize,
+    near_reach: usize,
 }
 
 impl<T, const D: usize> HalfListBlock<T, D> {
-    /// Sets [`reach`](Self::reach) from the lists (loops the compiler vectorises; inlined
-    /// into the vector builds).
+    /// Sets [`reach`](Self::reach) and [`near_reach`](Self::near_reach) from the lists
+    /// (loops the compiler vectorises; inlined into the vector builds).
     #[inline(always)]
     fn set_reach(&mut self) {
         let past = |max: u32, empty: bool| if empty { 0 } else { max as usize + 1 };
         let same = self.partners.iter().fold(0, |m, &j| m.max(j));
         let image = self.image_partners.iter().fold(0, |m, &(j, _)| m.max(j));
+        self.near_reach = self.end.max(past(same, self.partners.is_empty()));
         self.reach = self
-            .end
-            .max(past(same, self.partners.is_empty()))
+            .near_reach
             .max(past(image, self.image_partners.is_empty()));
     }
 
@@ -195,6 +197,20 @@ impl<T, const D: usize> HalfListBlock<T, D> {
         self.reach
     }
 
+    /// One past the largest sorted slot among [`end`](Self::end) and the same-image
+    /// partners (`end()` before the first build): the slots `start()..near_reach()` hold
+    /// the block and, with cells ordered last axis slowest, about one layer of cells
+    /// beyond it. Cross-image partners may lie far beyond it: a block in the first layer
+    /// of a box periodic along its last axis pairs with the last layer, so
+    /// [`reach`](Self::reach) is then about the whole system. A force loop can keep a
+    /// dense reaction buffer over `start()..near_reach()` and queue the few cross-image
+    /// reactions beyond it apart, holding memory proportional to the block and one layer
+    /// instead of the system.
+    #[inline]
+    pub fn near_reach(&self) -> usize {
+        self.near_reach
+    }
+
     /// Number of pairs listed by the block (both kinds).
     pub fn pair_count(&self) -> usize {
         self.partners.len() + self.image_partners.len()
@@ -202,15 +218,23 @@ impl<T, const D: usize> HalfListBlock<T, D> {
 }
 
 impl<T: Real, const D: usize> BlockedHalfList<T, D> {
-    /// Particles per block for `n` particles: `clamp(n / 16, 256, 4096)`, independent of
-    /// the thread count (16 blocks up to 65,536 particles, blocks of 4,096 beyond). A force
-    /// loop that keeps a reaction buffer per block moves each block's slots plus the reach
-    /// of its pairs (about a plane of cells) per pass, so fewer, longer blocks move less
-    /// memory: on the 32,000-atom `in.lj` liquid 16 blocks ran 6-7 % faster than 32 on 1 and
-    /// 2 threads of a 2-core machine (at the cost of parallelism on many cores for small
-    /// systems).
-    pub fn block_size_for(n: usize) -> usize {
-        (n / 16).clamp(256, 4096)
+    /// Particles per block for `n` particles in a grid of `cells` cells per axis:
+    /// `max(clamp(n / 16, 256, 4096), min(layer, n / 16))`, where `layer = ceil(n /
+    /// cells[D - 1])` is the mean count in one layer of cells along the slowest axis. It
+    /// depends on the particle count and the box, never on the thread count.
+    ///
+    /// Up to 65,536 particles that is 16 blocks (256 particles at least); beyond, blocks of
+    /// 4,096 particles or of one layer, whichever is longer, as long as 16 blocks remain.
+    /// A force loop that keeps a reaction buffer per block over the block and its
+    /// same-image partners ([`HalfListBlock::near_reach`], about one layer beyond the
+    /// block) holds and clears `block + layer` entries per block per pass, so blocks of a
+    /// layer move about twice the particle count where blocks of 4,096 move `1 + layer /
+    /// 4096` times it (7.6 at a million `in.lj` atoms). Fewer, longer blocks cost
+    /// parallelism on many cores for small systems: on the 32,000-atom `in.lj` liquid 16
+    /// blocks ran 6-7 % faster than 32 on 1 and 2 threads of a 2-core machine.
+    pub fn block_size_for(n: usize, cells: [usize; D]) -> usize {
+        let layer = n.div_ceil(cells[D - 1].max(1));
+        (n / 16).clamp(256, 4096).max(layer.min(n / 16))
     }
 
     /// A list over the box `[lo, lo + len)` with the given periodic axes, for pairs closer
@@ -282,7 +306,7 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
         // is bounded whatever the particle count.
         let limit = n.saturating_mul(8).saturating_add(4096).min(MAX_CELLS) as f64;
         let (cells, total) = crate::grid::fit_cells(&len, range, limit);
-        let block_size = Self::block_size_for(n);
+        let block_size = Self::block_size_for(n, cells);
         let count = n.div_ceil(block_size).max(1);
         let blocks = (0..count)
             .map(|b| HalfListBlock {
@@ -293,6 +317,7 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
                 image_offsets: Vec::new(),
                 image_partners: Vec::new(),
                 reach: ((b + 1) * block_size).min(n),
+                near_reach: ((b + 1) * block_size).min(n),
             })
             .collect();
         Ok(Self {
@@ -328,7 +353,7 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
     }
 
     /// Particles per block (the last block may hold fewer); see
-    /// [`block_size_for`](Self::block_size_for).
+    /// [`block_size_for`](Self::block_size_for) (called with [`cells`](Self::cells)).
     pub fn block_size(&self) -> usize {
         self.block_size
     }
@@ -1299,6 +1324,7 @@ mod tests {
                         assert_eq!(b.image_offsets, r.image_offsets);
                         assert_eq!(b.image_partners, r.image_partners);
                         assert_eq!(b.reach, r.reach);
+                        assert_eq!(b.near_reach, r.near_reach);
                     }
                 }
             }

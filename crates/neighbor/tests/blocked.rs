@@ -35,10 +35,15 @@ fn listed<T: Real, const D: usize>(list: &BlockedHalfList<T, D>) -> Pairs<D> {
             *b.image_offsets().last().unwrap() as usize,
             b.image_partners().len()
         );
-        let top = b.partners().iter().copied();
-        let top = top.chain(b.image_partners().iter().map(|&(j, _)| j));
-        let reach = top.map(|j| j as usize + 1).fold(b.end(), usize::max);
-        assert_eq!(b.reach(), reach, "block {t}: reach");
+        let past = |j: u32| j as usize + 1;
+        let near = b
+            .partners()
+            .iter()
+            .map(|&j| past(j))
+            .fold(b.end(), usize::max);
+        assert_eq!(b.near_reach(), near, "block {t}: near reach");
+        let image = b.image_partners().iter().map(|&(j, _)| past(j));
+        assert_eq!(b.reach(), image.fold(near, usize::max), "block {t}: reach");
         for k in 0..b.len() {
             let i = b.start() + k;
             for &j in b.partners_of(k).expect("built") {
@@ -287,19 +292,34 @@ fn invalid_input_is_refused() {
 }
 
 #[test]
-fn blocks_depend_only_on_the_particle_count() {
+fn blocks_depend_only_on_the_particle_count_and_the_box() {
+    // A box of 50^3 with range 1: 50 cells per axis (fewer for tiny counts).
     for (n, size, count) in [
         (0, 256, 1),
         (256, 256, 1),
         (257, 256, 2),
         (40_000, 2500, 16),
-        (1_000_000, 4096, 245),
+        // Blocks of one layer of cells (20,000 particles) beyond 65,536.
+        (1_000_000, 20_000, 50),
     ] {
         let list = BlockedHalfList::<f32, 3>::new([0.0; 3], [50.0; 3], [true; 3], 1.0, n).unwrap();
-        assert_eq!(list.block_size(), size);
-        assert_eq!(BlockedHalfList::<f32, 3>::block_size_for(n), size);
+        assert_eq!(list.block_size(), size, "n = {n}");
+        let sized = BlockedHalfList::<f32, 3>::block_size_for(n, list.cells());
+        assert_eq!(sized, size, "n = {n}");
         assert_eq!(list.blocks().len(), count, "n = {n}");
     }
+    // A flat box (5 layers): blocks of 4,096 at least ...
+    let list =
+        BlockedHalfList::<f32, 3>::new([0.0; 3], [500.0, 500.0, 5.0], [true; 3], 1.0, 10_000_000)
+            .unwrap();
+    assert_eq!(list.cells()[2], 5);
+    // ... and one layer (2 million) would leave 5 blocks: 16 blocks of n / 16 instead.
+    assert_eq!(list.block_size(), 625_000);
+    // A tall box: layers of 400 particles, blocks of 4,096.
+    let list =
+        BlockedHalfList::<f32, 3>::new([0.0; 3], [20.0, 20.0, 2500.0], [true; 3], 1.0, 1_000_000)
+            .unwrap();
+    assert_eq!(list.block_size(), 4096);
 }
 
 #[test]

@@ -606,7 +606,7 @@ fn blocked_case<T: Real + std::fmt::Debug, const D: usize>(
     assert!(cells <= MAX_CELLS && cells <= n.saturating_mul(8).saturating_add(4096));
     assert_eq!(
         list.block_size(),
-        BlockedHalfList::<T, D>::block_size_for(n)
+        BlockedHalfList::<T, D>::block_size_for(n, list.cells())
     );
     let mut next = 0;
     for b in list.blocks() {

@@ -93,28 +93,34 @@ pub(crate) struct Inputs<'a, T: Real, const D: usize, L: PairLaw> {
     pub pad: T,
 }
 
-/// Forces of block `nb`: `local[k]` gets the force on slot `nb.start() + k` from every
-/// pair the block lists (partners' reactions included: `local` spans the block and every
-/// slot its pairs reach, [`HalfListBlock::reach`]), `ew[k]` the sums of `phi` and `r . F` over the
-/// particle's listed pairs (each pair counted once, at its first particle) when `energy`
-/// is set (`ew` is left as it is otherwise; the forces are the same bits either way).
+/// Forces of block `nb`: `near[k]` gets the force on slot `nb.start() + k` from every
+/// pair the block lists (partners' reactions included: `near` spans the block and its
+/// same-image partners, [`HalfListBlock::near_reach`]), except the reactions on
+/// cross-image partners beyond that span, which go to `far` one per pair in visiting order
+/// (see [`BlockForces`](super::buffers::BlockForces)); `ew[k]` the sums of `phi` and
+/// `r . F` over the particle's listed pairs (each pair counted once, at its first
+/// particle) when `energy` is set (`ew` is left as it is otherwise; the forces are the
+/// same bits either way).
 ///
 /// # Safety
-/// Every partner `j` of `nb` must satisfy `nb.start() <= j`, `j < pos.len()`,
-/// `j < inp.species.len()` and `j < nb.start() + local.len()` (`local.len() >= nb.reach() -
-/// nb.start()`), and `nb.end() <= pos.len()`: the kernel reads `pos[j]` and `species[j]` and
-/// writes `local[j - nb.start()]` unchecked. A half list built over these positions (one
-/// species per position) satisfies all of them.
+/// Every partner `j` of `nb` must satisfy `nb.start() <= j`, `j < pos.len()` and
+/// `j < inp.species.len()`, every same-image partner `j < nb.start() + near.len()`
+/// (`near.len() >= nb.near_reach() - nb.start()`), and `nb.end() <= pos.len()`: the kernel
+/// reads `pos[j]` and `species[j]` and writes `near[j - nb.start()]` unchecked. A half list
+/// built over these positions (one species per position) satisfies all of them. `far`
+/// must hold one entry per cross-image pair beyond `near` (checked: the kernel panics
+/// otherwise).
 pub(crate) unsafe fn block_forces<T: Real, const D: usize, L: PairLaw>(
     kernel: Kernel,
     inp: &Inputs<'_, T, D, L>,
     nb: &HalfListBlock<T, D>,
-    local: &mut [[T; D]],
+    near: &mut [[T; D]],
+    far: &mut [[T; D]],
     ew: &mut [[T; 2]],
     energy: bool,
 ) {
     // SAFETY: passed on from the caller.
-    unsafe { dispatch::<T, D, L, LANES, { LANES / 2 }>(kernel, inp, nb, local, ew, energy) }
+    unsafe { dispatch::<T, D, L, LANES, { LANES / 2 }>(kernel, inp, nb, near, far, ew, energy) }
 }
 
 /// # Safety
@@ -124,19 +130,20 @@ unsafe fn dispatch<T: Real, const D: usize, L: PairLaw, const W: usize, const H:
     kernel: Kernel,
     inp: &Inputs<'_, T, D, L>,
     nb: &HalfListBlock<T, D>,
-    local: &mut [[T; D]],
+    near: &mut [[T; D]],
+    far: &mut [[T; D]],
     ew: &mut [[T; 2]],
     energy: bool,
 ) {
     match kernel {
         #[cfg(target_arch = "x86_64")]
         // SAFETY: `Kernel::detect` only returns Avx512 when the CPU has these features.
-        Kernel::Avx512 => unsafe { lanes_avx512::<T, D, L, W, H>(inp, nb, local, ew, energy) },
+        Kernel::Avx512 => unsafe { lanes_avx512::<T, D, L, W, H>(inp, nb, near, far, ew, energy) },
         #[cfg(target_arch = "x86_64")]
         // SAFETY: `Kernel::detect` only returns Avx2 (or better) when the CPU has AVX2, FMA.
-        Kernel::Avx2 => unsafe { lanes_avx2::<T, D, L, W, H>(inp, nb, local, ew, energy) },
+        Kernel::Avx2 => unsafe { lanes_avx2::<T, D, L, W, H>(inp, nb, near, far, ew, energy) },
         // SAFETY: as [`block_forces`].
-        _ => unsafe { lanes::<T, D, L, W, H>(inp, nb, local, ew, energy) },
+        _ => unsafe { lanes::<T, D, L, W, H>(inp, nb, near, far, ew, energy) },
     }
 }
 
@@ -149,12 +156,13 @@ unsafe fn dispatch<T: Real, const D: usize, L: PairLaw, const W: usize, const H:
 unsafe fn lanes_avx512<T: Real, const D: usize, L: PairLaw, const W: usize, const H: usize>(
     inp: &Inputs<'_, T, D, L>,
     nb: &HalfListBlock<T, D>,
-    local: &mut [[T; D]],
+    near: &mut [[T; D]],
+    far: &mut [[T; D]],
     ew: &mut [[T; 2]],
     energy: bool,
 ) {
     // SAFETY: passed on from the caller.
-    unsafe { lanes::<T, D, L, W, H>(inp, nb, local, ew, energy) };
+    unsafe { lanes::<T, D, L, W, H>(inp, nb, near, far, ew, energy) };
 }
 
 /// [`lanes`] compiled for AVX2.
@@ -166,12 +174,13 @@ unsafe fn lanes_avx512<T: Real, const D: usize, L: PairLaw, const W: usize, cons
 unsafe fn lanes_avx2<T: Real, const D: usize, L: PairLaw, const W: usize, const H: usize>(
     inp: &Inputs<'_, T, D, L>,
     nb: &HalfListBlock<T, D>,
-    local: &mut [[T; D]],
+    near: &mut [[T; D]],
+    far: &mut [[T; D]],
     ew: &mut [[T; 2]],
     energy: bool,
 ) {
     // SAFETY: passed on from the caller.
-    unsafe { lanes::<T, D, L, W, H>(inp, nb, local, ew, energy) };
+    unsafe { lanes::<T, D, L, W, H>(inp, nb, near, far, ew, energy) };
 }
 
 /// The kernel body (see the module doc), `W` lanes; the coefficient gather is left out
@@ -183,17 +192,18 @@ unsafe fn lanes_avx2<T: Real, const D: usize, L: PairLaw, const W: usize, const 
 unsafe fn lanes<T: Real, const D: usize, L: PairLaw, const W: usize, const H: usize>(
     inp: &Inputs<'_, T, D, L>,
     nb: &HalfListBlock<T, D>,
-    local: &mut [[T; D]],
+    near: &mut [[T; D]],
+    far: &mut [[T; D]],
     ew: &mut [[T; 2]],
     energy: bool,
 ) {
     // SAFETY: passed on from the caller.
     unsafe {
         match (inp.n_species == 1, energy) {
-            (true, true) => body::<T, D, L, W, H, true, true>(inp, nb, local, ew),
-            (true, false) => body::<T, D, L, W, H, true, false>(inp, nb, local, ew),
-            (false, true) => body::<T, D, L, W, H, false, true>(inp, nb, local, ew),
-            (false, false) => body::<T, D, L, W, H, false, false>(inp, nb, local, ew),
+            (true, true) => body::<T, D, L, W, H, true, true>(inp, nb, near, far, ew),
+            (true, false) => body::<T, D, L, W, H, true, false>(inp, nb, near, far, ew),
+            (false, true) => body::<T, D, L, W, H, false, true>(inp, nb, near, far, ew),
+            (false, false) => body::<T, D, L, W, H, false, false>(inp, nb, near, far, ew),
         }
     }
 }
@@ -212,10 +222,13 @@ unsafe fn body<
 >(
     inp: &Inputs<'_, T, D, L>,
     nb: &HalfListBlock<T, D>,
-    local: &mut [[T; D]],
+    near: &mut [[T; D]],
+    far: &mut [[T; D]],
     ew: &mut [[T; 2]],
 ) {
-    local.fill([T::ZERO; D]);
+    near.fill([T::ZERO; D]);
+    let near_end = nb.start() + near.len();
+    let mut queued = 0;
     let (pos, species, coeff, ns) = (inp.pos, inp.species, inp.coeff, inp.n_species);
     let start = nb.start();
     let (offsets, partners) = (nb.offsets(), nb.partners());
@@ -236,7 +249,7 @@ unsafe fn body<
             // SAFETY: passed on from the caller.
             unsafe {
                 chunk_forces::<T, D, L, W, W, SINGLE, ENERGY>(
-                    inp, row, xi, idx, W, start, local, &mut acc,
+                    inp, row, xi, idx, W, start, near, &mut acc,
                 )
             };
         }
@@ -249,7 +262,7 @@ unsafe fn body<
             // SAFETY: passed on from the caller.
             unsafe {
                 chunk_forces::<T, D, L, W, W, SINGLE, ENERGY>(
-                    inp, row, xi, &idx, cnt, start, local, &mut acc,
+                    inp, row, xi, &idx, cnt, start, near, &mut acc,
                 )
             };
         } else if cnt > 0 {
@@ -257,7 +270,7 @@ unsafe fn body<
             // SAFETY: passed on from the caller.
             unsafe {
                 chunk_forces::<T, D, L, H, W, SINGLE, ENERGY>(
-                    inp, row, xi, &idx, cnt, start, local, &mut acc,
+                    inp, row, xi, &idx, cnt, start, near, &mut acc,
                 )
             };
         }
@@ -278,18 +291,25 @@ unsafe fn body<
                 r2 += x * x;
             }
             let (fr, pe) = L::force_energy(&row[species[j] as usize], r2);
-            let fj = &mut local[j - start];
+            let f: [T; D] = std::array::from_fn(|d| fr * s[d]);
             for d in 0..D {
-                let f = fr * s[d];
-                fi[d] += f;
-                fj[d] = fj[d] - f;
+                fi[d] += f[d];
+            }
+            if j < near_end {
+                let fj = &mut near[j - start];
+                for d in 0..D {
+                    fj[d] = fj[d] - f[d];
+                }
+            } else {
+                far[queued] = f.map(|x| T::ZERO - x);
+                queued += 1;
             }
             if ENERGY {
                 e += pe;
                 w += fr * r2;
             }
         }
-        let own = &mut local[k];
+        let own = &mut near[k];
         for d in 0..D {
             own[d] += fi[d];
         }
@@ -331,7 +351,7 @@ unsafe fn chunk_forces<
     idx: &[u32; C],
     cnt: usize,
     start: usize,
-    local: &mut [[T; D]],
+    near: &mut [[T; D]],
     acc: &mut Acc<T, D, W>,
 ) {
     let (pos, species) = (inp.pos, inp.species);
@@ -375,8 +395,8 @@ unsafe fn chunk_forces<
     }
     // Reactions.
     for (l, &j) in idx[..cnt].iter().enumerate() {
-        // SAFETY: `start < j < start + local.len()` (the caller's guarantee).
-        let fj = unsafe { local.get_unchecked_mut(j as usize - start) };
+        // SAFETY: `start < j < start + near.len()` (the caller's guarantee).
+        let fj = unsafe { near.get_unchecked_mut(j as usize - start) };
         for d in 0..D {
             fj[d] = fj[d] - fp[d][l];
         }
@@ -386,6 +406,7 @@ unsafe fn chunk_forces<
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cpu::buffers::BlockForces;
     use crate::{LennardJones, LjCoeff, PairTable};
     use simkit_neighbor::BlockedHalfList;
 
@@ -441,23 +462,22 @@ mod tests {
         let mut f = vec![[T::ZERO; 3]; pos.len()];
         let mut ew = vec![[T::ZERO; 2]; pos.len()];
         for nb in list.blocks() {
-            let mut local = vec![[T::ZERO; 3]; nb.reach() - nb.start()];
-            // SAFETY: `local` spans `nb.reach()`, the list was built for `pos`.
+            let mut buf = BlockForces::default();
+            buf.fit(nb, pos.len()).unwrap();
+            // SAFETY: `buf` was fitted to `nb`, the list was built for `pos`.
             unsafe {
                 block_forces(
                     kernel,
                     &inp,
                     nb,
-                    &mut local,
+                    &mut buf.near,
+                    &mut buf.far,
                     &mut ew[nb.start()..nb.end()],
                     energy,
                 )
             };
-            for (k, x) in local.iter().enumerate() {
-                for d in 0..3 {
-                    f[nb.start() + k][d] += x[d];
-                }
-            }
+            buf.add_dense(nb.start(), nb.start(), &mut f[nb.start()..]);
+            buf.add_far(0, &mut f);
         }
         (f, ew)
     }
@@ -469,6 +489,8 @@ mod tests {
     fn every_kernel_gives_the_same_bits_in<T: Real>(name: &str) {
         let (pos, species, list) = liquid::<T>(3000, 15.0);
         assert!(list.blocks().len() > 2 && list.pair_count() > 50_000);
+        // Some blocks queue cross-image reactions beyond their dense span.
+        assert!(list.blocks().iter().any(|nb| nb.reach() > nb.near_reach()));
         let coeff = table().coefficients::<T>(true);
         let (f0, e0) = run(Kernel::Portable, &pos, &species, &list, &coeff, true);
         // Against a plain loop over every pair with the minimum image, in f64.

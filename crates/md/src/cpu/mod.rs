@@ -13,10 +13,12 @@
 //! every drift.
 //!
 //! Per force pass each block writes its particles' forces, and the reactions it owes to
-//! later slots, into its own buffer (the block's slots and every later slot its pairs
-//! reach); the total force on a slot is its own block's entry plus those of the earlier
-//! blocks that reach it, added in block order. Block boundaries depend only on the
-//! particle count, so results are bit for bit independent of the number of threads.
+//! later slots, into buffers of its own ([`buffers`]: a dense one over the block and its
+//! same-image partners, about one layer of cells, and a queue for the cross-image
+//! reactions beyond it); the total force on a slot is its own block's entry plus the dense
+//! entries of the earlier blocks that reach it, added in block order, then their queued
+//! reactions, in block order. Block boundaries depend only on the particle count and the
+//! box, so results are bit for bit independent of the number of threads.
 //!
 //! Without a thermostat a step makes two passes over the particle arrays besides the force
 //! kernel: the opening kick, the drift and the largest displacement since the build in one,
@@ -29,6 +31,7 @@
 //! list and continues bit for bit. The results depend on the skin through the rebuild
 //! schedule, by rounding only.
 
+mod buffers;
 mod kernel;
 
 use rayon::prelude::*;
@@ -37,6 +40,8 @@ use simkit_backend::guard::{Guarded, Halt, first_non_finite, run_guarded, verdic
 use simkit_backend::particles::Dynamics;
 use simkit_backend::{Error, Real, Result, max_or_nan};
 use simkit_neighbor::{BlockedHalfList, wrap_periodic};
+
+use buffers::BlockForces;
 
 use crate::config::Integrator;
 use crate::diagnostics::assemble;
@@ -100,8 +105,8 @@ pub(crate) struct CpuEngine<const D: usize, T: Real, L: PairLaw> {
     /// squared displacement since the build triggers a rebuild.
     rebuild2: f64,
     list: BlockedHalfList<T, D>,
-    /// Per block, its forces and the reactions it owes (slots `start..reach`).
-    local: Vec<Vec<[T; D]>>,
+    /// Per block, its forces and the reactions it owes.
+    local: Vec<BlockForces<T, D>>,
     kernel: Kernel,
     /// A separation beyond every cutoff, `2 max r_c` (the kernel's unused lanes).
     pad: T,
@@ -207,7 +212,7 @@ impl<const D: usize, T: Real, L: PairLaw> CpuEngine<D, T, L> {
             ew: vec![[T::ZERO; 2]; n],
             reference,
             rebuild2: half_skin * half_skin,
-            local: vec![Vec::new(); list.blocks().len()],
+            local: vec![BlockForces::default(); list.blocks().len()],
             list,
             kernel: Kernel::detect(),
             pad: T::from_f64(2.0 * system.table().max_cutoff()),
@@ -313,20 +318,12 @@ impl<const D: usize, T: Real, L: PairLaw> CpuEngine<D, T, L> {
         self.size_buffers()
     }
 
-    /// Sizes each block's force buffer to the slots its pairs reach (its end at least).
+    /// Sizes each block's force buffers to the list just built.
     /// Refuses a list that names a slot beyond the particles (the force kernel relies on it).
     fn size_buffers(&mut self) -> Result<()> {
         let n = self.pos.len();
         for (buf, nb) in self.local.iter_mut().zip(self.list.blocks()) {
-            let reach = nb.reach();
-            if reach > n {
-                return Err(Error::invalid(
-                    "neighbour list",
-                    format!("a pair with slot {}", reach - 1),
-                    format!("must name slots below the particle count {n}; this is a bug"),
-                ));
-            }
-            buf.resize(reach - nb.start(), [T::ZERO; D]);
+            buf.fit(nb, n)?;
         }
         Ok(())
     }
@@ -388,8 +385,18 @@ impl<const D: usize, T: Real, L: PairLaw> CpuEngine<D, T, L> {
             .zip(self.ew.par_chunks_mut(bs))
             .for_each(|((nb, local), ew)| {
                 // SAFETY: `size_buffers` (after every build) checked that no block reaches
-                // beyond `pos.len()` and sized `local` to the block's reach.
-                unsafe { kernel::block_forces(kern, &inp, nb, local, ew, energy) }
+                // beyond `pos.len()` and fitted `local` to the block.
+                unsafe {
+                    kernel::block_forces(
+                        kern,
+                        &inp,
+                        nb,
+                        &mut local.near,
+                        &mut local.far,
+                        ew,
+                        energy,
+                    )
+                }
             });
         // Totals: the own block's entry, then the earlier blocks' in block order.
         let local = &self.local;
@@ -401,18 +408,12 @@ impl<const D: usize, T: Real, L: PairLaw> CpuEngine<D, T, L> {
             .enumerate()
             .for_each(|(t, ((f, a), v))| {
                 let start = t * bs;
-                f.copy_from_slice(&local[t][..f.len()]);
+                f.copy_from_slice(&local[t].near[..f.len()]);
                 for (b, buf) in local[..t].iter().enumerate() {
-                    let from = b * bs;
-                    let end = (from + buf.len()).min(start + f.len());
-                    if end <= start {
-                        continue;
-                    }
-                    for (fi, x) in f[..end - start].iter_mut().zip(&buf[start - from..]) {
-                        for d in 0..D {
-                            fi[d] += x[d];
-                        }
-                    }
+                    buf.add_dense(b * bs, start, f);
+                }
+                for buf in &local[..t] {
+                    buf.add_far(start, f);
                 }
                 for (k, (a, f)) in a.iter_mut().zip(f.iter()).enumerate() {
                     let im = inv_mass[species[start + k] as usize];
