@@ -309,15 +309,18 @@ impl<T: Real, const D: usize> BlockedHalfList<T, D> {
         let block_size = Self::block_size_for(n, cells);
         let count = n.div_ceil(block_size).max(1);
         let blocks = (0..count)
-            .map(|b| HalfListBlock {
-                start: (b * block_size).min(n),
-                end: ((b + 1) * block_size).min(n),
-                offsets: Vec::new(),
-                partners: Vec::new(),
-                image_offsets: Vec::new(),
-                image_partners: Vec::new(),
-                reach: ((b + 1) * block_size).min(n),
-                near_reach: ((b + 1) * block_size).min(n),
+            .map(|b| {
+                let end = ((b + 1) * block_size).min(n);
+                HalfListBlock {
+                    start: (b * block_size).min(n),
+                    end,
+                    offsets: Vec::new(),
+                    partners: Vec::new(),
+                    image_offsets: Vec::new(),
+                    image_partners: Vec::new(),
+                    reach: end,
+                    near_reach: end,
+                }
             })
             .collect();
         Ok(Self {

@@ -39,8 +39,8 @@ impl<T: Real, const D: usize> BlockForces<T, D> {
                 format!("must name slots below the particle count {n}; this is a bug"),
             ));
         }
+        // Sizes only: the kernel clears `near` and writes every entry of `far` each pass.
         let near = nb.near_reach();
-        self.near.clear();
         self.near.resize(near - nb.start(), [T::ZERO; D]);
         self.far_by_slot.clear();
         let beyond = nb
@@ -50,7 +50,6 @@ impl<T: Real, const D: usize> BlockForces<T, D> {
         self.far_by_slot
             .extend(beyond.zip(0u32..).map(|(&(j, _), q)| (j, q)));
         self.far_by_slot.sort_by_key(|&(j, _)| j);
-        self.far.clear();
         self.far.resize(self.far_by_slot.len(), [T::ZERO; D]);
         Ok(())
     }
